@@ -1,0 +1,39 @@
+#!/usr/bin/env bash
+# Installs every Debian package fast-dynamic-vision needs, then configures and builds it.
+# Idempotent: packages already present are skipped by apt; the build is incremental.
+#
+#   scripts/setup.sh                 # install + Release build into build/
+#   BUILD_DIR=build-asan FDV_SANITIZE=ON scripts/setup.sh   # ASan+UBSan build
+#   FDV_SKIP_INSTALL=1 scripts/setup.sh                     # build only
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+PACKAGES=(
+  build-essential cmake ninja-build pkg-config
+  libeigen3-dev libopencv-dev libceres-dev libyaml-cpp-dev libcli11-dev
+  nlohmann-json3-dev libspdlog-dev libfmt-dev liblz4-dev libzstd-dev
+  libflatbuffers-dev flatbuffers-compiler libsqlite3-dev
+  libgtest-dev libgmock-dev libbenchmark-dev
+)
+
+if [ "${FDV_SKIP_INSTALL:-0}" != "1" ]; then
+  missing=()
+  for p in "${PACKAGES[@]}"; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+  done
+  if [ ${#missing[@]} -gt 0 ]; then
+    SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
+    echo "setup: installing ${missing[*]}"
+    $SUDO apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+  fi
+fi
+
+BUILD_DIR="${BUILD_DIR:-build}"
+BUILD_TYPE="${BUILD_TYPE:-Release}"
+cmake -S . -B "$BUILD_DIR" -G Ninja \
+  -DCMAKE_BUILD_TYPE="$BUILD_TYPE" \
+  -DFDV_WERROR="${FDV_WERROR:-OFF}" \
+  -DFDV_SANITIZE="${FDV_SANITIZE:-OFF}" >/dev/null
+cmake --build "$BUILD_DIR" -j "$(nproc)"
+echo "setup: built into $BUILD_DIR"

@@ -1,0 +1,37 @@
+#pragma once
+/// Sensor rig calibration: cameras, extrinsics, IMU alignment. Frames: B body, E event camera,
+/// D depth camera, I IMU. T_B_E maps E coordinates into B.
+#include <Eigen/Geometry>
+#include <optional>
+#include <string>
+
+#include "fdv/core/camera.h"
+
+namespace fdv {
+
+struct Calibration {
+  PinholeCamera event_camera;
+  std::optional<PinholeCamera> depth_camera;
+  Eigen::Isometry3d T_B_E = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d T_B_D = Eigen::Isometry3d::Identity();
+  Eigen::Matrix3d R_B_I = Eigen::Matrix3d::Identity();  ///< IMU-to-body rotation
+
+  /// Rotation taking IMU-frame vectors into the event-camera frame: R_E_I = R_B_E^T R_B_I.
+  Eigen::Matrix3d R_E_I() const { return T_B_E.linear().transpose() * R_B_I; }
+  /// Empty when valid, else the first problem found (key and reason).
+  std::string validate() const;
+};
+
+/// Reads a calibration file. Two layouts are recognised:
+///  - the project's YAML (docs/FORMATS.md: `event_camera`, optional `depth_camera`, `T_B_E`,
+///    `T_B_D`, `R_B_I`), parsed with yaml-cpp;
+///  - an OpenCV FileStorage file (XML or YAML) with `camera_matrix`, `distortion_coefficients`,
+///    `image_width`, `image_height`, at the top level or inside one named node (as written by
+///    the DV software and OpenCV's calibration sample). Extrinsics are identity then.
+/// Throws InputError naming the file, the key and the reason.
+Calibration load_calibration(const std::string& path);
+
+/// Writes the project's YAML layout (round-trips through load_calibration).
+void save_calibration(const Calibration& calib, const std::string& path);
+
+}  // namespace fdv

@@ -1,0 +1,99 @@
+#include "fdv/core/camera.h"
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+namespace fdv {
+
+std::string PinholeCamera::validate() const {
+  std::ostringstream why;
+  const double values[] = {fx, fy, cx, cy, distortion.k1, distortion.k2,
+                           distortion.p1, distortion.p2, distortion.k3};
+  for (double v : values)
+    if (!std::isfinite(v)) return "non-finite intrinsic or distortion value";
+  if (width <= 0 || height <= 0) {
+    why << "resolution must be positive, got " << width << "x" << height;
+  } else if (fx <= 0 || fy <= 0) {
+    why << "focal lengths must be positive, got fx=" << fx << " fy=" << fy;
+  } else if (cx < -width || cx > 2.0 * width || cy < -height || cy > 2.0 * height) {
+    why << "principal point (" << cx << ", " << cy << ") is far outside the " << width << "x"
+        << height << " image";
+  }
+  return why.str();
+}
+
+Eigen::Vector2d PinholeCamera::distort(const Eigen::Vector2d& xn) const {
+  const auto& d = distortion;
+  const double x = xn.x(), y = xn.y();
+  const double r2 = x * x + y * y;
+  const double radial = 1 + r2 * (d.k1 + r2 * (d.k2 + r2 * d.k3));
+  return {x * radial + 2 * d.p1 * x * y + d.p2 * (r2 + 2 * x * x),
+          y * radial + d.p1 * (r2 + 2 * y * y) + 2 * d.p2 * x * y};
+}
+
+Eigen::Vector2d PinholeCamera::undistort(const Eigen::Vector2d& xd) const {
+  if (distortion.is_zero()) return xd;
+  const auto& d = distortion;
+  // Damped Newton from the distorted point itself (distortion is a perturbation of identity
+  // near the centre). A step is accepted only if it reduces the residual, and the solution must
+  // lie where the lens map is locally invertible (det J > 0): polynomial models fold back on
+  // themselves beyond the calibrated field of view, and no inverse exists there.
+  Eigen::Vector2d xn = xd;
+  Eigen::Vector2d residual = distort(xn) - xd;
+  Eigen::Matrix2d J = Eigen::Matrix2d::Identity();
+  for (int it = 0; it < 50 && residual.squaredNorm() > 1e-30; ++it) {
+    const double x = xn.x(), y = xn.y();
+    const double r2 = x * x + y * y;
+    const double radial = 1 + r2 * (d.k1 + r2 * (d.k2 + r2 * d.k3));
+    const double dradial_dr2 = d.k1 + r2 * (2 * d.k2 + 3 * r2 * d.k3);
+    J(0, 0) = radial + 2 * x * x * dradial_dr2 + 2 * d.p1 * y + 6 * d.p2 * x;
+    J(0, 1) = 2 * x * y * dradial_dr2 + 2 * d.p1 * x + 2 * d.p2 * y;
+    J(1, 0) = J(0, 1);
+    J(1, 1) = radial + 2 * y * y * dradial_dr2 + 6 * d.p1 * y + 2 * d.p2 * x;
+    if (J.determinant() <= 0) break;
+    const Eigen::Vector2d step = J.inverse() * residual;
+    double scale = 1.0;
+    bool improved = false;
+    for (int halvings = 0; halvings < 20; ++halvings, scale *= 0.5) {
+      const Eigen::Vector2d candidate = xn - scale * step;
+      const Eigen::Vector2d r = distort(candidate) - xd;
+      if (r.squaredNorm() < residual.squaredNorm()) {
+        xn = candidate;
+        residual = r;
+        improved = true;
+        break;
+      }
+    }
+    if (!improved) break;
+  }
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  if (residual.norm() > 1e-9 || J.determinant() <= 0) return {nan, nan};
+  return xn;
+}
+
+Eigen::Vector2d PinholeCamera::project(const Eigen::Vector3d& X) const {
+  return normalized_to_pixel(X.head<2>() / X.z());
+}
+
+Eigen::Vector2d PinholeCamera::pixel_to_normalized(const Eigen::Vector2d& px) const {
+  return undistort({(px.x() - cx) / fx, (px.y() - cy) / fy});
+}
+
+Eigen::Vector2d PinholeCamera::normalized_to_pixel(const Eigen::Vector2d& xn) const {
+  const Eigen::Vector2d xd = distort(xn);
+  return {fx * xd.x() + cx, fy * xd.y() + cy};
+}
+
+Eigen::Vector2d PinholeCamera::undistort_pixel(const Eigen::Vector2d& px) const {
+  const Eigen::Vector2d xn = pixel_to_normalized(px);
+  return {fx * xn.x() + cx, fy * xn.y() + cy};
+}
+
+Eigen::Vector3d PinholeCamera::back_project(const Eigen::Vector2d& px, double depth_m) const {
+  const Eigen::Vector2d xn = pixel_to_normalized(px);
+  return {xn.x() * depth_m, xn.y() * depth_m, depth_m};
+}
+
+}  // namespace fdv

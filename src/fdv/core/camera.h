@@ -1,0 +1,55 @@
+#pragma once
+/// Pinhole camera with radial-tangential ("plumb bob", OpenCV) distortion k1 k2 p1 p2 k3.
+///
+///   PinholeCamera cam{640, 480, 536.3, 536.3, 320.9, 234.0, {k1, k2, p1, p2, k3}};
+///   Eigen::Vector2d px = cam.project(X_E);              // raw (distorted) pixel
+///   Eigen::Vector3d X = cam.back_project(px, depth_m);  // point in E with z = depth_m
+///
+/// Raw pixels are what the sensor reports; "undistorted" pixels are K·(normalised coordinates).
+/// Undistortion inverts the distortion by damped Newton iterations, exact to < 1e-9 (normalised
+/// units). Where the lens polynomial is not invertible (it folds back beyond the calibrated field
+/// of view, as in the corners of the real DAVIS346 calibration) the result is NaN, never a wrong
+/// point: callers treat such pixels as unusable. Thread-safe (const).
+#include <Eigen/Core>
+#include <array>
+#include <string>
+
+namespace fdv {
+
+struct Distortion {
+  double k1 = 0, k2 = 0, p1 = 0, p2 = 0, k3 = 0;
+  bool is_zero() const { return k1 == 0 && k2 == 0 && p1 == 0 && p2 == 0 && k3 == 0; }
+};
+
+struct PinholeCamera {
+  int width = 0;
+  int height = 0;
+  double fx = 0, fy = 0, cx = 0, cy = 0;
+  Distortion distortion;
+
+  /// Empty when valid, else a readable reason (non-positive size or focal length, non-finite
+  /// value, principal point far outside the image).
+  std::string validate() const;
+
+  /// Normalised undistorted coordinates (x/z, y/z) -> normalised distorted coordinates.
+  Eigen::Vector2d distort(const Eigen::Vector2d& xn) const;
+  /// Inverse of distort(); NaN where the lens map has no inverse.
+  Eigen::Vector2d undistort(const Eigen::Vector2d& xd) const;
+
+  /// Point in the camera frame (z > 0) -> raw pixel.
+  Eigen::Vector2d project(const Eigen::Vector3d& X) const;
+  /// Raw pixel -> normalised undistorted coordinates (x/z, y/z).
+  Eigen::Vector2d pixel_to_normalized(const Eigen::Vector2d& px) const;
+  /// Normalised undistorted coordinates -> raw pixel.
+  Eigen::Vector2d normalized_to_pixel(const Eigen::Vector2d& xn) const;
+  /// Raw pixel -> undistorted pixel K·xn.
+  Eigen::Vector2d undistort_pixel(const Eigen::Vector2d& px) const;
+  /// Raw pixel and z-depth -> point in the camera frame.
+  Eigen::Vector3d back_project(const Eigen::Vector2d& px, double depth_m) const;
+
+  bool in_image(const Eigen::Vector2d& px) const {
+    return px.x() >= -0.5 && px.y() >= -0.5 && px.x() < width - 0.5 && px.y() < height - 0.5;
+  }
+};
+
+}  // namespace fdv

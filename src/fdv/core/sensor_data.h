@@ -1,0 +1,69 @@
+#pragma once
+/// Value types for everything the sensors produce. Frames as in the paper: W world, B body,
+/// E event camera, D depth camera, I IMU. A transform T_A_B maps B coordinates into A.
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <vector>
+
+#include "fdv/core/time.h"
+
+namespace fdv {
+
+/// One event: raw (distorted) sensor pixel, time, polarity (true = brightness increase, ON).
+struct Event {
+  TimeNs t = 0;
+  std::uint16_t x = 0;
+  std::uint16_t y = 0;
+  bool polarity = false;
+  friend bool operator==(const Event&, const Event&) = default;
+};
+static_assert(sizeof(Event) == 16, "Event is kept at 16 bytes for cache-friendly windows");
+
+/// One IMU sample in the IMU frame I: angular velocity [rad/s], specific force [m/s^2].
+struct ImuSample {
+  TimeNs t = 0;
+  Eigen::Vector3d gyro_rad_s = Eigen::Vector3d::Zero();
+  Eigen::Vector3d accel_m_s2 = Eigen::Vector3d::Zero();
+};
+
+/// One depth image in the depth camera's raw pixel grid: z-depth along the optical axis in
+/// metres, row-major; 0 marks an invalid pixel (hole, out of range).
+struct DepthFrame {
+  TimeNs t = 0;
+  int width = 0;
+  int height = 0;
+  std::vector<float> depth_m;
+  float at(int u, int v) const { return depth_m[static_cast<std::size_t>(v) * width + u]; }
+};
+
+/// Vehicle state from odometry (e.g. VIO): pose of the body in the world, velocity in W,
+/// and angular velocity in B (zero when the source does not give it).
+struct OdometrySample {
+  TimeNs t = 0;
+  Eigen::Vector3d p_W_B = Eigen::Vector3d::Zero();
+  Eigen::Quaterniond q_W_B = Eigen::Quaterniond::Identity();
+  Eigen::Vector3d v_W = Eigen::Vector3d::Zero();
+  Eigen::Vector3d omega_B = Eigen::Vector3d::Zero();
+  Eigen::Isometry3d T_W_B() const {
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear() = q_W_B.toRotationMatrix();
+    T.translation() = p_W_B;
+    return T;
+  }
+};
+
+/// Ground truth of a tracked object (ball): position and velocity of its centre in W.
+struct ObjectState {
+  TimeNs t = 0;
+  int id = 0;
+  Eigen::Vector3d p_W = Eigen::Vector3d::Zero();
+  Eigen::Vector3d v_W = Eigen::Vector3d::Zero();
+};
+
+/// Odometry at time t by linear interpolation of position/velocity and slerp of attitude
+/// between the two samples around t (clamped to the ends). `samples` must be time-sorted
+/// and non-empty.
+OdometrySample interpolate_odometry(const std::vector<OdometrySample>& samples, TimeNs t);
+
+}  // namespace fdv

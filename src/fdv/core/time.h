@@ -1,0 +1,21 @@
+#pragma once
+/// The project's one time base: signed 64-bit integer nanoseconds.
+///
+/// The epoch is the input's own (a sensor's clock, ROS time, or 0 at the start of a simulated
+/// scene); readers convert every timestamp to nanoseconds and never shift it, so outputs can be
+/// matched against the input's own time stamps. Durations use the same type.
+#include <cmath>
+#include <cstdint>
+
+namespace fdv {
+
+using TimeNs = std::int64_t;
+
+inline constexpr TimeNs kNsPerUs = 1'000;
+inline constexpr TimeNs kNsPerMs = 1'000'000;
+inline constexpr TimeNs kNsPerS = 1'000'000'000;
+
+constexpr double to_seconds(TimeNs t_ns) { return static_cast<double>(t_ns) * 1e-9; }
+inline TimeNs from_seconds(double t_s) { return static_cast<TimeNs>(std::llround(t_s * 1e9)); }
+
+}  // namespace fdv

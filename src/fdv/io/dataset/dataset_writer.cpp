@@ -1,0 +1,128 @@
+#include "fdv/io/dataset/dataset_writer.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fmt/format.h>
+#include <opencv2/imgcodecs.hpp>
+
+#include "fdv/core/error.h"
+#include "fdv/io/dataset/dataset_reader.h"
+
+namespace fdv {
+namespace fs = std::filesystem;
+namespace {
+
+std::ofstream open_out(const fs::path& path, const char* header, bool binary = false) {
+  std::ofstream f(path, binary ? std::ios::binary : std::ios::out);
+  if (!f) throw InputError(path.string(), "", "cannot create file");
+  if (header) f << header << "\n";
+  return f;
+}
+
+void write_pose_row(std::ofstream& f, const OdometrySample& s) {
+  f << fmt::format("{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g}\n",
+                   s.t, s.p_W_B.x(), s.p_W_B.y(), s.p_W_B.z(), s.q_W_B.x(), s.q_W_B.y(),
+                   s.q_W_B.z(), s.q_W_B.w(), s.v_W.x(), s.v_W.y(), s.v_W.z(), s.omega_B.x(),
+                   s.omega_B.y(), s.omega_B.z());
+}
+
+constexpr const char* kPoseHeader = "# t_ns,px,py,pz,qx,qy,qz,qw,vx,vy,vz,wx,wy,wz";
+
+}  // namespace
+
+DatasetWriter::DatasetWriter(const std::string& dir, const Calibration& calib)
+    : dir_(dir), width_(calib.event_camera.width), height_(calib.event_camera.height) {
+  fs::create_directories(fs::path(dir) / "depth");
+  fs::create_directories(fs::path(dir) / "truth");
+  save_calibration(calib, (fs::path(dir) / "calibration.yaml").string());
+  events_ = open_out(fs::path(dir) / "events.bin", nullptr, true);
+  char header[kEventsHeaderBytes] = {};
+  std::memcpy(header, kEventsMagic, 8);
+  const auto w = static_cast<std::uint32_t>(width_), h = static_cast<std::uint32_t>(height_);
+  std::memcpy(header + 8, &w, 4);
+  std::memcpy(header + 12, &h, 4);
+  events_.write(header, sizeof header);
+  imu_ = open_out(fs::path(dir) / "imu.csv", "# t_ns,gx,gy,gz,ax,ay,az");
+  odometry_ = open_out(fs::path(dir) / "odometry.csv", kPoseHeader);
+  depth_index_ = open_out(fs::path(dir) / "depth.csv", "# t_ns,file");
+  objects_ = open_out(fs::path(dir) / "truth" / "objects.csv", "# t_ns,id,px,py,pz,vx,vy,vz");
+  body_ = open_out(fs::path(dir) / "truth" / "body.csv", kPoseHeader);
+}
+
+DatasetWriter::~DatasetWriter() {
+  if (!finished_) {
+    try {
+      finish();
+    } catch (...) {  // destructors must not throw; an explicit finish() reports errors
+    }
+  }
+}
+
+void DatasetWriter::add_events(std::span<const Event> events) {
+  // Event is 16 bytes with 3 zeroed padding bytes; write field by field so padding is defined.
+  static_assert(std::endian::native == std::endian::little, "events.bin is little-endian");
+  std::vector<char> buf(events.size() * 16, 0);
+  for (std::size_t i = 0; i < events.size(); ++i) {
+    char* r = buf.data() + i * 16;
+    std::memcpy(r, &events[i].t, 8);
+    std::memcpy(r + 8, &events[i].x, 2);
+    std::memcpy(r + 10, &events[i].y, 2);
+    r[12] = events[i].polarity ? 1 : 0;
+  }
+  events_.write(buf.data(), static_cast<std::streamsize>(buf.size()));
+  event_count_ += events.size();
+}
+
+void DatasetWriter::add_imu(const ImuSample& s) {
+  imu_ << fmt::format("{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g}\n", s.t, s.gyro_rad_s.x(),
+                      s.gyro_rad_s.y(), s.gyro_rad_s.z(), s.accel_m_s2.x(), s.accel_m_s2.y(),
+                      s.accel_m_s2.z());
+}
+
+void DatasetWriter::add_odometry(const OdometrySample& s) { write_pose_row(odometry_, s); }
+void DatasetWriter::add_body_truth(const OdometrySample& s) { write_pose_row(body_, s); }
+
+void DatasetWriter::add_object_truth(const ObjectState& s) {
+  objects_ << fmt::format("{},{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g}\n", s.t, s.id, s.p_W.x(),
+                          s.p_W.y(), s.p_W.z(), s.v_W.x(), s.v_W.y(), s.v_W.z());
+}
+
+void DatasetWriter::add_depth(const DepthFrame& frame) {
+  cv::Mat mm(frame.height, frame.width, CV_16UC1);
+  for (int v = 0; v < frame.height; ++v)
+    for (int u = 0; u < frame.width; ++u) {
+      const float d = frame.at(u, v);
+      const double m = std::isfinite(d) && d > 0 ? std::round(d * 1000.0) : 0.0;
+      mm.at<std::uint16_t>(v, u) = static_cast<std::uint16_t>(std::min(m, 65535.0));
+    }
+  const std::string name = fmt::format("depth/{:06d}.png", depth_count_++);
+  if (!cv::imwrite((fs::path(dir_) / name).string(), mm))
+    throw InputError((fs::path(dir_) / name).string(), "", "cannot write depth PNG");
+  depth_index_ << frame.t << "," << name << "\n";
+}
+
+void DatasetWriter::finish(const std::string& manifest_extra) {
+  if (finished_) return;
+  finished_ = true;
+  events_.seekp(16);
+  events_.write(reinterpret_cast<const char*>(&event_count_), 8);
+  for (auto* f : {&events_, &imu_, &odometry_, &depth_index_, &objects_, &body_}) {
+    f->close();
+    if (f->fail()) throw InputError(dir_, "", "write failed (disk full?)");
+  }
+  YAML::Node manifest = manifest_extra.empty() ? YAML::Node(YAML::NodeType::Map)
+                                               : YAML::Load(manifest_extra);
+  manifest["format"] = "fdv_dataset";
+  manifest["format_version"] = 1;
+  manifest["width"] = width_;
+  manifest["height"] = height_;
+  manifest["events"] = event_count_;
+  std::ofstream m(fs::path(dir_) / kDatasetManifest);
+  m << manifest << "\n";
+  if (!m) throw InputError(dir_, "", "cannot write dataset.yaml");
+}
+
+}  // namespace fdv

@@ -1,0 +1,45 @@
+#pragma once
+/// Writes the project's dataset folder (layout in dataset_reader.h and docs/FORMATS.md).
+///
+///   DatasetWriter w(dir, calib);     // creates dir, writes calibration.yaml
+///   w.add_events(events); w.add_imu(s); w.add_depth(frame); ...
+///   w.finish(extra_manifest_yaml);   // writes the event count and dataset.yaml
+///
+/// Each stream must be added in non-decreasing time. Not thread-safe.
+#include <fstream>
+#include <span>
+#include <string>
+
+#include "fdv/core/calibration.h"
+#include "fdv/core/sensor_data.h"
+
+namespace fdv {
+
+class DatasetWriter {
+ public:
+  DatasetWriter(const std::string& dir, const Calibration& calib);
+  ~DatasetWriter();
+  DatasetWriter(const DatasetWriter&) = delete;
+  DatasetWriter& operator=(const DatasetWriter&) = delete;
+
+  void add_events(std::span<const Event> events);
+  void add_imu(const ImuSample& s);
+  void add_odometry(const OdometrySample& s);
+  void add_depth(const DepthFrame& frame);  ///< metres -> 16-bit PNG millimetres (0 invalid)
+  void add_object_truth(const ObjectState& s);
+  void add_body_truth(const OdometrySample& s);
+  /// Completes events.bin and writes dataset.yaml; `manifest_extra` is a YAML mapping text
+  /// merged into the manifest (e.g. scenario name, seed, ball radius).
+  void finish(const std::string& manifest_extra = "");
+  std::uint64_t event_count() const { return event_count_; }
+
+ private:
+  std::string dir_;
+  int width_, height_;
+  std::ofstream events_, imu_, odometry_, depth_index_, objects_, body_;
+  std::uint64_t event_count_ = 0;
+  int depth_count_ = 0;
+  bool finished_ = false;
+};
+
+}  // namespace fdv

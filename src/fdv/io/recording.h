@@ -1,0 +1,90 @@
+#pragma once
+/// The one interface every input format implements, so that files, bags, the simulator and
+/// live sources all feed the same pipeline.
+///
+///   auto reader = fdv::open_recording("run.aedat4");
+///   fdv::SensorChunk chunk;
+///   while (reader->read(chunk)) { /* chunk.events, chunk.imu, ... */ }
+///   reader->report();   // what was dropped or repaired, and why
+///
+/// Contract for implementations:
+///  - read() hands out the recording piece by piece (about `ReaderOptions::chunk_events` events
+///    at a time) and never needs the whole file in memory;
+///  - within each stream, items come in non-decreasing time (a record whose time goes backwards
+///    is dropped and counted in the report, never reordered silently);
+///  - events outside the sensor resolution are dropped and counted;
+///  - unrecoverable corruption (bad magic, truncated header) throws InputError with the file,
+///    byte offset or line and the reason; recoverable damage (a corrupt packet, a truncated
+///    tail) is dropped and counted so the rest of the file stays usable.
+/// Not thread-safe; one reader per thread.
+#include <limits>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "fdv/core/calibration.h"
+#include "fdv/core/sensor_data.h"
+#include "fdv/io/read_report.h"
+
+namespace fdv {
+
+enum class StreamKind { kEvents, kImu, kDepth, kOdometry, kGroundTruth };
+const char* to_string(StreamKind kind);
+
+struct RecordingInfo {
+  std::string path;
+  std::string format;  ///< "aedat4", "evt2", "evt3", "rpg_text", "fdv_dataset", ...
+  int width = 0;       ///< event sensor resolution; 0 when the file does not say
+  int height = 0;
+  std::vector<StreamKind> streams;         ///< streams this recording can contain
+  std::optional<Calibration> calibration;  ///< when the recording carries one
+  std::vector<std::string> notes;          ///< format details worth printing (compression, ...)
+};
+
+struct SensorChunk {
+  std::vector<Event> events;
+  std::vector<ImuSample> imu;
+  std::vector<DepthFrame> depth;
+  std::vector<OdometrySample> odometry;
+  std::vector<ObjectState> ground_truth;
+  void clear();
+  bool empty() const;
+};
+
+struct ReaderOptions {
+  std::size_t chunk_events = 1 << 16;  ///< about how many events one read() hands out
+};
+
+class RecordingReader {
+ public:
+  virtual ~RecordingReader() = default;
+  virtual const RecordingInfo& info() const = 0;
+  /// Clears `chunk` and fills it with the next piece. Returns false once the recording is
+  /// exhausted (the chunk is then empty).
+  virtual bool read(SensorChunk& chunk) = 0;
+  /// Drops and repairs so far (complete once read() has returned false).
+  virtual const ReadReport& report() const = 0;
+};
+
+/// Detects the format of `path` (by magic bytes or folder layout) and opens it.
+/// Throws InputError for a missing file or an unrecognised format.
+std::unique_ptr<RecordingReader> open_recording(const std::string& path,
+                                                const ReaderOptions& options = {});
+
+/// Drops events that break the stream contract (time going backwards, pixel outside the
+/// sensor) and counts them in `report`. Readers run every decoded batch through it.
+class EventSanitizer {
+ public:
+  EventSanitizer(int width, int height) : width_(width), height_(height) {}
+  /// Appends the valid events of [first, last) to `out`; `where` locates the batch for the report.
+  void append(const Event* first, const Event* last, std::vector<Event>& out, ReadReport& report,
+              const std::string& where);
+  TimeNs last_time() const { return last_t_; }
+
+ private:
+  int width_, height_;
+  TimeNs last_t_ = std::numeric_limits<TimeNs>::min();
+};
+
+}  // namespace fdv

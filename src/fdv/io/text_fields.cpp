@@ -1,0 +1,96 @@
+#include "fdv/io/text_fields.h"
+
+#include <charconv>
+#include <cmath>
+
+#include "fdv/core/error.h"
+
+namespace fdv {
+namespace {
+std::string_view trim(std::string_view s) {
+  while (!s.empty() && (s.front() == ' ' || s.front() == '\t' || s.front() == '\r')) s.remove_prefix(1);
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) s.remove_suffix(1);
+  return s;
+}
+}  // namespace
+
+LineReader::LineReader(const std::string& path) : path_(path), in_(path) {
+  if (!in_) throw InputError(path, "", "cannot open file");
+}
+
+bool LineReader::next(std::string_view& line) {
+  while (std::getline(in_, buffer_)) {
+    ++line_number_;
+    line = trim(buffer_);
+    if (!line.empty() && line.front() != '#') return true;
+  }
+  return false;
+}
+
+void split_fields(std::string_view line, char separator, std::vector<std::string_view>& fields) {
+  fields.clear();
+  if (separator == ' ') {
+    std::size_t i = 0;
+    while (i < line.size()) {
+      while (i < line.size() && (line[i] == ' ' || line[i] == '\t')) ++i;
+      std::size_t j = i;
+      while (j < line.size() && line[j] != ' ' && line[j] != '\t') ++j;
+      if (j > i) fields.push_back(line.substr(i, j - i));
+      i = j;
+    }
+    return;
+  }
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t end = line.find(separator, start);
+    fields.push_back(trim(line.substr(start, end == std::string_view::npos ? line.npos : end - start)));
+    if (end == std::string_view::npos) break;
+    start = end + 1;
+  }
+}
+
+bool parse_int64(std::string_view s, std::int64_t& out) {
+  const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), out);
+  return ec == std::errc() && ptr == s.data() + s.size() && !s.empty();
+}
+
+bool parse_double(std::string_view s, double& out) {
+  if (!s.empty() && s.front() == '+') s.remove_prefix(1);
+  const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), out);
+  return ec == std::errc() && ptr == s.data() + s.size() && !s.empty() && std::isfinite(out);
+}
+
+bool parse_seconds_to_ns(std::string_view s, TimeNs& out) {
+  if (s.empty()) return false;
+  bool negative = false;
+  if (s.front() == '-' || s.front() == '+') {
+    negative = s.front() == '-';
+    s.remove_prefix(1);
+  }
+  const std::size_t dot = s.find('.');
+  const std::string_view whole = s.substr(0, dot);
+  std::string_view frac = dot == std::string_view::npos ? std::string_view{} : s.substr(dot + 1);
+  std::int64_t sec = 0;
+  if (!whole.empty() && !parse_int64(whole, sec)) return false;
+  if (whole.empty() && frac.empty()) return false;
+  if (sec > 9'000'000'000) return false;  // beyond int64 nanoseconds
+  std::int64_t ns = 0;
+  int digits = 0;
+  bool round_up = false;
+  for (std::size_t i = 0; i < frac.size(); ++i) {
+    const char c = frac[i];
+    if (c < '0' || c > '9') return false;
+    if (digits < 9) {
+      ns = ns * 10 + (c - '0');
+      ++digits;
+    } else if (i == 9) {
+      round_up = c >= '5';
+    }
+  }
+  for (; digits < 9; ++digits) ns *= 10;
+  const TimeNs total = sec * kNsPerS + ns + (round_up ? 1 : 0);
+  out = negative ? -total : total;
+  return true;
+}
+
+}  // namespace fdv

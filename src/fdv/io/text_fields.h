@@ -1,0 +1,40 @@
+#pragma once
+/// Line-by-line reading of numeric text tables (CSV, space-separated), streaming, with exact
+/// integer timestamps: a time never passes through a double, so nanoseconds since 1970 stay exact.
+#include <cstdint>
+#include <fstream>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "fdv/core/time.h"
+
+namespace fdv {
+
+class LineReader {
+ public:
+  /// Throws InputError if the file cannot be opened.
+  explicit LineReader(const std::string& path);
+  /// Next non-empty line that is not a comment ('#' first); false at end of file.
+  bool next(std::string_view& line);
+  std::size_t line_number() const { return line_number_; }
+  const std::string& path() const { return path_; }
+  std::string where() const { return "line " + std::to_string(line_number_); }
+
+ private:
+  std::string path_;
+  std::ifstream in_;
+  std::string buffer_;
+  std::size_t line_number_ = 0;
+};
+
+/// Splits on `separator` (or on runs of blanks when separator is ' '); trims blanks.
+void split_fields(std::string_view line, char separator, std::vector<std::string_view>& fields);
+
+bool parse_int64(std::string_view s, std::int64_t& out);
+bool parse_double(std::string_view s, double& out);  ///< finite values only
+/// Decimal seconds ("1468941032.229165635", "0.5", "12") to integer nanoseconds, exactly
+/// (digits beyond the ninth decimal are rounded).
+bool parse_seconds_to_ns(std::string_view s, TimeNs& out);
+
+}  // namespace fdv
