@@ -65,5 +65,7 @@ struct ObjectState {
 /// between the two samples around t (clamped to the ends). `samples` must be time-sorted
 /// and non-empty.
 OdometrySample interpolate_odometry(const std::vector<OdometrySample>& samples, TimeNs t);
+/// The same between two samples a.t <= t <= b.t.
+OdometrySample interpolate_between(const OdometrySample& a, const OdometrySample& b, TimeNs t);
 
 }  // namespace fdv

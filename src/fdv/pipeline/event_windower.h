@@ -1,0 +1,63 @@
+#pragma once
+/// Cuts a time-ordered event stream into consecutive windows [t0, t0 + Δt) (paper §III-A,
+/// Δt = 25 ms), streaming: push() event runs as they arrive, take each completed window.
+///
+///   EventWindower w(options);
+///   w.push(events, [&](const EventWindow& win) { process(win); });
+///   w.flush([&](const EventWindow& win) { process(win); });   // the last, partial window
+///
+/// Windows are aligned to multiples of Δt after the first event's time. A gap in the stream
+/// yields empty windows (each is still reported, so the output has one row per window).
+/// Overload policy: a window holding more than `max_events_per_window` events is decimated
+/// uniformly in time order (every k-th event kept) and the number dropped is reported in the
+/// window, so latency stays bounded under bursts instead of falling behind.
+/// The callback's window view is valid only during the call. Not thread-safe.
+#include <cstdint>
+#include <functional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "fdv/core/sensor_data.h"
+
+namespace fdv {
+
+struct EventWindowerOptions {
+  TimeNs window_ns = 25 * kNsPerMs;  ///< Δt, paper §III-A
+  /// Decimation cap: 20 M events/s sustained over 25 ms is 500 k events; twice that is a burst
+  /// the front end cannot absorb within one window period on one core (docs/BENCHMARKS.md).
+  std::size_t max_events_per_window = 1'000'000;
+  std::string validate() const;
+};
+
+struct EventWindow {
+  TimeNs t_start = 0;
+  TimeNs t_end = 0;  ///< exclusive
+  std::span<const Event> events;
+  std::uint64_t decimated = 0;  ///< events dropped by the overload policy
+  std::uint64_t index = 0;      ///< 0, 1, 2, ... in stream order
+};
+
+class EventWindower {
+ public:
+  using Callback = std::function<void(const EventWindow&)>;
+  explicit EventWindower(const EventWindowerOptions& options = {});
+  /// Adds a time-ordered run of events; calls `on_window` for every window completed by it.
+  void push(std::span<const Event> events, const Callback& on_window);
+  /// Completes windows up to time `t` (e.g. when the stream is known to have moved past it).
+  void advance_to(TimeNs t, const Callback& on_window);
+  /// Emits the last, partial window (if it holds any events).
+  void flush(const Callback& on_window);
+  std::uint64_t windows_emitted() const { return next_index_; }
+
+ private:
+  void emit(const Callback& on_window);
+  EventWindowerOptions options_;
+  bool started_ = false;
+  TimeNs t_start_ = 0;
+  std::vector<Event> buffer_;
+  std::vector<Event> decimated_;
+  std::uint64_t next_index_ = 0;
+};
+
+}  // namespace fdv
