@@ -23,7 +23,7 @@ TEST(Summarize, HandComputedValues) {
 TEST(AbsolutePositionError, ConstantOffsetGivesThatError) {
   std::vector<ObjectState> truth;
   for (int i = 0; i <= 10; ++i) truth.push_back({i * kNsPerMs, 1, {0.1 * i, 0, 5}, {100, 0, 0}});
-  truth.push_back({5 * kNsPerMs, 2, {9, 9, 9}, {}});  // another object: ignored
+  truth.push_back({5 * kNsPerMs, 2, {9, 9, 9}, Eigen::Vector3d::Zero()});  // another object: ignored
   // Estimate off by (0, 0.3, 0.4): error 0.5 at every sample.
   const auto est = [](TimeNs t) { return Eigen::Vector3d(100.0 * to_seconds(t), 0.3, 5.4); };
   const Summary s = absolute_position_error(est, truth, 1, 2 * kNsPerMs, 8 * kNsPerMs);
