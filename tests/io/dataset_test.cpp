@@ -65,7 +65,9 @@ TEST(Dataset, RoundTripsEveryStreamInChunks) {
     w.add_depth(d);
     w.finish("scenario: unit_test\nseed: 7\n");
   }
-  auto reader = open_recording(dir, ReaderOptions{.chunk_events = 128});
+  ReaderOptions small_chunks;
+  small_chunks.chunk_events = 128;
+  auto reader = open_recording(dir, small_chunks);
   EXPECT_EQ(reader->info().format, "fdv_dataset");
   EXPECT_EQ(reader->info().width, 64);
   ASSERT_TRUE(reader->info().calibration.has_value());

@@ -10,64 +10,16 @@
 #include <optional>
 
 #include "fdv/core/error.h"
+#include "fdv/io/table_stream.h"
 #include "fdv/io/text_fields.h"
 
 namespace fdv {
 namespace fs = std::filesystem;
 namespace {
 
-/// One CSV stream with a single-row lookahead. `parse` turns the fields of a row into an item
-/// or returns a reason for dropping it.
+/// The CSV streams of the folder (shared helper, fdv/io/table_stream.h).
 template <typename T>
-class CsvStream {
- public:
-  using Parser = std::function<std::string(const std::vector<std::string_view>&, T&)>;
-  CsvStream(const fs::path& path, std::string name, Parser parse)
-      : name_(std::move(name)), parse_(std::move(parse)) {
-    if (fs::exists(path)) lines_.emplace(path.string());
-  }
-  bool present() const { return lines_.has_value(); }
-
-  /// Moves rows with t <= horizon (at most max_items) into out; drops bad rows into report.
-  void take_until(TimeNs horizon, std::size_t max_items, std::vector<T>& out, ReadReport& report) {
-    while (out.size() < max_items && fill(report) && pending_->t <= horizon) {
-      out.push_back(std::move(*pending_));
-      pending_.reset();
-    }
-  }
-  bool exhausted(ReadReport& report) { return !fill(report); }
-
- private:
-  bool fill(ReadReport& report) {
-    if (pending_) return true;
-    if (!lines_) return false;
-    std::string_view line;
-    while (lines_->next(line)) {
-      split_fields(line, ',', fields_);
-      T item;
-      std::string why = parse_(fields_, item);
-      const std::string where = lines_->path() + ":" + lines_->where();
-      if (!why.empty()) {
-        report.drop(name_ + ": " + why, where);
-      } else if (item.t < last_t_) {
-        report.drop(name_ + ": timestamp went backwards", where);
-      } else {
-        last_t_ = item.t;
-        pending_ = std::move(item);
-        return true;
-      }
-    }
-    lines_.reset();
-    return false;
-  }
-
-  std::string name_;
-  Parser parse_;
-  std::optional<LineReader> lines_;
-  std::vector<std::string_view> fields_;
-  std::optional<T> pending_;
-  TimeNs last_t_ = std::numeric_limits<TimeNs>::min();
-};
+using CsvStream = TableStream<T>;
 
 std::string parse_numbers(const std::vector<std::string_view>& f, std::size_t n, TimeNs& t,
                           double* values) {

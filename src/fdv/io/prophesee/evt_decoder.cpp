@@ -1,0 +1,191 @@
+#include "fdv/io/prophesee/evt_decoder.h"
+
+#include <bit>
+
+namespace fdv {
+namespace {
+
+// Word types, from Prophesee's EVT 2.0 / EVT 3.0 format pages (type in the 4 most significant
+// bits).
+namespace evt2 {
+constexpr std::uint32_t kCdOff = 0x0, kCdOn = 0x1, kTimeHigh = 0x8, kExtTrigger = 0xA,
+                        kOthers = 0xE, kContinued = 0xF;
+}
+namespace evt3 {
+constexpr std::uint32_t kAddrY = 0x0, kAddrX = 0x2, kVectBaseX = 0x3, kVect12 = 0x4, kVect8 = 0x5,
+                        kTimeLow = 0x6, kContinued4 = 0x7, kTimeHigh = 0x8, kExtTrigger = 0xA,
+                        kOthers = 0xE, kContinued12 = 0xF;
+}
+
+// Rare paths, kept out of the hot loops.
+[[gnu::cold]] void count(std::uint64_t& n, std::size_t& first, std::size_t index,
+                         std::uint64_t how_many = 1) {
+  if (n == 0) first = index;
+  n += how_many;
+}
+
+}  // namespace
+
+std::size_t Evt2Decoder::decode(const Word* words, std::size_t n, Event* out,
+                                std::size_t max_events, std::size_t& consumed,
+                                DecodeCounts& counts) {
+  std::size_t k = 0;
+  std::size_t i = 0;
+  TimeNs high_ns = high_ns_;
+  bool have_time = have_time_;
+  for (; i < n && k < max_events; ++i) {
+    const std::uint32_t w = words[i];
+    const std::uint32_t type = w >> 28;
+    if (type <= evt2::kCdOn) [[likely]] {
+      // [27:22] time low 6 bits, [21:11] x, [10:0] y; polarity = type (CD_ON = 1).
+      if (have_time) [[likely]] {
+        out[k++] = Event{high_ns + static_cast<TimeNs>((w >> 22) & 0x3F) * kNsPerUs,
+                         static_cast<std::uint16_t>((w >> 11) & 0x7FF),
+                         static_cast<std::uint16_t>(w & 0x7FF), type == evt2::kCdOn};
+      } else {
+        count(counts.before_time, counts.first_before_time, i);
+      }
+      continue;
+    }
+    switch (type) {
+      case evt2::kTimeHigh: {  // [27:0] bits 33..6 of the time in us
+        const std::uint32_t h = w & 0x0FFFFFFF;
+        if (have_time && h < time_high_) {
+          if (time_high_ - h > kTimeHighRange / 2) {
+            epoch_us_ += static_cast<std::int64_t>(kTimeHighRange) << 6;
+            count(counts.wraps, counts.first_wrap, i);
+          } else {
+            ++counts.time_high_backwards;
+          }
+        }
+        have_time = true;
+        time_high_ = h;
+        high_ns = (epoch_us_ + (static_cast<std::int64_t>(h) << 6)) * kNsPerUs;
+        break;
+      }
+      case evt2::kExtTrigger:
+        ++counts.triggers;
+        break;
+      case evt2::kOthers:
+      case evt2::kContinued:
+        ++counts.vendor;
+        break;
+      default:
+        count(counts.unknown, counts.first_unknown, i);
+        break;
+    }
+  }
+  high_ns_ = high_ns;
+  have_time_ = have_time;
+  consumed = i;
+  return k;
+}
+
+std::size_t Evt3Decoder::decode(const Word* words, std::size_t n, Event* out,
+                                std::size_t max_events, std::size_t& consumed,
+                                DecodeCounts& counts) {
+  std::size_t k = 0;
+  std::size_t i = 0;
+  // The state lives in locals inside the loop (registers); written back at the end.
+  TimeNs t = t_ns_;
+  std::uint16_t y = y_;
+  std::uint16_t base_x = base_x_;
+  bool base_polarity = base_polarity_;
+  bool ready = have_time_ && have_y_;       // single events can be output
+  bool vector_ready = ready && have_base_;  // vector events can be output
+  for (; i < n && k < max_events; ++i) {
+    const std::uint32_t w = words[i];
+    // ADDR_X is most words of a dense stream: tested before the switch's indirect jump.
+    if ((w >> 12) == evt3::kAddrX) [[likely]] {  // [11] polarity, [10:0] x: one event
+      if (ready) [[likely]] {
+        out[k++] = Event{t, static_cast<std::uint16_t>(w & 0x7FF), y, ((w >> 11) & 1) != 0};
+      } else if (!have_time_) {
+        count(counts.before_time, counts.first_before_time, i);
+      } else {
+        count(counts.missing_address, counts.first_missing_address, i);
+      }
+      continue;
+    }
+    switch (w >> 12) {
+      case evt3::kAddrY:  // [11] system type (ignored), [10:0] y
+        y = static_cast<std::uint16_t>(w & 0x7FF);
+        have_y_ = true;
+        ready = have_time_;
+        vector_ready = ready && have_base_;
+        break;
+      case evt3::kVectBaseX:  // [11] polarity, [10:0] x of the next vector's bit 0
+        base_x = static_cast<std::uint16_t>(w & 0x7FF);
+        base_polarity = ((w >> 11) & 1) != 0;
+        have_base_ = true;
+        vector_ready = ready;
+        break;
+      case evt3::kVect12:
+      case evt3::kVect8: {  // [11:0] or [7:0]: bit b set = event at base_x + b; base_x += 12 or 8
+        const bool is12 = (w >> 12) == evt3::kVect12;
+        const std::uint32_t mask = is12 ? (w & 0xFFF) : (w & 0xFF);
+        if (vector_ready) [[likely]] {
+          // Branch-free: write every candidate, advance only over the valid ones (out has
+          // room for kMaxEventsPerWord - 1 events beyond max_events).
+          for (std::uint32_t b = 0; b < 12; ++b) {
+            out[k] = Event{t, static_cast<std::uint16_t>(base_x + b), y, base_polarity};
+            k += (mask >> b) & 1;
+          }
+        } else if (mask != 0) {
+          if (!have_time_) {
+            count(counts.before_time, counts.first_before_time, i, std::popcount(mask));
+          } else {
+            count(counts.missing_address, counts.first_missing_address, i, std::popcount(mask));
+          }
+        }
+        base_x = static_cast<std::uint16_t>(base_x + (is12 ? 12 : 8));
+        break;
+      }
+      case evt3::kTimeLow:  // [11:0] bits 11..0 of the time in us
+        time_low_ = w & 0xFFF;
+        update_time();
+        t = t_ns_;
+        break;
+      case evt3::kTimeHigh: {  // [11:0] bits 23..12 of the time in us
+        const std::uint32_t h = w & 0xFFF;
+        if (!have_time_ || h != time_high_) {
+          if (have_time_ && h < time_high_) {
+            if (time_high_ - h > kTimeHighRange / 2) {
+              epoch_us_ += std::int64_t{1} << 24;
+              count(counts.wraps, counts.first_wrap, i);
+            } else {
+              ++counts.time_high_backwards;
+            }
+          }
+          // A new TIME_HIGH value starts a new 4096 us period: the last TIME_LOW belongs to
+          // the previous one, so the time base is the period's start until a TIME_LOW comes.
+          time_high_ = h;
+          time_low_ = 0;
+          update_time();
+          t = t_ns_;
+        }
+        have_time_ = true;
+        ready = have_y_;
+        vector_ready = ready && have_base_;
+        break;
+      }
+      case evt3::kExtTrigger:
+        ++counts.triggers;
+        break;
+      case evt3::kContinued4:
+      case evt3::kOthers:
+      case evt3::kContinued12:
+        ++counts.vendor;
+        break;
+      default:
+        count(counts.unknown, counts.first_unknown, i);
+        break;
+    }
+  }
+  y_ = y;
+  base_x_ = base_x;
+  base_polarity_ = base_polarity;
+  consumed = i;
+  return k;
+}
+
+}  // namespace fdv
