@@ -12,8 +12,9 @@ PACKAGES=(
   build-essential cmake ninja-build pkg-config
   libeigen3-dev libopencv-dev libceres-dev libyaml-cpp-dev libcli11-dev
   nlohmann-json3-dev libspdlog-dev libfmt-dev liblz4-dev libzstd-dev
-  libflatbuffers-dev flatbuffers-compiler libsqlite3-dev
+  libflatbuffers-dev flatbuffers-compiler libsqlite3-dev libtinyxml2-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  librosbag-storage-dev libsensor-msgs-dev libnav-msgs-dev libgeometry-msgs-dev libfastcdr-dev
 )
 
 if [ "${FDV_SKIP_INSTALL:-0}" != "1" ]; then

@@ -5,10 +5,10 @@
 #include "fdv/core/error.h"
 #include "fdv/io/dataset/dataset_reader.h"
 #include "fdv/io/recording.h"
-// [format include slot: aedat4]
-// [format include slot: prophesee]
-// [format include slot: rpg]
-// [format include slot: rosbag]
+#include "fdv/io/aedat4/aedat4_reader.h"
+#include "fdv/io/prophesee/prophesee_raw_reader.h"
+#include "fdv/io/rpg/rpg_text_reader.h"
+#include "fdv/io/rosbag/rosbag_reader.h"
 
 namespace fdv {
 namespace fs = std::filesystem;
@@ -18,7 +18,8 @@ std::unique_ptr<RecordingReader> open_recording(const std::string& path,
   if (!fs::exists(path)) throw InputError(path, "", "no such file or folder");
   if (fs::is_directory(path)) {
     if (fs::exists(fs::path(path) / kDatasetManifest)) return open_dataset(path, options);
-    // [folder format slot: rpg]
+    if (fs::exists(fs::path(path) / kRpgEventsFile)) return open_rpg_text(path, options);
+    if (is_ros2_bag_folder(path)) return open_ros2_bag(path, options);
     throw InputError(path, "", "folder is not a recognised dataset (no " +
                                    std::string(kDatasetManifest) + ")");
   }
@@ -26,9 +27,18 @@ std::unique_ptr<RecordingReader> open_recording(const std::string& path,
   std::string head(256, '\0');
   in.read(head.data(), static_cast<std::streamsize>(head.size()));
   head.resize(static_cast<std::size_t>(in.gcount()));
-  // [file format slot: aedat4]
-  // [file format slot: prophesee]
-  // [file format slot: rosbag]
+  if (head.starts_with("#!AER-DAT4.0")) return open_aedat4(path, options);
+  // "% " text header: Prophesee RAW; the reader parses the whole header and rejects encodings
+  // other than EVT 2.0 / 3.0 (and DAT files, whose header also starts with "% ") with a reason.
+  if (looks_like_prophesee_raw(head)) return open_prophesee_raw(path, options);
+  // ROS 1 bag ("#ROSBAG V2.0"; older versions are rejected by the reader with a reason); ROS 2
+  // bag file (an SQLite database: the reader checks for the topics/messages tables).
+  if (head.starts_with("#ROSBAG V")) return open_ros1_bag(path, options);
+  if (head.starts_with(kSqliteMagic)) return open_ros2_bag(path, options);
+  if (head.starts_with("\x89MCAP"))
+    throw InputError(path, "byte 0",
+                     "MCAP (ROS 2) is not supported: Debian ships no MCAP library; "
+                     "`ros2 bag convert` can rewrite the bag with sqlite3 storage");
   throw InputError(path, "byte 0", "unrecognised file format");
 }
 

@@ -17,6 +17,7 @@
 ///    byte offset or line and the reason; recoverable damage (a corrupt packet, a truncated
 ///    tail) is dropped and counted so the rest of the file stays usable.
 /// Not thread-safe; one reader per thread.
+#include <cstdint>
 #include <limits>
 #include <memory>
 #include <optional>
@@ -32,6 +33,14 @@ namespace fdv {
 enum class StreamKind { kEvents, kImu, kDepth, kOdometry, kGroundTruth };
 const char* to_string(StreamKind kind);
 
+/// One topic (channel) of a recording that has them (ROS bags): listed by `fdv info`.
+struct TopicInfo {
+  std::string topic;
+  std::string type;         ///< message type as the recording names it
+  std::uint64_t count = 0;  ///< messages
+  double rate_hz = 0;       ///< mean rate over the topic's span in recording time; 0 if < 2 messages
+};
+
 struct RecordingInfo {
   std::string path;
   std::string format;  ///< "aedat4", "evt2", "evt3", "rpg_text", "fdv_dataset", ...
@@ -40,6 +49,7 @@ struct RecordingInfo {
   std::vector<StreamKind> streams;         ///< streams this recording can contain
   std::optional<Calibration> calibration;  ///< when the recording carries one
   std::vector<std::string> notes;          ///< format details worth printing (compression, ...)
+  std::vector<TopicInfo> topics;           ///< every topic of a bag; empty for other formats
 };
 
 struct SensorChunk {
@@ -54,6 +64,14 @@ struct SensorChunk {
 
 struct ReaderOptions {
   std::size_t chunk_events = 1 << 16;  ///< about how many events one read() hands out
+  /// Topics to read from a ROS bag (other formats ignore them). Empty: chosen by message type,
+  /// preferring the paper's names (/dvs/events, /mavros/imu/data, /camera/depth/image_rect_raw)
+  /// when several topics qualify; docs/FORMATS.md "ROS 1 bags" has the rules.
+  std::string events_topic;
+  std::string imu_topic;
+  std::string depth_topic;
+  std::string odometry_topic;
+  std::string ground_truth_topic;
 };
 
 class RecordingReader {
