@@ -1,0 +1,76 @@
+#pragma once
+/// Registration of a depth image into the event camera's raw pixel grid.
+///
+///   DepthRegistrar reg(calibration);                   // precomputes the depth rays once
+///   DepthRegistrationResult r = reg.register_frame(frame);
+///   if (r.ok()) use(r.depth);                          // z in E [m] per raw event pixel, 0 = hole
+///   else report(r.rejected);                           // e.g. wrong frame size
+///
+/// Every valid depth pixel (u, v, z) is back-projected through the depth camera (intrinsics and
+/// distortion), moved into the event camera frame with T_E_D = T_B_E⁻¹ T_B_D, projected with the
+/// event camera's intrinsics and distortion, and rounded to the nearest raw event pixel. When
+/// several depth pixels land on one event pixel the nearest surface (smallest z in E) wins
+/// (z-buffer); event pixels no depth pixel lands on stay 0 (holes are not filled here; the
+/// consumer decides, see docs/DETECTION.md). Thread-safe after construction (const).
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "fdv/core/calibration.h"
+#include "fdv/core/sensor_data.h"
+
+namespace fdv {
+
+struct DepthRegistrationOptions {
+  /// Depth values outside [min_depth_m, max_depth_m] are treated as invalid input (D435
+  /// operating range 0.3-10 m, DESIGN.md; a little margin either side).
+  double min_depth_m = 0.1;
+  double max_depth_m = 20.0;
+  std::string validate() const;
+};
+
+/// A depth image resampled onto the event camera's raw pixel grid.
+struct RegisteredDepth {
+  TimeNs t = 0;  ///< time of the source depth frame
+  int width = 0;
+  int height = 0;
+  std::vector<float> depth_m;  ///< z along E's optical axis [m], row-major, 0 = no depth
+  // What happened to the source pixels (they sum to width·height of the depth frame):
+  std::uint64_t registered = 0;       ///< landed on an event pixel (z-test winners and losers)
+  std::uint64_t occluded = 0;         ///< of those, lost the z-test to a nearer surface
+  std::uint64_t invalid_input = 0;    ///< 0, NaN or out of range in the depth frame
+  std::uint64_t no_inverse = 0;       ///< depth lens map not invertible at that pixel
+  std::uint64_t behind_camera = 0;    ///< z ≤ 0 in E
+  std::uint64_t outside_image = 0;    ///< projected outside the event image
+  float at(int x, int y) const { return depth_m[static_cast<std::size_t>(y) * width + x]; }
+  bool empty() const { return depth_m.empty(); }
+};
+
+struct DepthRegistrationResult {
+  RegisteredDepth depth;  ///< empty when rejected
+  std::string rejected;   ///< empty when accepted, else the reason (the frame is not used)
+  bool ok() const { return rejected.empty(); }
+};
+
+class DepthRegistrar {
+ public:
+  /// Throws ConfigError when the calibration has no depth camera or an option is invalid.
+  explicit DepthRegistrar(const Calibration& calibration, const DepthRegistrationOptions& options = {});
+  /// Registers one frame. A frame whose size differs from the depth camera's calibration, or
+  /// whose buffer does not hold width·height values, is rejected with a reason; the caller
+  /// counts rejections (the streaming pipeline reports them per reason).
+  DepthRegistrationResult register_frame(const DepthFrame& frame) const;
+
+ private:
+  DepthRegistrationOptions options_;
+  PinholeCamera depth_camera_;
+  PinholeCamera event_camera_;
+  Eigen::Matrix3d R_E_D_;
+  Eigen::Vector3d t_E_D_;
+  std::vector<float> rays_;  ///< interleaved normalised (x, y) per depth pixel, NaN = no inverse
+  /// Squared normalised radius beyond which the event lens polynomial is not trusted (it can
+  /// fold far-off-axis points back into the image); +inf without distortion.
+  double max_radius2_event_ = 0;
+};
+
+}  // namespace fdv

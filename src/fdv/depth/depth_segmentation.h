@@ -1,0 +1,147 @@
+#pragma once
+/// Segmentation of a tracked object in a depth image registered into the event camera's raw
+/// pixel grid (paper §IV-C.2): ROI = the track's box at the depth frame's time scaled ×2; the
+/// nearest significant peak of the ROI's depth histogram; a window around it; gates on spread,
+/// footprint, position and size; the object's centre depth with the sphere-radius correction.
+///
+///   DepthSegmentationOptions opt;  opt.object_radius_m = 0.1;    // if the ball is known
+///   DepthQuery q{track.predict(frame.t).centre_px, track.predict(frame.t).box_size_px};
+///   DepthSegmentation r = segment_object_depth(depth_view(registered), event_camera, q, opt);
+///   if (r.observation) use(*r.observation); else report(r.rejection, r.reason);
+///
+/// Pitfalls: the depth image must be in the event camera's raw grid with z along E's optical
+/// axis (what DepthRegistrar produces); the box is the tracker's *prediction at the depth frame's
+/// time*, not the latest detection. Thread-safe (pure function); allocates one small histogram.
+#include <Eigen/Core>
+#include <optional>
+#include <span>
+#include <string>
+
+#include "fdv/core/camera.h"
+#include "fdv/core/time.h"
+
+namespace fdv {
+
+/// Non-owning view of a depth image [m], row-major, 0 = invalid.
+struct DepthImageView {
+  TimeNs t = 0;
+  int width = 0;
+  int height = 0;
+  std::span<const float> depth_m;
+};
+/// View of any frame type with t, width, height and a depth_m vector (DepthFrame, RegisteredDepth).
+template <class Frame>
+DepthImageView depth_view(const Frame& f) {
+  return {f.t, f.width, f.height, std::span<const float>(f.depth_m)};
+}
+
+/// Stereo depth noise σ(z) = z²·s/(f·B) (Intel's RMS formula; DESIGN.md defaults, D435).
+struct DepthNoiseModel {
+  double subpixel_px = 0.08;  ///< s: stereo matching subpixel accuracy [px]
+  double focal_px =
+      385.7;  ///< f: depth camera focal length [px] (paper release's depth intrinsics)
+  double baseline_m = 0.05;  ///< B: stereo baseline [m] (D435: 50 mm)
+  double sigma_m(double z_m) const { return z_m * z_m * subpixel_px / (focal_px * baseline_m); }
+  std::string validate() const;
+};
+
+struct DepthSegmentationOptions {
+  /// ROI = box scaled about its centre by this factor (paper §IV-C.2: "twice").
+  double roi_scale = 2.0;
+  /// Histogram bin width [m]: about σ(z) at 5 m (0.10 m) and the depth extent of a 0.1 m-radius
+  /// ball, so the object's pixels fall into 1-3 bins over the working range.
+  double bin_width_m = 0.10;
+  /// Valid depth range [m] (D435 0.3-10 m, DESIGN.md).
+  double min_depth_m = 0.3;
+  double max_depth_m = 10.0;
+  /// A histogram peak is significant when a 3-bin sum holds at least this many pixels...
+  int min_peak_pixels = 8;
+  /// ...and at least this fraction of the ROI's valid pixels (a ball filling its box covers
+  /// π/16 ≈ 0.2 of a ×2 ROI; 0.04 leaves room for holes and partial occlusion).
+  double min_peak_fraction = 0.04;
+  /// Peaks tried from near to far when the nearer ones fail the object gates (an occluder in
+  /// front).
+  int max_peaks = 3;
+  /// Segmentation half-window about the peak's mean [m]: radius + window_sigmas·σ(z).
+  double window_sigmas = 2.5;
+  /// Known object radius [m]; 0 = unknown: estimated from the box, r = ½·min(w, h)·z/f.
+  double object_radius_m = 0.0;
+  /// Radius assumed for the window when the radius is unknown [m] (a handball is 0.09 m).
+  double default_window_radius_m = 0.10;
+  /// Spread gate: reject when std of the segmented depths > spread_gate × the expected std
+  /// sqrt((0.236·r)² + σ(z)²) of a sphere's visible cap plus sensor noise.
+  double spread_gate = 2.0;
+  /// Footprint gate: reject when segmented pixels > max_fill_ratio × the box's inscribed ellipse
+  /// area (an occluder or wall filling the ×2 ROI has up to 5× that).
+  double max_fill_ratio = 1.5;
+  /// Position gate: the segmented centroid must lie inside the box's ellipse scaled by this.
+  double max_centroid_offset = 1.0;
+  /// Size gate (known radius only): ½·min(w, h)·z/f must be within [1/k, k] × object_radius_m.
+  double radius_ratio_gate = 1.6;
+  /// Relative std of the estimated radius, used in the observation's sigma when r is estimated.
+  double radius_relative_sigma = 0.25;
+  /// Floor of the observation's sigma [m]: registration rounds to whole event pixels and the
+  /// cap model (2r/3) is approximate; 1 cm.
+  double min_sigma_m = 0.01;
+  DepthNoiseModel noise;
+
+  std::string validate() const;
+};
+
+/// Where to look: the track's box at the depth frame's time (raw event pixels), optionally the
+/// depth the current trajectory estimate expects there (consistency with the event track).
+struct DepthQuery {
+  Eigen::Vector2d centre_px = Eigen::Vector2d::Zero();
+  Eigen::Vector2d box_size_px = Eigen::Vector2d::Zero();  ///< width, height
+  std::optional<double> expected_depth_m;                 ///< z of the centre in E, if known
+  double expected_depth_sigma_m = 0.0;                    ///< its std (added to σ(z))
+  double expected_depth_gate_sigmas = 3.0;                ///< reject peaks farther than this
+};
+
+/// One depth observation of the object, in the frame of the registered image (E).
+struct DepthObservation {
+  TimeNs t = 0;
+  /// z of the object's CENTRE along the optical axis [m] (what r_D = z - d compares, eq. 15):
+  /// surface_depth_m + (2/3)·r·cosθ, the mean depth of a sphere's visible cap lying 2r/3 in front
+  /// of its centre along the line of sight θ off the axis.
+  double depth_m = 0;
+  double surface_depth_m = 0;  ///< mean z of the segmented pixels [m]
+  double radius_m = 0;         ///< radius used for the correction [m]
+  bool radius_estimated = false;
+  double sigma_m = 0;  ///< std of depth_m for the estimator: σ(z) ⊕ radius uncertainty
+  int pixel_count = 0;
+  double spread_m = 0;                                  ///< std of the segmented depths [m]
+  double expected_spread_m = 0;                         ///< what a sphere plus noise would give [m]
+  Eigen::Vector2d centre_px = Eigen::Vector2d::Zero();  ///< centroid of the segmented pixels
+};
+
+enum class DepthRejection {
+  kNone,
+  kInvalidInput,       ///< image buffer size, box or camera inconsistent
+  kRoiOutsideImage,    ///< nothing of the ROI lies in the image
+  kTooFewValidPixels,  ///< holes over the ROI
+  kNoSignificantPeak,  ///< no histogram peak reaches the significance threshold
+  kSpreadTooLarge,     ///< variance gate
+  kFootprintTooLarge,  ///< more pixels than the object can cover (wall, large occluder)
+  kOffCentre,          ///< segmented blob not where the event track says the object is
+  kSizeInconsistent,   ///< the box at this depth implies a radius unlike the known one
+  kDepthInconsistent,  ///< far from the depth the trajectory estimate expects
+};
+const char* to_string(DepthRejection r);
+
+struct DepthSegmentation {
+  std::optional<DepthObservation> observation;
+  DepthRejection rejection = DepthRejection::kNone;  ///< of the nearest peak when all failed
+  std::string reason;    ///< readable: every peak tried and why it failed
+  int roi_pixels = 0;    ///< pixels of the ROI inside the image
+  int valid_pixels = 0;  ///< of those, with a depth in range
+  int peaks_tried = 0;
+};
+
+/// Segments the object in `depth` (registered into `event_camera`'s raw grid). Never throws on
+/// bad data: inconsistencies come back as kInvalidInput. Throws ConfigError for invalid options.
+DepthSegmentation segment_object_depth(const DepthImageView& depth,
+                                       const PinholeCamera& event_camera, const DepthQuery& query,
+                                       const DepthSegmentationOptions& options);
+
+}  // namespace fdv

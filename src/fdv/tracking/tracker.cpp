@@ -1,0 +1,155 @@
+#include "fdv/tracking/tracker.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "fdv/core/error.h"
+
+namespace fdv {
+
+namespace {
+
+bool finite(const Eigen::Vector2d& v) { return std::isfinite(v.x()) && std::isfinite(v.y()); }
+
+struct Candidate {
+  double d2;
+  std::size_t track;
+  std::size_t detection;
+};
+
+}  // namespace
+
+std::string TrackerOptions::validate() const {
+  if (auto e = filter.validate(); !e.empty()) return "filter." + e;
+  if (!(gate_chi2 > 0) || !std::isfinite(gate_chi2)) return "gate_chi2 must be > 0";
+  if (!(gate_max_distance_px > 0)) return "gate_max_distance_px must be > 0";
+  if (max_gap_ns <= 0) return "max_gap_ns must be > 0";
+  if (tentative_max_gap_ns <= 0) return "tentative_max_gap_ns must be > 0";
+  if (confirm_hits < 1) return "confirm_hits must be >= 1";
+  if (!(box_smoothing > 0 && box_smoothing <= 1)) return "box_smoothing must be in (0, 1]";
+  if (max_tracks < 1) return "max_tracks must be >= 1";
+  return {};
+}
+
+TrackPrediction Track::predict(TimeNs t) const {
+  const ImagePrediction p = filter_.predict(t);
+  TrackPrediction out;
+  out.t = t;
+  out.centre_px = p.position();
+  out.velocity_px_s = p.velocity();
+  out.acceleration_px_s2 = p.acceleration();
+  out.centre_covariance_px2 = p.position_covariance();
+  out.box_size_px = box_size_px_;
+  return out;
+}
+
+Tracker::Tracker(TrackerOptions options) : options_(std::move(options)) {
+  if (auto e = options_.validate(); !e.empty()) throw ConfigError("TrackerOptions: " + e);
+}
+
+const Track* Tracker::find(int id) const {
+  for (const Track& tr : tracks_)
+    if (tr.id() == id) return &tr;
+  return nullptr;
+}
+
+TrackerStep Tracker::update(TimeNs t, std::span<const TrackerDetection> detections) {
+  TrackerStep step;
+  step.assignments.resize(detections.size());
+  for (std::size_t i = 0; i < detections.size(); ++i) step.assignments[i].detection = i;
+
+  if (started_ && t < now_) {
+    for (auto& a : step.assignments)
+      a.reason = "out of order: window time before the previous window";
+    return step;
+  }
+  started_ = true;
+  now_ = t;
+
+  // Valid detections only; the rest are rejected with a reason.
+  std::vector<bool> usable(detections.size(), false);
+  for (std::size_t i = 0; i < detections.size(); ++i) {
+    const TrackerDetection& d = detections[i];
+    if (!finite(d.centre_px) || !finite(d.box_size_px) || d.box_size_px.minCoeff() < 0)
+      step.assignments[i].reason = "non-finite centre or invalid box";
+    else if (d.t > t)
+      step.assignments[i].reason = "detection time after the window time";
+    else
+      usable[i] = true;
+  }
+
+  // Gate every (track, detection) pair.
+  std::vector<Candidate> candidates;
+  for (std::size_t k = 0; k < tracks_.size(); ++k) {
+    const Track& tr = tracks_[k];
+    const TimeNs gap_limit = tr.confirmed() ? options_.max_gap_ns : options_.tentative_max_gap_ns;
+    for (std::size_t i = 0; i < detections.size(); ++i) {
+      if (!usable[i]) continue;
+      const TrackerDetection& d = detections[i];
+      if (d.t < tr.last_update_time() || d.t - tr.last_update_time() > gap_limit) continue;
+      const ImagePrediction p = tr.filter().predict(d.t);
+      if ((d.centre_px - p.position()).norm() > options_.gate_max_distance_px) continue;
+      const double d2 = p.mahalanobis2(d.centre_px);
+      if (d2 <= options_.gate_chi2) candidates.push_back({d2, k, i});
+    }
+  }
+  // Global nearest neighbour, greedy: smallest d² first; ties go to the older (confirmed) track.
+  std::sort(candidates.begin(), candidates.end(), [this](const Candidate& a, const Candidate& b) {
+    if (a.d2 != b.d2) return a.d2 < b.d2;
+    return tracks_[a.track].id() < tracks_[b.track].id();
+  });
+  std::vector<bool> track_taken(tracks_.size(), false), detection_taken(detections.size(), false);
+  for (const Candidate& c : candidates) {
+    if (track_taken[c.track] || detection_taken[c.detection]) continue;
+    track_taken[c.track] = detection_taken[c.detection] = true;
+    Track& tr = tracks_[c.track];
+    const TrackerDetection& d = detections[c.detection];
+    tr.filter_.update(d.t, d.centre_px);
+    const double a = options_.box_smoothing;
+    tr.box_size_px_ = a * d.box_size_px + (1 - a) * tr.box_size_px_;
+    ++tr.hits_;
+    tr.misses_ = 0;
+    if (!tr.confirmed() && tr.hits_ >= options_.confirm_hits) {
+      tr.status_ = TrackStatus::kConfirmed;
+      step.confirmed.push_back(tr.id());
+    }
+    auto& out = step.assignments[c.detection];
+    out.outcome = TrackAssignment::Outcome::kUpdated;
+    out.track_id = tr.id();
+    out.mahalanobis2 = c.d2;
+  }
+  for (std::size_t k = 0; k < track_taken.size(); ++k)
+    if (!track_taken[k]) ++tracks_[k].misses_;
+
+  // Delete tracks not updated for too long (before creating new ones, so slots free up).
+  for (auto it = tracks_.begin(); it != tracks_.end();) {
+    const TimeNs limit = it->confirmed() ? options_.max_gap_ns : options_.tentative_max_gap_ns;
+    if (t - it->last_update_time() > limit) {
+      step.deleted.push_back(it->id());
+      it = tracks_.erase(it);
+    } else {
+      ++it;
+    }
+  }
+
+  // Detections left over start tentative tracks.
+  for (std::size_t i = 0; i < detections.size(); ++i) {
+    if (!usable[i] || detection_taken[i]) continue;
+    if (static_cast<int>(tracks_.size()) >= options_.max_tracks) {
+      step.assignments[i].reason = "track limit reached (max_tracks)";
+      continue;
+    }
+    tracks_.push_back(Track(next_id_++, detections[i], options_.filter));
+    Track& tr = tracks_.back();
+    if (options_.confirm_hits <= 1) {
+      tr.status_ = TrackStatus::kConfirmed;
+      step.confirmed.push_back(tr.id());
+    }
+    auto& out = step.assignments[i];
+    out.outcome = TrackAssignment::Outcome::kNewTrack;
+    out.track_id = tr.id();
+  }
+  return step;
+}
+
+}  // namespace fdv

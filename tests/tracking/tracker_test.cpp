@@ -1,0 +1,157 @@
+#include "fdv/tracking/tracker.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "fdv/core/error.h"
+
+namespace fdv {
+namespace {
+
+constexpr TimeNs kWindow = 25 * kNsPerMs;
+
+TrackerDetection det(TimeNs t, double u, double v, double size = 20) {
+  TrackerDetection d;
+  d.t = t;
+  d.centre_px = {u, v};
+  d.box_size_px = {size, size};
+  d.event_count = 100;
+  return d;
+}
+
+using Outcome = TrackAssignment::Outcome;
+
+TEST(Tracker, RejectsInvalidOptions) {
+  TrackerOptions o;
+  o.confirm_hits = 0;
+  EXPECT_THROW(Tracker{o}, ConfigError);
+  o = {};
+  o.box_smoothing = 1.5;
+  EXPECT_THROW(Tracker{o}, ConfigError);
+}
+
+// One object: created tentative, confirmed at the 3rd hit, predicted through two missed windows,
+// deleted 100 ms after its last update.
+TEST(Tracker, LifecycleOfOneTrack) {
+  Tracker tracker;
+  auto pos = [](int k) {
+    return Eigen::Vector2d(100 + 20.0 * k, 200 + 5.0 * k);
+  };  // 800 px/s, 200 px/s
+  int id = -1;
+  for (int k = 0; k < 8; ++k) {
+    const TimeNs t = k * kWindow;
+    std::vector<TrackerDetection> d;
+    if (k != 4 && k != 5) d.push_back(det(t, pos(k).x(), pos(k).y()));  // two misses
+    const TrackerStep step = tracker.update(t, d);
+    if (k == 0) {
+      ASSERT_EQ(step.assignments.size(), 1u);
+      EXPECT_EQ(step.assignments[0].outcome, Outcome::kNewTrack);
+      id = step.assignments[0].track_id;
+      EXPECT_FALSE(tracker.find(id)->confirmed());
+    } else if (!d.empty()) {
+      EXPECT_EQ(step.assignments[0].outcome, Outcome::kUpdated) << "window " << k;
+      EXPECT_EQ(step.assignments[0].track_id, id);
+    }
+    if (k == 2) {
+      EXPECT_EQ(step.confirmed, std::vector<int>{id});
+      EXPECT_TRUE(tracker.find(id)->confirmed());
+    }
+    if (k == 5) {
+      EXPECT_EQ(tracker.find(id)->misses(), 2);
+    }
+  }
+  // The track predicted ahead follows the motion; its box is the smoothed detection size.
+  const TrackPrediction p = tracker.find(id)->predict(9 * kWindow);
+  EXPECT_LT((p.centre_px - pos(9)).norm(), 2.0);
+  EXPECT_NEAR(p.box_size_px.x(), 20.0, 1e-9);
+  // No detections: deleted once more than 100 ms have passed since the last update (k = 7).
+  EXPECT_TRUE(tracker.update(11 * kWindow, {}).deleted.empty());
+  EXPECT_EQ(tracker.update(12 * kWindow, {}).deleted, std::vector<int>{id});
+  EXPECT_EQ(tracker.find(id), nullptr);
+}
+
+// A single clutter detection makes a tentative track that is dropped after 50 ms, never confirmed;
+// a detection far from the real track (beyond the gates) starts its own track.
+TEST(Tracker, ClutterDoesNotJoinOrSurvive) {
+  Tracker tracker;
+  std::vector<int> clutter_ids;
+  for (int k = 0; k < 6; ++k) {
+    const TimeNs t = k * kWindow;
+    std::vector<TrackerDetection> d = {det(t, 300 + 10.0 * k, 300)};
+    if (k == 2) d.push_back(det(t, 500, 100));  // far away: new track
+    const TrackerStep step = tracker.update(t, d);
+    if (k == 2) {
+      ASSERT_EQ(step.assignments.size(), 2u);
+      EXPECT_EQ(step.assignments[0].outcome, Outcome::kUpdated);
+      EXPECT_EQ(step.assignments[1].outcome, Outcome::kNewTrack);
+      clutter_ids.push_back(step.assignments[1].track_id);
+    }
+    if (k == 5) {
+      EXPECT_EQ(step.deleted, clutter_ids);  // 75 ms after its only hit
+    }
+  }
+  ASSERT_EQ(tracker.tracks().size(), 1u);
+  EXPECT_TRUE(tracker.tracks()[0].confirmed());
+  EXPECT_EQ(tracker.tracks()[0].hits(), 6);
+}
+
+// Two balls on crossing paths (one left-to-right rising, one right-to-left falling), detections
+// presented in random order every window: each keeps its id through the crossing.
+TEST(Tracker, TwoCrossingTracksKeepTheirIds) {
+  Tracker tracker;
+  std::mt19937 rng(3);
+  std::normal_distribution<double> n01(0, 1);
+  auto a = [](double s) { return Eigen::Vector2d(100 + 1200 * s, 300 - 300 * s + 500 * s * s); };
+  auto b = [](double s) { return Eigen::Vector2d(540 - 1200 * s, 200 + 400 * s - 400 * s * s); };
+  int id_a = -1, id_b = -1;
+  for (int k = 0; k <= 14; ++k) {  // 0.35 s; the paths cross near s = 0.18
+    const TimeNs t = k * kWindow;
+    const double s = to_seconds(t);
+    std::vector<TrackerDetection> d = {
+        det(t, a(s).x() + 1.5 * n01(rng), a(s).y() + 1.5 * n01(rng)),
+        det(t, b(s).x() + 1.5 * n01(rng), b(s).y() + 1.5 * n01(rng))};
+    const bool swap = rng() % 2;
+    if (swap) std::swap(d[0], d[1]);
+    const TrackerStep step = tracker.update(t, d);
+    const int got_a = step.assignments[swap ? 1 : 0].track_id,
+              got_b = step.assignments[swap ? 0 : 1].track_id;
+    if (k == 0) {
+      id_a = got_a;
+      id_b = got_b;
+      EXPECT_NE(id_a, id_b);
+    } else {
+      EXPECT_EQ(got_a, id_a) << "window " << k;
+      EXPECT_EQ(got_b, id_b) << "window " << k;
+    }
+  }
+  EXPECT_EQ(tracker.tracks().size(), 2u);
+}
+
+TEST(Tracker, OutOfOrderWindowAndBadDetectionsAreRejected) {
+  Tracker tracker;
+  tracker.update(2 * kWindow, std::vector<TrackerDetection>{det(2 * kWindow, 100, 100)});
+  const TrackerStep late =
+      tracker.update(kWindow, std::vector<TrackerDetection>{det(kWindow, 100, 100)});
+  EXPECT_EQ(late.assignments[0].outcome, Outcome::kRejected);
+  EXPECT_NE(late.assignments[0].reason.find("out of order"), std::string::npos);
+  TrackerDetection nan = det(3 * kWindow, std::nan(""), 100);
+  TrackerDetection future = det(4 * kWindow, 110, 100);
+  const std::vector<TrackerDetection> bad = {nan, future};
+  const TrackerStep step = tracker.update(3 * kWindow, bad);
+  EXPECT_EQ(step.assignments[0].outcome, Outcome::kRejected);
+  EXPECT_EQ(step.assignments[1].outcome, Outcome::kRejected);
+  EXPECT_EQ(tracker.tracks().size(), 1u);
+}
+
+// Box smoothing: sizes 20 then 40 with weight 0.5 give 30; the box is carried in predictions.
+TEST(Tracker, BoxSizeIsSmoothed) {
+  Tracker tracker;
+  tracker.update(0, std::vector<TrackerDetection>{det(0, 100, 100, 20)});
+  tracker.update(kWindow, std::vector<TrackerDetection>{det(kWindow, 110, 100, 40)});
+  ASSERT_EQ(tracker.tracks().size(), 1u);
+  EXPECT_NEAR(tracker.tracks()[0].predict(3 * kWindow).box_size_px.x(), 30.0, 1e-12);
+}
+
+}  // namespace
+}  // namespace fdv
