@@ -1,0 +1,37 @@
+#include "fdv/compensation/compensator_base.h"
+
+namespace fdv::internal {
+
+CompensatorBase::CompensatorBase(CompensationMethod method, const Calibration& calibration,
+                                 const CompensationOptions& options, std::shared_ptr<const UndistortionMap> map)
+    : method_(method), calibration_(calibration), options_(options), map_(std::move(map)) {
+  out_.width = map_->width();
+  out_.height = map_->height();
+}
+
+ImuWindowSummary CompensatorBase::begin_window(const CompensationInput& in) {
+  out_.t_start_ns = in.t_start_ns;
+  out_.t_end_ns = in.t_end_ns;
+  out_.set_size(0);
+  CompensationReport& rep = out_.report;
+  rep = CompensationReport{};
+  rep.requested = rep.used = method_;
+  rep.events_in = in.events.size();
+  const ImuWindowSummary imu = summarize_imu(in.imu, in.t_start_ns, in.t_end_ns, options_.max_imu_gap_ns);
+  rep.imu_samples = imu.samples_used;
+  rep.imu_largest_gap_ns = imu.largest_gap_ns;
+  rep.imu_gap = imu.available && imu.gap;
+  Eigen::Vector3d omega_B = Eigen::Vector3d::Zero();
+  if (imu.available) {
+    rep.has_omega = true;
+    rep.omega_E = calibration_.R_E_I() * imu.mean_gyro_I;
+    omega_B = calibration_.R_B_I * imu.mean_gyro_I;
+  }
+  if (in.odometry && in.odometry->v_W.allFinite() && in.odometry->q_W_B.coeffs().allFinite()) {
+    rep.has_velocity = true;
+    rep.v_E = camera_velocity_E(calibration_, *in.odometry, omega_B);
+  }
+  return imu;
+}
+
+}  // namespace fdv::internal

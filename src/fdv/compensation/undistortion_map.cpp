@@ -1,0 +1,40 @@
+#include "fdv/compensation/undistortion_map.h"
+
+#include <cmath>
+
+#include "fdv/core/error.h"
+
+namespace fdv {
+
+UndistortionMap::UndistortionMap(const PinholeCamera& camera) : camera_(camera) {
+  if (const auto why = camera.validate(); !why.empty()) throw ConfigError("event camera: " + why);
+  const std::size_t n = static_cast<std::size_t>(camera.width) * camera.height;
+  rays_.resize(n);
+  grid_index_.resize(n);
+  for (int y = 0; y < camera.height; ++y)
+    for (int x = 0; x < camera.width; ++x) {
+      const std::size_t i = static_cast<std::size_t>(y) * camera.width + x;
+      const Eigen::Vector2d xn = camera.pixel_to_normalized({x, y});
+      if (!xn.allFinite()) {
+        const float nan = std::nanf("");
+        rays_[i] = {nan, nan};
+        grid_index_[i] = kNoInverse;
+        ++pixels_without_inverse_;
+        continue;
+      }
+      rays_[i] = {static_cast<float>(xn.x()), static_cast<float>(xn.y())};
+      const double u = camera.fx * xn.x() + camera.cx, v = camera.fy * xn.y() + camera.cy;
+      if (u >= -0.5 && v >= -0.5 && u < camera.width - 0.5 && v < camera.height - 0.5) {
+        const int ui = static_cast<int>(u + 0.5), vi = static_cast<int>(v + 0.5);
+        grid_index_[i] = vi * camera.width + ui;
+      } else {
+        grid_index_[i] = kOutside;
+      }
+    }
+}
+
+Eigen::Vector2d UndistortionMap::undistorted_to_raw(const Eigen::Vector2d& uv) const {
+  return camera_.normalized_to_pixel({(uv.x() - camera_.cx) / camera_.fx, (uv.y() - camera_.cy) / camera_.fy});
+}
+
+}  // namespace fdv

@@ -1,0 +1,40 @@
+#pragma once
+/// Internal: the IMU / odometry / depth driven strategies "none", "rotation" (Falanga et al. 2020)
+/// and "rotation_translation" (the paper, eqs. 6-8). Create through make_compensator().
+#include <opencv2/core.hpp>
+#include <vector>
+
+#include "fdv/compensation/compensator_base.h"
+
+namespace fdv::internal {
+
+class WarpCompensator final : public CompensatorBase {
+ public:
+  WarpCompensator(CompensationMethod method, const Calibration& calibration, const CompensationOptions& options,
+                  std::shared_ptr<const UndistortionMap> map);
+  const CompensatedWindow& compensate(const CompensationInput& input) override;
+
+ private:
+  /// K·R_s for each refresh slot of the window (row-major 3x3 floats), R_s = exp([ω]× t_s) at
+  /// the slot's middle time t_s.
+  void build_rotation_slots(const Eigen::Vector3d& omega_E, TimeNs duration_ns);
+  /// Per raw pixel inverse depth ρ = 1/z (holes filled / fallback applied) and a fallback flag,
+  /// rebuilt only when the depth frame changes. False when the frame holds no usable depth.
+  bool prepare_depth(const RegisteredDepth& depth);
+
+  std::vector<float> slots_;  ///< n_slots × 9
+  float slots_per_s_ = 0;
+  int last_slot_ = 0;
+  // Depth cache.
+  const RegisteredDepth* depth_key_ = nullptr;
+  const float* depth_data_key_ = nullptr;
+  TimeNs depth_t_key_ = 0;
+  bool depth_usable_ = false;
+  float fallback_depth_m_ = 0;
+  /// ρ = 1/z per raw pixel [1/m]; sign bit set where the missing-depth policy was applied.
+  std::vector<float> inv_depth_;
+  cv::Mat inv_raw_, inv_dilated_;
+  std::vector<float> median_scratch_;
+};
+
+}  // namespace fdv::internal

@@ -1,0 +1,46 @@
+#pragma once
+/// One detected moving object in one event window. Plain value type (Eigen only), so tracking
+/// and output code can use it without OpenCV.
+#include <Eigen/Core>
+#include <string_view>
+
+#include "fdv/core/time.h"
+
+namespace fdv {
+
+/// Axis-aligned box [x0, x1] × [y0, y1] in continuous pixel coordinates (pixel centres at integers).
+struct Box2D {
+  double x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+  double width() const { return x1 - x0; }
+  double height() const { return y1 - y0; }
+  Eigen::Vector2d center() const { return {0.5 * (x0 + x1), 0.5 * (y0 + y1)}; }
+};
+
+enum class DetectionSource {
+  kGaussianFit,      ///< Algorithm 1 converged to a plausible ROI
+  kRegionRetrieval,  ///< connected component chosen after the fit failed (paper §IV-B.3)
+};
+std::string_view to_string(DetectionSource s);
+
+struct Detection2D {
+  /// Mean time of the compensated events inside the box (not the window start).
+  TimeNs t_ns = 0;
+  // On the undistorted pixel grid K·xn (where the time images live).
+  Box2D box_undistorted;
+  Eigen::Vector2d center_undistorted = Eigen::Vector2d::Zero();
+  /// The centre as normalised undistorted coordinates (x/z, y/z) of the event camera.
+  Eigen::Vector2d center_normalized = Eigen::Vector2d::Zero();
+  // In raw (distorted) sensor pixels: the centre mapped through the lens model, and the bounding
+  // box of the undistorted box's outline mapped the same way.
+  Box2D box_raw;
+  Eigen::Vector2d center_raw = Eigen::Vector2d::Zero();
+  int events = 0;      ///< compensated events inside the box
+  /// Peak of the filtered segmentation (mean-filtered, opened S, before squaring) inside the box,
+  /// in [0, 1]: the local density and recency of the segmented pattern; 1 = a fully segmented
+  /// neighbourhood at N = 1. Same scale as DetectorOptions::min_peak, the detection threshold.
+  double score = 0;
+  DetectionSource source = DetectionSource::kGaussianFit;
+  int fit_iterations = 0;
+};
+
+}  // namespace fdv

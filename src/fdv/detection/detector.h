@@ -1,0 +1,93 @@
+#pragma once
+/// The detection front end of one compensated window (paper §IV-B): time images, adaptive
+/// threshold, pre-processing, iterative Gaussian fitting, moving-region retrieval, Detection2D.
+///
+///   Detector detector(options, calibration.event_camera);
+///   CompensatedEventsView view{w.t_start_ns, w.t_end_ns, w.width, w.height, w.pixel(), w.t_s(),
+///                              w.report.omega_E.norm(), w.report.v_E.norm(),
+///                              w.report.events_out_of_order == 0};
+///   DetectionResult r = detector.detect(view);
+///   if (r.detection) use(*r.detection);              // else r.status says why not
+///   show(detector.time_images().normalized, detector.segmentation());   // valid until next call
+///
+/// The images live on the undistorted grid K·xn of `event_camera` (the compensators' output
+/// grid); detections are reported there and in raw sensor pixels through the lens model.
+/// A Detector keeps its image buffers between calls. Not thread-safe: one per thread.
+#include <optional>
+#include <utility>
+#include <string_view>
+#include <vector>
+
+#include "fdv/core/camera.h"
+#include "fdv/detection/detection2d.h"
+#include "fdv/detection/detector_options.h"
+#include "fdv/detection/gaussian_fit.h"
+#include "fdv/detection/time_images.h"
+
+namespace fdv {
+
+enum class DetectionStatus {
+  kDetected,
+  kTooFewEvents,       ///< fewer than min_window_events compensated events (incl. none)
+  kNoTemporalContrast, ///< all event pixels share one mean time (N ≡ 0)
+  kNothingSegmented,   ///< no pixel reached θ
+  kFlooded,            ///< more than max_segmented_fraction of the image reached θ
+  kRemovedAsNoise,     ///< nothing above θ survived the pre-processing as a solid pattern (min_peak)
+  kNoRegion,           ///< the fit failed and no connected component qualified
+  kTooFewEventsInBox,  ///< the final box holds fewer than roi_min_events events
+};
+std::string_view to_string(DetectionStatus s);
+
+/// Wall-clock time of each stage [ms] (steady clock).
+struct DetectionTimings {
+  double time_images_ms = 0;
+  double segmentation_ms = 0;
+  double preprocess_ms = 0;
+  double fit_ms = 0;
+  double retrieval_ms = 0;  ///< 0 when retrieval was not needed
+  double refine_ms = 0;     ///< centre / time refinement from the events
+  double total_ms = 0;
+};
+
+struct DetectionResult {
+  std::optional<Detection2D> detection;
+  DetectionStatus status = DetectionStatus::kTooFewEvents;
+  double theta = 0;             ///< θ(ω, v) used
+  double mean_normalized = 0;   ///< mean(N) over pixels with events
+  int segmented_pixels = 0;     ///< pixels with S > 0
+  GaussianFit fit;              ///< Algorithm 1's outcome (zero when not run)
+  /// Why the fitted ROI was not used ("" when it was): "not converged", "diverged", "empty roi",
+  /// "too large", "aspect ratio", "too few events".
+  std::string_view fit_rejected;
+  DetectionTimings timings;
+};
+
+class Detector {
+ public:
+  /// Throws ConfigError for invalid options or camera.
+  Detector(const DetectorOptions& options, const PinholeCamera& event_camera);
+  DetectionResult detect(const CompensatedEventsView& window);
+
+  // Intermediate images of the last call (valid until the next one), for visualisation.
+  const TimeImages& time_images() const { return ti_; }
+  const cv::Mat& segmentation() const { return S_; }   ///< S, CV_32F
+  const cv::Mat& preprocessed() const { return P_; }   ///< P = (open(mean(S)))², CV_32F
+  const DetectorOptions& options() const { return options_; }
+
+  /// Undistorted-grid point -> raw sensor pixel, and the box outline's raw bounding box.
+  Eigen::Vector2d undistorted_to_raw(const Eigen::Vector2d& uv) const;
+  Box2D undistorted_box_to_raw(const Box2D& box) const;
+
+ private:
+  /// Centroid and mean time [s since t_start] of the events in a time-complete slice around the
+  /// box (DetectorOptions::refine_box_scale), or nothing when too few or outside the box.
+  std::optional<std::pair<Eigen::Vector2d, double>> refine_with_events(const CompensatedEventsView& window,
+                                                                      const Box2D& box, double t_box_s) const;
+  DetectorOptions options_;
+  PinholeCamera camera_;
+  TimeImages ti_;
+  cv::Mat S_, P_, scratch_, mask_, labels_, stats_, centroids_;
+  std::vector<double> mass_;
+};
+
+}  // namespace fdv

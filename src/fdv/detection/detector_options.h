@@ -1,0 +1,49 @@
+#pragma once
+/// Parameters of the detector (paper §IV-B). Defaults marked "provisional" are not from the
+/// paper (it gives no values) and are to be tuned on simulated scenes (docs/DETECTION.md).
+#include <string>
+
+namespace fdv {
+
+struct DetectorOptions {
+  // Adaptive threshold θ(ω, v) = mean(N) + a‖ω‖ + b‖v‖ + c (§IV-B.1). Provisional values,
+  // chosen on the synthetic windows of tests/detection; to be tuned on simulated scenes.
+  double threshold_a_s_per_rad = 0.01;  ///< a [1/(rad/s)]: more residual motion blur when rotating fast
+  double threshold_b_s_per_m = 0.01;    ///< b [1/(m/s)]: the same for translation
+  double threshold_c = 0.3;             ///< c [-]: keeps the upper part of the N distribution
+  // Pre-processing (§IV-B.2): mean filter, morphological opening, element-wise square.
+  int mean_filter_px = 3;  ///< box filter size [px] (odd), provisional
+  int opening_px = 3;      ///< square structuring element of the opening [px] (odd), provisional
+  /// Evidence: the strongest pattern must reach this value in the filtered S (before squaring),
+  /// i.e. P_max ≥ min_peak². Salt-and-pepper noise cannot (an isolated pixel gives ≤ 1/9 after the
+  /// 3x3 mean filter); a moving object's recent sweep is a solid patch with high N (≈ 0.5-0.8).
+  /// Provisional: separates noise clusters (≤ 0.21) from moving blobs (≥ 0.25) in tests/detection.
+  double min_peak = 0.25;
+  // Iterative Gaussian fitting (Algorithm 1).
+  int fit_max_iterations = 30;        ///< K, provisional (a blob converges in ~10 from the half-image ROI)
+  double fit_delta_center_px = 0.25; ///< δ_C: centre change below which the fit has converged [px]
+  /// δ_L: change of each side below which it has converged [px]. L ← 4σ contracts by ≈ 0.7 per
+  /// iteration near its fixed point, so the stopped L is within ≈ 2.5·δ_L of it.
+  double fit_delta_size_px = 0.5;
+  double fit_min_size_px = 3.0;      ///< sides are floored here so a tiny blob cannot collapse the ROI
+  // Plausibility of the converged ROI (else moving-region retrieval, §IV-B.3).
+  double roi_max_fraction = 0.35;  ///< a side longer than this fraction of the image side is implausible
+  double roi_max_aspect = 4.0;     ///< long side / short side above this is implausible (a streak or two objects)
+  int roi_min_events = 8;          ///< fewer compensated events inside is implausible (and no detection)
+  // Moving-region retrieval.
+  int region_min_area_px = 4;  ///< connected components smaller than this are ignored [px]
+  /// Re-estimate the centre and time from the events themselves (docs/DETECTION.md, "centre and
+  /// time"): events inside the box enlarged by this factor and within ±τ of the box's mean event
+  /// time (τ as large as the window allows) give the centroid and mean time of a time-complete
+  /// slice of the object, which removes the forward bias of the segmented region's centroid. 0 = off.
+  double refine_box_scale = 3.0;
+  // Whole-window guards.
+  int min_window_events = 30;  ///< fewer compensated events: no detection ("too few events")
+  /// More than this fraction of the image above θ means the compensation failed or a burst
+  /// flooded the window: no detection ("segmentation flooded"), rather than a random one.
+  double max_segmented_fraction = 0.25;
+
+  std::string validate() const;
+};
+
+}  // namespace fdv

@@ -1,0 +1,54 @@
+#pragma once
+/// The count, mean-time and normalised mean-time images of a compensated window (paper §III,
+/// eqs. 1-4), on the undistorted pixel grid.
+///
+///   TimeImages ti;                      // reuse across windows: buffers are kept
+///   build_time_images(view, ti);
+///   ti.count (CV_32S) = I, ti.mean_time_s (CV_32F) = T, ti.normalized (CV_32F) = N
+///
+///   I_ij = |ξ_ij|                       number of compensated events on pixel (i, j)
+///   T_ij = (1/I_ij)·Σ_{ξ_ij} (t − t0)    mean time [s] relative to the window start
+///   N_ij = (T_ij − min T) / (max T − min T)
+/// min and max are taken over pixels with I > 0 (T is undefined elsewhere); pixels with I = 0 are 0
+/// in T and N. When max T = min T (e.g. a single event) N is 0 everywhere: no temporal structure.
+#include <cstdint>
+#include <opencv2/core.hpp>
+#include <span>
+
+#include "fdv/core/time.h"
+
+namespace fdv {
+
+/// What detection needs of a motion-compensated window (compensation/compensator.h produces
+/// the arrays; the pipeline joins the two modules). Borrowed, valid for the call.
+struct CompensatedEventsView {
+  TimeNs t_start_ns = 0;
+  TimeNs t_end_ns = 0;
+  int width = 0;   ///< undistorted grid size
+  int height = 0;
+  std::span<const std::int32_t> pixel;  ///< row-major index v·width + u of each event, in range
+  std::span<const float> t_s;           ///< event time − t_start [s]
+  double omega_rad_s = 0;  ///< ‖ω‖ of the camera over the window, 0 when unknown (threshold θ)
+  double speed_m_s = 0;    ///< ‖v‖ of the camera, 0 when unknown (threshold θ)
+  /// t_s is non-decreasing (the compensators keep the input's time order and report it): lets the
+  /// detector binary-search time slices. False is always safe.
+  bool time_sorted = false;
+};
+
+struct TimeImages {
+  cv::Mat count;        ///< I, CV_32S
+  cv::Mat sum_time_s;   ///< Σ (t − t0) per pixel [s], CV_32F
+  cv::Mat mean_time_s;  ///< T [s], CV_32F, 0 where I = 0
+  cv::Mat normalized;   ///< N in [0, 1], CV_32F, 0 where I = 0
+  int events = 0;
+  int pixels_with_events = 0;
+  float t_min_s = 0, t_max_s = 0;  ///< min / max of T over pixels with events
+  double mean_normalized = 0;      ///< mean of N over pixels with events (threshold θ, §IV-B.1)
+  cv::Mat accumulator;             ///< scratch: interleaved (count, Σt) per pixel, CV_32FC2
+  cv::Mat count_f;                 ///< scratch: count as float
+};
+
+/// Fills `out` (reusing its buffers). Events whose pixel index is out of range are ignored.
+void build_time_images(const CompensatedEventsView& view, TimeImages& out);
+
+}  // namespace fdv

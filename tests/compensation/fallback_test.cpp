@@ -1,0 +1,196 @@
+// Fallbacks and bad input of the compensators: missing or gappy IMU, missing odometry, missing,
+// stale or wrong-sized depth, pixels without depth, event bursts. Each must be handled, reported
+// in the window's report, and produce the documented result.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "fdv/compensation/compensator.h"
+#include "synthetic_motion.h"
+
+namespace fdv {
+namespace {
+
+Calibration plain_rig() {
+  Calibration c;
+  c.event_camera = {320, 240, 250.0, 250.0, 160.0, 120.0, {}};
+  return c;
+}
+
+RegisteredDepth flat_depth(const Calibration& c, float z, TimeNs t) {
+  RegisteredDepth d;
+  d.t = t;
+  d.width = c.event_camera.width;
+  d.height = c.event_camera.height;
+  d.depth_m.assign(static_cast<std::size_t>(d.width) * d.height, z);
+  return d;
+}
+
+std::vector<Event> some_events(TimeNs t0, int n) {
+  std::vector<Event> ev;
+  for (int i = 0; i < n; ++i)
+    ev.push_back({t0 + i * (25 * kNsPerMs / n), static_cast<std::uint16_t>(100 + i % 100), static_cast<std::uint16_t>(60 + (i / 100) % 100), true});
+  return ev;
+}
+
+OdometrySample moving(TimeNs t, const Eigen::Vector3d& v_W) {
+  OdometrySample o;
+  o.t = t;
+  o.v_W = v_W;
+  return o;
+}
+
+TEST(Fallback, MissingImuFallsBackToNoneAndSaysSo) {
+  const Calibration c = plain_rig();
+  const TimeNs t0 = kNsPerS, t1 = t0 + 25 * kNsPerMs;
+  const auto ev = some_events(t0, 500);
+  // Only samples long before the window: further than max_imu_gap_ns (20 ms) from it.
+  const auto old_imu = test::constant_imu({0, 1, 0}, t0 - 200 * kNsPerMs, t0 - 100 * kNsPerMs, kNsPerMs);
+  for (const char* m : {"rotation", "rotation_translation"}) {
+    CompensationOptions opt;
+    opt.method = m;
+    auto comp = make_compensator(c, opt);
+    for (std::span<const ImuSample> imu : {std::span<const ImuSample>{}, std::span<const ImuSample>(old_imu)}) {
+      const RegisteredDepth d = flat_depth(c, 3.0f, t0);
+      const CompensatedWindow& out = comp->compensate({ev, t0, t1, imu, moving(t0, {1, 0, 0}), &d});
+      EXPECT_TRUE(out.report.imu_missing) << m;
+      EXPECT_EQ(out.report.used, CompensationMethod::kNone) << m;
+      EXPECT_EQ(out.report.requested, *parse_compensation_method(m));
+      EXPECT_FALSE(out.report.has_omega);
+      EXPECT_NE(out.report.brief().find("imu missing"), std::string::npos);
+      // "none" on a camera without distortion: every event stays on its own pixel.
+      ASSERT_EQ(out.size(), ev.size());
+      for (std::size_t k = 0; k < ev.size(); ++k) EXPECT_EQ(out.pixel()[k], ev[k].y * 320 + ev[k].x);
+    }
+  }
+}
+
+TEST(Fallback, ImuGapIsFlaggedAndTheMeanStillUsed) {
+  const Calibration c = plain_rig();
+  const TimeNs t0 = kNsPerS, t1 = t0 + 25 * kNsPerMs;
+  // 1 kHz, constant ω, but nothing between t0 + 2 ms and t0 + 40 ms (a 38 ms hole in the window).
+  std::vector<ImuSample> imu;
+  for (const auto& s : test::constant_imu({0.5, -1.0, 2.0}, t0 - 10 * kNsPerMs, t0 + 60 * kNsPerMs, kNsPerMs))
+    if (s.t <= t0 + 2 * kNsPerMs || s.t >= t0 + 40 * kNsPerMs) imu.push_back(s);
+  CompensationOptions opt;
+  opt.method = "rotation";
+  auto comp = make_compensator(c, opt);
+  const CompensatedWindow& out = comp->compensate({.events = some_events(t0, 100), .t_start_ns = t0, .t_end_ns = t1, .imu = imu});
+  EXPECT_TRUE(out.report.imu_gap);
+  EXPECT_FALSE(out.report.imu_missing);
+  EXPECT_EQ(out.report.used, CompensationMethod::kRotation);
+  EXPECT_EQ(out.report.imu_largest_gap_ns, 38 * kNsPerMs);
+  EXPECT_NEAR((out.report.omega_E - Eigen::Vector3d(0.5, -1.0, 2.0)).norm(), 0, 1e-12);
+}
+
+TEST(Fallback, RotationTranslationWithoutOdometryOrDepthIsRotation) {
+  const Calibration c = plain_rig();
+  const TimeNs t0 = kNsPerS, t1 = t0 + 25 * kNsPerMs;
+  const auto ev = some_events(t0, 300);
+  const auto imu = test::constant_imu({0, 0.5, 0}, t0 - 5 * kNsPerMs, t1 + 5 * kNsPerMs, kNsPerMs);
+  CompensationOptions opt;
+  opt.method = "rotation_translation";
+  opt.max_depth_age_ns = 100 * kNsPerMs;
+  auto comp = make_compensator(c, opt);
+  const RegisteredDepth fresh = flat_depth(c, 3.0f, t0);
+  const RegisteredDepth stale = flat_depth(c, 3.0f, t0 - 200 * kNsPerMs);
+  RegisteredDepth wrong = flat_depth(c, 3.0f, t0);
+  wrong.width = 160;  // e.g. registered for another camera
+  wrong.height = 120;
+  wrong.depth_m.resize(160 * 120);
+  RegisteredDepth all_holes = flat_depth(c, 0.0f, t0);
+
+  auto run = [&](std::optional<OdometrySample> odo, const RegisteredDepth* d) {
+    return comp->compensate({ev, t0, t1, imu, odo, d}).report;
+  };
+  const auto odo = moving(t0, {2, 0, 0});
+  CompensationReport r = run(std::nullopt, &fresh);
+  EXPECT_TRUE(r.odometry_missing);
+  EXPECT_EQ(r.used, CompensationMethod::kRotation);
+  r = run(odo, nullptr);
+  EXPECT_TRUE(r.depth_missing);
+  EXPECT_EQ(r.used, CompensationMethod::kRotation);
+  r = run(odo, &stale);
+  EXPECT_TRUE(r.depth_stale);
+  EXPECT_EQ(r.depth_age_ns, 212'500'000);  // window middle t0 + 12.5 ms vs frame at t0 − 200 ms
+  EXPECT_EQ(r.used, CompensationMethod::kRotation);
+  r = run(odo, &wrong);
+  EXPECT_TRUE(r.depth_wrong_size);
+  EXPECT_EQ(r.used, CompensationMethod::kRotation);
+  r = run(odo, &all_holes);
+  EXPECT_TRUE(r.depth_missing);
+  EXPECT_EQ(r.used, CompensationMethod::kRotation);
+  r = run(odo, &fresh);
+  EXPECT_EQ(r.used, CompensationMethod::kRotationTranslation) << r.brief();
+  EXPECT_FALSE(r.depth_missing || r.depth_stale || r.depth_wrong_size || r.odometry_missing);
+}
+
+TEST(Fallback, PixelsWithoutDepthUseTheMedianAndAreCounted) {
+  const Calibration c = plain_rig();
+  const TimeNs t0 = 0, t1 = 25 * kNsPerMs;
+  // Depth: 2 m on the left 150 columns, 5 m on the rest (170 columns): median 5 m.
+  RegisteredDepth d = flat_depth(c, 5.0f, t0);
+  for (int y = 0; y < 240; ++y)
+    for (int x = 0; x < 150; ++x) d.depth_m[static_cast<std::size_t>(y) * 320 + x] = 2.0f;
+  // Holes: a 5x5 block (not fillable from neighbours with radius 1 at its centre) and one pinhole.
+  for (int y = 100; y < 105; ++y)
+    for (int x = 200; x < 205; ++x) d.depth_m[static_cast<std::size_t>(y) * 320 + x] = 0.0f;
+  d.depth_m[50 * 320 + 250] = 0.0f;
+  // Events: on the block centre (3x3 core stays a hole after a radius-1 fill), the pinhole, and
+  // a valid pixel.
+  const std::vector<Event> ev{{1'000'000, 202, 102, true}, {2'000'000, 250, 50, true}, {3'000'000, 10, 10, true},
+                              {20'000'000, 202, 102, true}};
+  const auto imu = test::constant_imu(Eigen::Vector3d::Zero(), -5 * kNsPerMs, 30 * kNsPerMs, kNsPerMs);
+  const OdometrySample odo = moving(0, {0, 0, 4.0});  // forward: expansion away from the centre
+
+  CompensationOptions opt;
+  opt.method = "rotation_translation";
+  opt.hole_fill_radius_px = 1;
+  auto comp = make_compensator(c, opt);
+  const CompensatedWindow& out = comp->compensate({ev, t0, t1, imu, odo, &d});
+  ASSERT_EQ(out.size(), 4u) << out.report.brief();
+  EXPECT_EQ(out.report.depth_fallback_events, 2u);  // the two block-centre events; the pinhole was filled
+  EXPECT_FLOAT_EQ(out.report.fallback_depth_m, 5.0f);
+  // Hand-computed expected position of the block-centre event at t = 20 ms with z = 5 m (median):
+  // X0 ∝ [x; y; 1] + (1/z)·v·t  ->  u = cx + fx·x / (1 + v_z t / z).
+  auto expected_u = [&](double u_raw, double z, double t) {
+    const double xn = (u_raw - 160.0) / 250.0;
+    return 160.0 + 250.0 * xn / (1.0 + 4.0 * t / z);
+  };
+  EXPECT_NEAR(out.x()[3], expected_u(202, 5.0, 0.020), 1e-3);
+  // The pinhole took its neighbours' 5 m; the valid pixel its own 2 m.
+  EXPECT_NEAR(out.x()[1], expected_u(250, 5.0, 0.002), 1e-3);
+  EXPECT_NEAR(out.x()[2], expected_u(10, 2.0, 0.003), 1e-3);
+
+  // Policy "rotation only": the holes get ρ = 0 (no translation), still counted.
+  opt.missing_depth = MissingDepthPolicy::kRotationOnly;
+  auto comp2 = make_compensator(c, opt);
+  const CompensatedWindow& out2 = comp2->compensate({ev, t0, t1, imu, odo, &d});
+  EXPECT_EQ(out2.report.depth_fallback_events, 2u);
+  EXPECT_NEAR(out2.x()[3], 202.0, 1e-3);
+  EXPECT_NEAR(out2.x()[2], expected_u(10, 2.0, 0.003), 1e-3);
+}
+
+TEST(Fallback, BurstIsDecimatedAndCounted) {
+  const Calibration c = plain_rig();
+  const TimeNs t0 = 0, t1 = 25 * kNsPerMs;
+  // 400 k events in 1 ms (400 M ev/s), against a guard of 100 k per window.
+  std::vector<Event> ev;
+  ev.reserve(400'000);
+  for (int i = 0; i < 400'000; ++i)
+    ev.push_back({10 * kNsPerMs + i * 2'500 / 1'000, static_cast<std::uint16_t>(i % 320), static_cast<std::uint16_t>((i / 320) % 240), true});
+  CompensationOptions opt;
+  opt.method = "none";
+  opt.max_events_per_window = 100'000;
+  auto comp = make_compensator(c, opt);
+  const CompensatedWindow& out = comp->compensate({.events = ev, .t_start_ns = t0, .t_end_ns = t1});
+  EXPECT_EQ(out.report.dropped_burst, 300'000u);
+  EXPECT_EQ(out.size(), 100'000u);
+  EXPECT_EQ(out.report.events_in, 400'000u);
+  EXPECT_NE(out.report.brief().find("burst decimation 300000"), std::string::npos) << out.report.brief();
+  // Every 4th event was kept: uniform in time order.
+  EXPECT_EQ(out.pixel()[1], (4 / 320) * 320 + 4 % 320);
+}
+
+}  // namespace
+}  // namespace fdv

@@ -1,0 +1,152 @@
+// The whole detector on synthetic windows: a moving blob over a static (hence exactly
+// compensated) background with noise, seen through a distorted lens; and the bad-input cases.
+#include <gtest/gtest.h>
+
+#include "fdv/compensation/compensator.h"
+#include "fdv/core/error.h"
+#include "fdv/detection/detector.h"
+#include "synthetic_scene.h"
+
+namespace fdv {
+namespace {
+
+PinholeCamera lens() { return {640, 480, 400.0, 401.0, 318.0, 243.0, {-0.1, 0.01, 0.0005, -0.0003, 0.0}}; }
+
+CompensatedEventsView view_of(const CompensatedWindow& w) {
+  return {w.t_start_ns, w.t_end_ns, w.width, w.height, w.pixel(), w.t_s(), w.report.omega_E.norm(), w.report.v_E.norm(),
+          w.report.events_out_of_order == 0};
+}
+
+class DetectorTest : public ::testing::Test {
+ protected:
+  DetectorTest() : detector_(DetectorOptions{}, lens()) {
+    Calibration c;
+    c.event_camera = lens();
+    CompensationOptions o;
+    o.method = "none";
+    compensator_ = make_compensator(c, o);
+  }
+  DetectionResult run(const std::vector<Event>& ev, TimeNs t0, TimeNs t1) {
+    const CompensatedWindow& w = compensator_->compensate({.events = ev, .t_start_ns = t0, .t_end_ns = t1});
+    return detector_.detect(view_of(w));
+  }
+  std::unique_ptr<Compensator> compensator_;
+  Detector detector_;
+};
+
+// The blob's true position at the detection's own time, on the undistorted grid and in raw pixels.
+void expect_on_blob(const DetectionResult& r, const test::BlobScene& s, double tol_px) {
+  ASSERT_TRUE(r.detection) << to_string(r.status) << ", fit rejected: " << r.fit_rejected;
+  const Detection2D& d = *r.detection;
+  EXPECT_GT(d.t_ns, s.t0);
+  EXPECT_LT(d.t_ns, s.t0 + s.duration);
+  const Eigen::Vector2d truth = s.blob_at(d.t_ns);
+  EXPECT_LT((d.center_undistorted - truth).norm(), tol_px)
+      << "detected " << d.center_undistorted.transpose() << " truth " << truth.transpose() << " at "
+      << to_seconds(d.t_ns - s.t0) * 1e3 << " ms, source " << to_string(d.source);
+  const PinholeCamera cam = lens();
+  const Eigen::Vector2d truth_raw =
+      cam.normalized_to_pixel({(truth.x() - cam.cx) / cam.fx, (truth.y() - cam.cy) / cam.fy});
+  EXPECT_LT((d.center_raw - truth_raw).norm(), tol_px);
+  EXPECT_NEAR(d.center_normalized.x(), (truth.x() - cam.cx) / cam.fx, tol_px / cam.fx);
+  // The box contains the centre in both coordinate systems and has the blob's scale.
+  EXPECT_TRUE(d.box_undistorted.x0 < d.center_undistorted.x() && d.center_undistorted.x() < d.box_undistorted.x1);
+  EXPECT_TRUE(d.box_raw.x0 < d.center_raw.x() && d.center_raw.x() < d.box_raw.x1);
+  EXPECT_TRUE(d.box_raw.y0 < d.center_raw.y() && d.center_raw.y() < d.box_raw.y1);
+  EXPECT_LT(d.box_undistorted.width(), 8 * s.radius_px);
+  EXPECT_GT(d.events, 20);
+  EXPECT_GE(d.score, DetectorOptions{}.min_peak);
+  EXPECT_LE(d.score, 1.0);
+}
+
+TEST_F(DetectorTest, FindsAMovingBlobWithinTwoPixels) {
+  for (unsigned seed = 1; seed <= 4; ++seed) {
+    test::BlobScene s;
+    s.seed = seed;
+    s.t0 = 3 * kNsPerS + seed * 25 * kNsPerMs;
+    s.start_uv = {120.0 + 90 * seed, 100.0 + 60 * seed};
+    s.velocity_px_s = {seed % 2 ? 300.0 : -250.0, seed % 3 ? 160.0 : -200.0};
+    const auto ev = test::make_scene(lens(), s);
+    const DetectionResult r = run(ev, s.t0, s.t0 + s.duration);
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    expect_on_blob(r, s, 2.0);
+    EXPECT_GT(r.timings.total_ms, 0);
+  }
+}
+
+TEST_F(DetectorTest, StaticBackgroundAndNoiseAloneGiveNoDetection) {
+  test::BlobScene s;
+  s.blob_rate_ev_s = 0;
+  for (unsigned seed = 1; seed <= 3; ++seed) {
+    s.seed = seed;
+    const DetectionResult r = run(test::make_scene(lens(), s), s.t0, s.t0 + s.duration);
+    EXPECT_FALSE(r.detection) << "seed " << seed << " at " << r.detection->center_undistorted.transpose();
+  }
+}
+
+TEST_F(DetectorTest, EmptyAndNearlyEmptyWindows) {
+  DetectionResult r = run({}, 0, 25 * kNsPerMs);
+  EXPECT_FALSE(r.detection);
+  EXPECT_EQ(r.status, DetectionStatus::kTooFewEvents);
+  std::vector<Event> few;
+  for (int i = 0; i < 10; ++i) few.push_back({i * kNsPerMs, static_cast<std::uint16_t>(300 + i), 200, true});
+  r = run(few, 0, 25 * kNsPerMs);
+  EXPECT_FALSE(r.detection);
+  EXPECT_EQ(r.status, DetectionStatus::kTooFewEvents);
+  EXPECT_EQ(cv::countNonZero(detector_.preprocessed()), 0);
+  // Many events, all at one instant: no temporal contrast.
+  std::vector<Event> same_time;
+  for (int i = 0; i < 500; ++i) same_time.push_back({kNsPerMs, static_cast<std::uint16_t>(100 + i % 50), static_cast<std::uint16_t>(100 + i / 50), true});
+  r = run(same_time, 0, 25 * kNsPerMs);
+  EXPECT_FALSE(r.detection);
+  EXPECT_EQ(r.status, DetectionStatus::kNoTemporalContrast);
+}
+
+std::vector<Event> with_burst(std::vector<Event> ev, TimeNs from, TimeNs to, int n, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<TimeNs> when(from, to - 1);
+  std::uniform_int_distribution<int> ux(0, 639), uy(0, 479);
+  for (int i = 0; i < n; ++i)
+    ev.push_back({when(rng), static_cast<std::uint16_t>(ux(rng)), static_cast<std::uint16_t>(uy(rng)), true});
+  std::sort(ev.begin(), ev.end(), [](const Event& a, const Event& b) { return a.t < b.t; });
+  return ev;
+}
+
+TEST_F(DetectorTest, BurstFarAboveTheNormalRate) {
+  test::BlobScene s;
+  const auto ev = test::make_scene(lens(), s);
+  // 200 k events within 1 ms (200 M ev/s, 10x the whole window's normal count) in mid-window:
+  // the burst pixels' mean time sits mid-window, below θ, and the blob is still found.
+  const DetectionResult mid = run(with_burst(ev, 12 * kNsPerMs, 13 * kNsPerMs, 200'000, 5), s.t0, s.t0 + s.duration);
+  expect_on_blob(mid, s, 2.0);
+  // The same burst in the window's last millisecond makes a third of the image "newest". Half of
+  // the pixels with events are then burst pixels at N ≈ 1, so mean(N) ≈ 0.7 and θ = mean(N) + c
+  // reaches 1: nothing is segmented, and no detection is reported rather than a random one.
+  const DetectionResult late = run(with_burst(ev, 24 * kNsPerMs, 25 * kNsPerMs, 200'000, 6), s.t0, s.t0 + s.duration);
+  EXPECT_FALSE(late.detection);
+  EXPECT_GT(late.mean_normalized, 0.65);
+  EXPECT_EQ(late.status, DetectionStatus::kNothingSegmented);
+  // With c = 0 the burst passes θ and floods the segmentation: reported as such.
+  DetectorOptions o;
+  o.threshold_c = 0;
+  Detector permissive(o, lens());
+  const CompensatedWindow& w = compensator_->compensate(
+      {.events = with_burst(ev, 24 * kNsPerMs, 25 * kNsPerMs, 200'000, 6), .t_start_ns = s.t0, .t_end_ns = s.t0 + s.duration});
+  const DetectionResult flooded = permissive.detect(view_of(w));
+  EXPECT_FALSE(flooded.detection);
+  EXPECT_EQ(flooded.status, DetectionStatus::kFlooded);
+}
+
+TEST_F(DetectorTest, InvalidOptionsAreRejected) {
+  DetectorOptions o;
+  o.mean_filter_px = 4;
+  EXPECT_NE(o.validate().find("mean_filter_px"), std::string::npos);
+  EXPECT_THROW(Detector(o, lens()), ConfigError);
+  o = {};
+  o.fit_delta_center_px = 0;
+  EXPECT_NE(o.validate().find("δ_C"), std::string::npos);
+  EXPECT_TRUE(DetectorOptions{}.validate().empty());
+}
+
+}  // namespace
+}  // namespace fdv
