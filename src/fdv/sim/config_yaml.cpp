@@ -1,0 +1,421 @@
+// YAML loading and dumping of ScenarioConfig. Every field is named once, in describe(); the
+// loader and the dumper are two visitors over that description, so they cannot disagree.
+#include <fmt/format.h>
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include "fdv/core/error.h"
+#include "fdv/sim/scenario_config.h"
+
+namespace fdv::sim {
+namespace {
+
+template <class V>
+void describe(V& v, EventCameraConfig& c);
+template <class V>
+void describe(V& v, DepthCameraConfig& c);
+template <class V>
+void describe(V& v, ImuConfig& c);
+template <class V>
+void describe(V& v, OdometryConfig& c);
+template <class V>
+void describe(V& v, TruthConfig& c);
+template <class V>
+void describe(V& v, VehicleConfig& c);
+template <class V>
+void describe(V& v, PanelConfig& c);
+template <class V>
+void describe(V& v, SceneConfig& c);
+template <class V>
+void describe(V& v, BallConfig& c);
+template <class V>
+void describe(V& v, ScenarioConfig& c);
+
+// ------------------------------------------------------------------------------------------ load
+
+class Loader {
+ public:
+  Loader(const YAML::Node& node, const std::string& file, std::string prefix)
+      : node_(node), file_(file), prefix_(std::move(prefix)) {}
+
+  template <class T>
+  void operator()(const char* key, T& value) {
+    known_.insert(key);
+    const YAML::Node n = node_[key];
+    if (!n) return;
+    read(n, value, path(key));
+  }
+
+  template <class T>
+  void section(const char* key, T& sub) {
+    known_.insert(key);
+    const YAML::Node n = node_[key];
+    if (!n) return;
+    if (!n.IsMap()) fail(path(key), "expected a mapping of keys");
+    Loader inner(n, file_, path(key) + ".");
+    describe(inner, sub);
+    inner.check_unknown();
+  }
+
+  template <class T>
+  void list(const char* key, std::vector<T>& items) {
+    known_.insert(key);
+    const YAML::Node n = node_[key];
+    if (!n) return;
+    if (!n.IsSequence()) fail(path(key), "expected a list");
+    std::vector<T> out;
+    for (std::size_t i = 0; i < n.size(); ++i) {
+      const std::string item_key = fmt::format("{}[{}]", path(key), i);
+      if (!n[i].IsMap()) fail(item_key, "expected a mapping of keys");
+      T item = i < items.size() ? items[i] : T{};
+      Loader inner(n[i], file_, item_key + ".");
+      describe(inner, item);
+      inner.check_unknown();
+      out.push_back(std::move(item));
+    }
+    items = std::move(out);
+  }
+
+  void check_unknown() const {
+    if (!node_.IsMap()) return;
+    for (const auto& kv : node_) {
+      const std::string key = kv.first.Scalar();
+      if (known_.count(key)) continue;
+      std::string list;
+      for (const auto& k : known_) list += (list.empty() ? "" : ", ") + k;
+      fail(path(key), "unknown key (known here: " + list + ")");
+    }
+  }
+
+ private:
+  std::string path(const std::string& key) const { return prefix_ + key; }
+  [[noreturn]] void fail(const std::string& key, const std::string& reason) const {
+    throw InputError(file_, "key " + key, reason);
+  }
+
+  double number(const YAML::Node& n, const std::string& key) const {
+    if (!n.IsScalar()) fail(key, "expected a number");
+    double v;
+    try {
+      v = n.as<double>();
+    } catch (const YAML::Exception&) {
+      fail(key, "'" + n.Scalar() + "' is not a number");
+    }
+    if (!std::isfinite(v)) fail(key, "must be finite");
+    return v;
+  }
+  void read(const YAML::Node& n, double& v, const std::string& key) const { v = number(n, key); }
+  void read(const YAML::Node& n, int& v, const std::string& key) const {
+    const double x = number(n, key);
+    if (x != std::floor(x) || std::abs(x) > 2e9)
+      fail(key, "'" + n.Scalar() + "' is not an integer");
+    v = static_cast<int>(x);
+  }
+  void read(const YAML::Node& n, std::uint64_t& v, const std::string& key) const {
+    if (!n.IsScalar()) fail(key, "expected a non-negative integer");
+    try {
+      v = n.as<std::uint64_t>();
+    } catch (const YAML::Exception&) {
+      fail(key, "'" + n.Scalar() + "' is not a non-negative integer");
+    }
+  }
+  void read(const YAML::Node& n, bool& v, const std::string& key) const {
+    if (!n.IsScalar()) fail(key, "expected true or false");
+    try {
+      v = n.as<bool>();
+    } catch (const YAML::Exception&) {
+      fail(key, "'" + n.Scalar() + "' is not true or false");
+    }
+  }
+  void read(const YAML::Node& n, std::string& v, const std::string& key) const {
+    if (!n.IsScalar()) fail(key, "expected a string");
+    v = n.Scalar();
+  }
+  template <int N>
+  void read_fixed(const YAML::Node& n, double* out, const std::string& key) const {
+    if (!n.IsSequence() || n.size() != N)
+      fail(key, fmt::format("expected a list of {} numbers", N));
+    for (int i = 0; i < N; ++i) out[i] = number(n[i], fmt::format("{}[{}]", key, i));
+  }
+  void read(const YAML::Node& n, Eigen::Vector3d& v, const std::string& key) const {
+    read_fixed<3>(n, v.data(), key);
+  }
+  void read(const YAML::Node& n, Eigen::Vector2d& v, const std::string& key) const {
+    read_fixed<2>(n, v.data(), key);
+  }
+  void read(const YAML::Node& n, std::array<double, 5>& v, const std::string& key) const {
+    read_fixed<5>(n, v.data(), key);
+  }
+  void read(const YAML::Node& n, MotionKind& v, const std::string& key) const {
+    std::string s;
+    read(n, s, key);
+    for (auto k :
+         {MotionKind::kHover, MotionKind::kForward, MotionKind::kSwing, MotionKind::kConstant})
+      if (s == to_string(k)) {
+        v = k;
+        return;
+      }
+    fail(key, "'" + s + "' is not one of hover, forward, swing, constant");
+  }
+
+  const YAML::Node node_;
+  const std::string& file_;
+  std::string prefix_;
+  std::set<std::string> known_;
+};
+
+// ------------------------------------------------------------------------------------------ dump
+
+class Dumper {
+ public:
+  explicit Dumper(YAML::Emitter& out) : out_(out) {}
+
+  template <class T>
+  void operator()(const char* key, T& value) {
+    out_ << YAML::Key << key << YAML::Value;
+    write(value);
+  }
+  template <class T>
+  void section(const char* key, T& sub) {
+    out_ << YAML::Key << key << YAML::Value << YAML::BeginMap;
+    describe(*this, sub);
+    out_ << YAML::EndMap;
+  }
+  template <class T>
+  void list(const char* key, std::vector<T>& items) {
+    out_ << YAML::Key << key << YAML::Value << YAML::BeginSeq;
+    for (auto& item : items) {
+      out_ << YAML::BeginMap;
+      describe(*this, item);
+      out_ << YAML::EndMap;
+    }
+    out_ << YAML::EndSeq;
+  }
+
+ private:
+  // Shortest text that reads back to the same double.
+  void write(double v) { out_ << fmt::format("{}", v); }
+  void write(int v) { out_ << v; }
+  void write(std::uint64_t v) { out_ << v; }
+  void write(bool v) { out_ << v; }
+  void write(const std::string& v) { out_ << v; }
+  void write(MotionKind v) { out_ << to_string(v); }
+  void write_list(const double* v, int n) {
+    out_ << YAML::Flow << YAML::BeginSeq;
+    for (int i = 0; i < n; ++i) out_ << fmt::format("{}", v[i]);
+    out_ << YAML::EndSeq;
+  }
+  void write(const Eigen::Vector3d& v) { write_list(v.data(), 3); }
+  void write(const Eigen::Vector2d& v) { write_list(v.data(), 2); }
+  void write(const std::array<double, 5>& v) { write_list(v.data(), 5); }
+
+  YAML::Emitter& out_;
+};
+
+// ------------------------------------------------------------------------------------ description
+
+template <class V>
+void describe(V& v, EventCameraConfig& c) {
+  v("width", c.width);
+  v("height", c.height);
+  v("fx", c.fx);
+  v("fy", c.fy);
+  v("cx", c.cx);
+  v("cy", c.cy);
+  v("distortion", c.distortion);
+  v("position_B_m", c.position_B_m);
+  v("mount_rpy_deg", c.mount_rpy_deg);
+  v("contrast_threshold_mean", c.contrast_threshold_mean);
+  v("contrast_threshold_spread", c.contrast_threshold_spread);
+  v("contrast_threshold_min", c.contrast_threshold_min);
+  v("refractory_s", c.refractory_s);
+  v("dark_current_lux", c.dark_current_lux);
+  v("timestamp_resolution_s", c.timestamp_resolution_s);
+  v("timestamp_jitter_s", c.timestamp_jitter_s);
+  v("background_rate_hz", c.background_rate_hz);
+  v("background_rate_spread_decades", c.background_rate_spread_decades);
+  v("background_on_fraction", c.background_on_fraction);
+  v("hot_pixel_fraction", c.hot_pixel_fraction);
+  v("hot_pixel_rate_median_hz", c.hot_pixel_rate_median_hz);
+  v("hot_pixel_rate_spread_decades", c.hot_pixel_rate_spread_decades);
+  v("hot_pixel_rate_min_hz", c.hot_pixel_rate_min_hz);
+  v("max_motion_px", c.max_motion_px);
+  v("chunk_s", c.chunk_s);
+  v("tile_px", c.tile_px);
+  v("max_steps_per_chunk", c.max_steps_per_chunk);
+}
+
+template <class V>
+void describe(V& v, DepthCameraConfig& c) {
+  v("enabled", c.enabled);
+  v("width", c.width);
+  v("height", c.height);
+  v("fx", c.fx);
+  v("fy", c.fy);
+  v("cx", c.cx);
+  v("cy", c.cy);
+  v("position_B_m", c.position_B_m);
+  v("mount_rpy_deg", c.mount_rpy_deg);
+  v("rate_hz", c.rate_hz);
+  v("subpixel_px", c.subpixel_px);
+  v("baseline_m", c.baseline_m);
+  v("min_range_m", c.min_range_m);
+  v("max_range_m", c.max_range_m);
+  v("hole_fraction", c.hole_fraction);
+  v("edge_hole_probability", c.edge_hole_probability);
+  v("edge_jump_fraction", c.edge_jump_fraction);
+}
+
+template <class V>
+void describe(V& v, ImuConfig& c) {
+  v("rate_hz", c.rate_hz);
+  v("R_B_I_rpy_deg", c.R_B_I_rpy_deg);
+  v("gyro_noise_density", c.gyro_noise_density);
+  v("accel_noise_density", c.accel_noise_density);
+  v("gyro_random_walk", c.gyro_random_walk);
+  v("accel_random_walk", c.accel_random_walk);
+  v("gyro_bias_sigma", c.gyro_bias_sigma);
+  v("accel_bias_sigma", c.accel_bias_sigma);
+}
+
+template <class V>
+void describe(V& v, OdometryConfig& c) {
+  v("rate_hz", c.rate_hz);
+  v("velocity_sigma_m_s", c.velocity_sigma_m_s);
+  v("velocity_correlation_s", c.velocity_correlation_s);
+  v("drift_fraction", c.drift_fraction);
+  v("position_sigma_m", c.position_sigma_m);
+  v("attitude_sigma_deg", c.attitude_sigma_deg);
+  v("attitude_correlation_s", c.attitude_correlation_s);
+  v("angular_velocity_sigma_rad_s", c.angular_velocity_sigma_rad_s);
+}
+
+template <class V>
+void describe(V& v, TruthConfig& c) {
+  v("rate_hz", c.rate_hz);
+}
+
+template <class V>
+void describe(V& v, VehicleConfig& c) {
+  v("motion", c.motion);
+  v("start_W_m", c.start_W_m);
+  v("heading_deg", c.heading_deg);
+  v("speed_m_s", c.speed_m_s);
+  v("nose_down_deg", c.nose_down_deg);
+  v("vibration_angle_deg", c.vibration_angle_deg);
+  v("vibration_position_m", c.vibration_position_m);
+  v("vibration_frequency_hz", c.vibration_frequency_hz);
+  v("wander_position_m", c.wander_position_m);
+  v("wander_frequency_hz", c.wander_frequency_hz);
+  v("swing_roll_deg", c.swing_roll_deg);
+  v("swing_yaw_deg", c.swing_yaw_deg);
+  v("swing_frequency_hz", c.swing_frequency_hz);
+  v("velocity_W_m_s", c.velocity_W_m_s);
+  v("acceleration_W_m_s2", c.acceleration_W_m_s2);
+  v("omega_B_rad_s", c.omega_B_rad_s);
+  v("rpy0_deg", c.rpy0_deg);
+}
+
+template <class V>
+void describe(V& v, PanelConfig& c) {
+  v("axis", c.axis);
+  v("position_m", c.position_m);
+  v("min_m", c.min_m);
+  v("max_m", c.max_m);
+  v("albedo", c.albedo);
+  v("contrast", c.contrast);
+  v("scale_m", c.scale_m);
+}
+
+template <class V>
+void describe(V& v, SceneConfig& c) {
+  v("room_min_W_m", c.room_min_W_m);
+  v("room_max_W_m", c.room_max_W_m);
+  v("illuminance_lux", c.illuminance_lux);
+  v("ambient_fraction", c.ambient_fraction);
+  v("light_direction_W", c.light_direction_W);
+  v("floor_albedo", c.floor_albedo);
+  v("wall_albedo", c.wall_albedo);
+  v("ceiling_albedo", c.ceiling_albedo);
+  v("surface_contrast", c.surface_contrast);
+  v("surface_scale_m", c.surface_scale_m);
+  v.list("panels", c.panels);
+}
+
+template <class V>
+void describe(V& v, BallConfig& c) {
+  v("id", c.id);
+  v("radius_m", c.radius_m);
+  v("mode", c.mode);
+  v("release_t_s", c.release_t_s);
+  v("from_m", c.from_m);
+  v("to_m", c.to_m);
+  v("speed_m_s", c.speed_m_s);
+  v("origin_W_m", c.origin_W_m);
+  v("velocity_W_m_s", c.velocity_W_m_s);
+  v("spin_W_rad_s", c.spin_W_rad_s);
+  v("hidden_before_release", c.hidden_before_release);
+  v("albedo", c.albedo);
+  v("contrast", c.contrast);
+  v("texture_frequency", c.texture_frequency);
+  v("drag_coefficient", c.drag_coefficient);
+  v("mass_kg", c.mass_kg);
+  v("air_density_kg_m3", c.air_density_kg_m3);
+}
+
+template <class V>
+void describe(V& v, ScenarioConfig& c) {
+  v("name", c.name);
+  v("seed", c.seed);
+  v("duration_s", c.duration_s);
+  v("gravity_W_m_s2", c.gravity_W_m_s2);
+  v("threads", c.threads);
+  v.section("event_camera", c.event_camera);
+  v.section("depth_camera", c.depth_camera);
+  v.section("imu", c.imu);
+  v.section("odometry", c.odometry);
+  v.section("truth", c.truth);
+  v.section("vehicle", c.vehicle);
+  v.section("scene", c.scene);
+  v.list("balls", c.balls);
+}
+
+}  // namespace
+
+void apply_scenario_yaml(ScenarioConfig& config, const YAML::Node& node, const std::string& file) {
+  if (!node || node.IsNull()) return;
+  if (!node.IsMap()) throw InputError(file, "", "a scenario file must be a mapping of keys");
+  Loader loader(node, file, "");
+  describe(loader, config);
+  loader.check_unknown();
+}
+
+void apply_scenario_yaml(ScenarioConfig& config, const std::string& path) {
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(path);
+  } catch (const YAML::BadFile&) {
+    throw InputError(path, "", "cannot open the file");
+  } catch (const YAML::ParserException& e) {
+    throw InputError(path, "line " + std::to_string(e.mark.line + 1), e.msg);
+  }
+  apply_scenario_yaml(config, root, path);
+  if (const auto problem = config.find_problem())
+    throw InputError(path, "key " + problem->first, problem->second);
+}
+
+std::string to_yaml(const ScenarioConfig& config) {
+  ScenarioConfig copy = config;
+  YAML::Emitter out;
+  out << YAML::BeginMap;
+  Dumper dumper(out);
+  describe(dumper, copy);
+  out << YAML::EndMap;
+  return out.c_str();
+}
+
+}  // namespace fdv::sim

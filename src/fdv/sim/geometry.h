@@ -1,0 +1,63 @@
+#pragma once
+/// Small geometric helpers shared by the simulator's parts.
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+
+#include "fdv/core/camera.h"
+
+namespace fdv::sim {
+
+inline constexpr double kDegToRad = 0.017453292519943295;
+
+/// R = Rz(yaw) Ry(pitch) Rx(roll), angles in degrees (roll, pitch, yaw).
+inline Eigen::Matrix3d rotation_from_rpy_deg(const Eigen::Vector3d& rpy_deg) {
+  return (Eigen::AngleAxisd(rpy_deg.z() * kDegToRad, Eigen::Vector3d::UnitZ()) *
+          Eigen::AngleAxisd(rpy_deg.y() * kDegToRad, Eigen::Vector3d::UnitY()) *
+          Eigen::AngleAxisd(rpy_deg.x() * kDegToRad, Eigen::Vector3d::UnitX()))
+      .toRotationMatrix();
+}
+
+/// R_B_C of a forward-looking camera on an FLU body: camera z = body x, camera x = body -y
+/// (right), camera y = body -z (down).
+inline Eigen::Matrix3d forward_camera_rotation() {
+  Eigen::Matrix3d R;
+  R << 0, 0, 1, -1, 0, 0, 0, -1, 0;
+  return R;
+}
+
+/// Largest normalised radius up to which the lens's radial map r (1 + k1 r² + k2 r⁴ + k3 r⁶)
+/// keeps increasing (capped at 4). Beyond it the polynomial folds back and projecting there
+/// gives wrong pixels.
+inline double lens_monotonic_radius(const PinholeCamera& cam) {
+  const auto& d = cam.distortion;
+  double r = 0;
+  for (int i = 1; i <= 4000; ++i) {
+    r = i * 1e-3;
+    const double r2 = r * r;
+    const double deriv = 1 + 3 * d.k1 * r2 + 5 * d.k2 * r2 * r2 + 7 * d.k3 * r2 * r2 * r2;
+    if (deriv <= 0.05) return r - 1e-3;
+  }
+  return r;
+}
+
+/// Normalised (distorted) radius of the image corner farthest from the principal point.
+inline double corner_radius_distorted(const PinholeCamera& cam) {
+  const double dx = std::max(cam.cx + 0.5, cam.width - 0.5 - cam.cx) / cam.fx;
+  const double dy = std::max(cam.cy + 0.5, cam.height - 0.5 - cam.cy) / cam.fy;
+  return std::sqrt(dx * dx + dy * dy);
+}
+
+/// True when the lens map is monotonic out past every image corner (with 10 % margin), so each
+/// raw pixel has exactly one viewing ray.
+inline bool lens_is_invertible(const PinholeCamera& cam) {
+  const double r_max = lens_monotonic_radius(cam);
+  const auto& d = cam.distortion;
+  const double r2 = r_max * r_max;
+  const double rd_max = r_max * (1 + d.k1 * r2 + d.k2 * r2 * r2 + d.k3 * r2 * r2 * r2);
+  const double tangential = 2 * (std::abs(d.p1) + std::abs(d.p2)) * r2;
+  return rd_max - tangential > 1.1 * corner_radius_distorted(cam);
+}
+
+}  // namespace fdv::sim
