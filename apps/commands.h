@@ -5,9 +5,9 @@
 namespace fdv::cli {
 
 void add_info_command(CLI::App& app);
-// [command slot: simulate]
-// [command slot: run]
-// [command slot: eval]
-// [command slot: bench]
+void add_simulate_command(CLI::App& app);
+void add_run_command(CLI::App& app);
+void add_eval_command(CLI::App& app);
+void add_demo_command(CLI::App& app);
 
 }  // namespace fdv::cli

@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "apps/commands.h"
+#include "apps/reader_flags.h"
 #include "fdv/io/recording.h"
 
 namespace fdv::cli {
@@ -27,8 +28,8 @@ struct StreamSummary {
   }
 };
 
-nlohmann::json summarize(const std::string& path) {
-  auto reader = open_recording(path);
+nlohmann::json summarize(const std::string& path, const ReaderOptions& options) {
+  auto reader = open_recording(path, options);
   StreamSummary events, imu, depth, odometry, truth;
   std::uint64_t on_events = 0;
   SensorChunk chunk;
@@ -58,6 +59,12 @@ nlohmann::json summarize(const std::string& path) {
   j["ground_truth"] = truth.to_json();
   j["calibration"] = info.calibration.has_value();
   j["notes"] = info.notes;
+  if (!info.topics.empty()) {
+    j["topics"] = nlohmann::json::array();
+    for (const auto& t : info.topics)
+      j["topics"].push_back(
+          {{"topic", t.topic}, {"type", t.type}, {"count", t.count}, {"rate_hz", t.rate_hz}});
+  }
   j["report"] = reader->report().to_json();
   return j;
 }
@@ -67,8 +74,10 @@ nlohmann::json summarize(const std::string& path) {
 void add_info_command(CLI::App& app) {
   auto* cmd = app.add_subcommand("info", "print a JSON summary of a recording (any supported format)");
   static std::string input;
+  static ReaderOptions options;
   cmd->add_option("input", input, "recording file or dataset folder")->required();
-  cmd->callback([] { std::cout << summarize(input).dump(2) << std::endl; });
+  add_reader_flags(cmd, options);
+  cmd->callback([] { std::cout << summarize(input, options).dump(2) << std::endl; });
 }
 
 }  // namespace fdv::cli

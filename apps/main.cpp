@@ -1,4 +1,5 @@
 // fdv: the command-line front end. Every sub-command is a thin layer over the library.
+#include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
@@ -9,13 +10,15 @@
 int main(int argc, char** argv) {
   CLI::App app{"fast-dynamic-vision: detect and track fast-moving objects with event + depth sensing"};
   app.require_subcommand(1);
-  bool verbose = false;
-  app.add_flag("-v,--verbose", verbose, "debug logging");
+  // Log to stderr: stdout carries the commands' JSON (info, simulate) for pipes.
+  spdlog::set_default_logger(spdlog::stderr_color_mt("fdv"));
+  app.add_flag_callback("-v,--verbose", [] { spdlog::set_level(spdlog::level::debug); }, "debug logging")
+      ->trigger_on_parse();  // before the sub-command's callback runs
   fdv::cli::add_info_command(app);
-  // [command slot: simulate]
-  // [command slot: run]
-  // [command slot: eval]
-  // [command slot: bench]
+  fdv::cli::add_simulate_command(app);
+  fdv::cli::add_run_command(app);
+  fdv::cli::add_eval_command(app);
+  fdv::cli::add_demo_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

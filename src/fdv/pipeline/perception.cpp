@@ -1,0 +1,343 @@
+#include "fdv/pipeline/perception.h"
+
+#include <algorithm>
+#include <chrono>
+
+#include "fdv/core/error.h"
+#include "fdv/estimation/camera_pose.h"
+
+namespace fdv {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+/// History kept for IMU and odometry behind the newest sample: a window, the lateness allowance
+/// and the estimator's own lateness, with margin.
+constexpr TimeNs kHistoryNs = 2 * kNsPerS;
+
+template <typename T>
+void trim_history(std::vector<T>& v) {
+  if (v.size() < 64) return;
+  const TimeNs keep_from = v.back().t - kHistoryNs;
+  auto first_kept = std::find_if(v.begin(), v.end(), [&](const T& s) { return s.t >= keep_from; });
+  // Erase in bulk only when a good share is stale (amortised O(1) per sample).
+  if (first_kept - v.begin() > static_cast<std::ptrdiff_t>(v.size() / 2)) v.erase(v.begin(), first_kept - 1);
+}
+
+}  // namespace
+
+std::string PerceptionOptions::validate() const {
+  const std::pair<const char*, std::string> parts[] = {
+      {"windows", windows.validate()},
+      {"compensation", compensation.validate()},
+      {"detection", detection.validate()},
+      {"depth_registration", depth_registration.validate()},
+      {"tracking", tracking.validate()},
+      {"depth_segmentation", depth_segmentation.validate()},
+      {"prediction", prediction.validate()},
+  };
+  for (const auto& [name, why] : parts)
+    if (!why.empty()) return std::string(name) + ": " + why;
+  if (max_lateness_ns < 0) return "max_lateness_ns must not be negative";
+  if (odometry_max_extrapolation_ns < 0) return "odometry_max_extrapolation_ns must not be negative";
+  return {};
+}
+
+Perception::Perception(const Calibration& calibration, PerceptionOptions options,
+                       PerceptionCallbacks callbacks)
+    : calibration_(calibration),
+      options_([&] {
+        if (options.estimation.event_focal_px <= 0)
+          options.estimation.event_focal_px = 0.5 * (calibration.event_camera.fx + calibration.event_camera.fy);
+        options.estimation.mode = EstimatorMode::kFusion;
+        if (const auto why = options.validate(); !why.empty()) throw ConfigError(why);
+        if (const auto why = options.estimation.validate(); !why.empty())
+          throw ConfigError("estimation: " + why);
+        return options;
+      }()),
+      callbacks_(std::move(callbacks)),
+      windower_(options_.windows),
+      compensator_(make_compensator(calibration, options_.compensation)),
+      detector_(options_.detection, calibration.event_camera),
+      tracker_(options_.tracking) {
+  if (calibration.depth_camera) registrar_.emplace(calibration, options_.depth_registration);
+}
+
+Perception::~Perception() = default;
+
+void Perception::warn_once(const std::string& key, const std::string& message) {
+  if (std::find(warned_.begin(), warned_.end(), key) != warned_.end()) return;
+  warned_.push_back(key);
+  if (callbacks_.on_warning) callbacks_.on_warning(message);
+}
+
+void Perception::advance_stream_time(TimeNs t) { stream_time_ = std::max(stream_time_, t); }
+
+void Perception::enqueue(const EventWindow& w) {
+  PendingWindow p;
+  if (!free_buffers_.empty()) {  // reuse a processed window's storage: no allocation once warm
+    p.events = std::move(free_buffers_.back());
+    free_buffers_.pop_back();
+  }
+  p.t_start = w.t_start;
+  p.t_end = w.t_end;
+  p.index = w.index;
+  p.decimated = w.decimated;
+  p.events.assign(w.events.begin(), w.events.end());
+  pending_windows_.push_back(std::move(p));
+}
+
+void Perception::push_events(std::span<const Event> events) {
+  if (events.empty()) return;
+  counters_.events += events.size();
+  windower_.push(events, [this](const EventWindow& w) { enqueue(w); });
+  advance_stream_time(events.back().t);
+  process_ready(false);
+}
+
+void Perception::push_imu(const ImuSample& sample) {
+  if (!imu_.empty() && sample.t < imu_.back().t) {
+    ++counters_.imu_out_of_order;
+    return;
+  }
+  ++counters_.imu;
+  imu_.push_back(sample);
+  trim_history(imu_);
+  advance_stream_time(sample.t);
+  process_ready(false);
+}
+
+void Perception::push_odometry(const OdometrySample& sample) {
+  if (!odometry_.empty() && sample.t < odometry_.back().t) {
+    ++counters_.odometry_out_of_order;
+    return;
+  }
+  ++counters_.odometry;
+  odometry_.push_back(sample);
+  trim_history(odometry_);
+  advance_stream_time(sample.t);
+  process_ready(false);
+}
+
+void Perception::push_depth(const DepthFrame& frame) {
+  ++counters_.depth_frames;
+  if (!registrar_) {
+    warn_once("no depth camera", "depth frames given but the calibration has no depth camera: ignored");
+    return;
+  }
+  DepthRegistrationResult r = registrar_->register_frame(frame);
+  if (!r.ok()) {
+    ++counters_.depth_rejected_registration;
+    warn_once("depth rejected: " + r.rejected, "depth frame at t=" + std::to_string(frame.t) +
+                                                   " ns rejected: " + r.rejected + " (further ones counted)");
+    return;
+  }
+  recent_depth_.push_back(r.depth);
+  while (recent_depth_.size() > 4) recent_depth_.pop_front();  // ~130 ms at 30 Hz
+  pending_depth_.push_back(std::move(r.depth));
+  advance_stream_time(frame.t);
+  process_ready(false);
+}
+
+void Perception::finish() {
+  windower_.flush([this](const EventWindow& w) { enqueue(w); });
+  process_ready(true);
+  while (!pending_depth_.empty()) {  // frames after the last window: segment with predictions
+    process_depth(pending_depth_.front());
+    pending_depth_.pop_front();
+  }
+}
+
+bool Perception::window_ready(const PendingWindow& w, bool flush) const {
+  if (flush || stream_time_ >= w.t_end + options_.max_lateness_ns) return true;
+  const bool imu_caught_up = !imu_.empty() && imu_.back().t >= w.t_end;
+  const bool odometry_caught_up = !odometry_.empty() && odometry_.back().t >= w.t_end;
+  return imu_caught_up && odometry_caught_up;
+}
+
+void Perception::process_ready(bool flush) {
+  while (!pending_windows_.empty() && window_ready(pending_windows_.front(), flush)) {
+    PendingWindow& w = pending_windows_.front();
+    // Depth frames up to this window's end are segmented first when the tracks already cover
+    // their time; the rest wait for the windows that do.
+    process_window(w);
+    processed_until_ = w.t_end;
+    w.events.clear();
+    free_buffers_.push_back(std::move(w.events));
+    pending_windows_.pop_front();
+    while (!pending_depth_.empty() && pending_depth_.front().t <= processed_until_) {
+      process_depth(pending_depth_.front());
+      pending_depth_.pop_front();
+    }
+  }
+  // A frame that arrived after the windows covering its time: segment it now.
+  while (!pending_depth_.empty() && pending_depth_.front().t <= processed_until_) {
+    process_depth(pending_depth_.front());
+    pending_depth_.pop_front();
+  }
+}
+
+std::optional<OdometrySample> Perception::vehicle_state(TimeNs t) const {
+  if (!odometry_.empty()) return body_state_at(odometry_, t, options_.odometry_max_extrapolation_ns);
+  if (!options_.assume_static_vehicle) return std::nullopt;
+  OdometrySample s;
+  s.t = t;
+  return s;
+}
+
+std::optional<Eigen::Isometry3d> Perception::camera_pose(TimeNs t) const {
+  const auto body = vehicle_state(t);
+  if (!body) return std::nullopt;
+  return body->T_W_B() * calibration_.T_B_E;
+}
+
+void Perception::process_window(PendingWindow& w) {
+  const auto start = Clock::now();
+  WindowResult result;
+  result.index = w.index;
+  result.t_start = w.t_start;
+  result.t_end = w.t_end;
+  result.events = w.events.size();
+  result.decimated = w.decimated;
+  ++counters_.windows;
+
+  CompensationInput in;
+  in.events = w.events;
+  in.t_start_ns = w.t_start;
+  in.t_end_ns = w.t_end;
+  in.imu = imu_;
+  in.odometry = vehicle_state(w.t_start);
+  in.depth = nullptr;  // the newest frame not newer than the window's end
+  for (const RegisteredDepth& d : recent_depth_)
+    if (d.t <= w.t_end) in.depth = &d;
+  const CompensatedWindow& cw = compensator_->compensate(in);
+  result.compensation = cw.report;
+  result.timings.compensation_ms = ms_since(start);
+
+  CompensatedEventsView view;
+  view.t_start_ns = cw.t_start_ns;
+  view.t_end_ns = cw.t_end_ns;
+  view.width = cw.width;
+  view.height = cw.height;
+  view.pixel = cw.pixel();
+  view.t_s = cw.t_s();
+  view.time_sorted = cw.report.events_out_of_order == 0;  // lets the detector binary-search time slices
+  view.omega_rad_s = cw.report.has_omega ? cw.report.omega_E.norm() : 0.0;
+  view.speed_m_s = cw.report.has_velocity ? cw.report.v_E.norm() : 0.0;
+  const DetectionResult det = detector_.detect(view);
+  result.status = det.status;
+  result.detection = det.detection;
+  result.theta = det.theta;
+  result.timings.detection = det.timings;
+
+  const auto tracking_start = Clock::now();
+  std::vector<TrackerDetection> inputs;
+  if (det.detection) {
+    ++counters_.detections;
+    const Detection2D& d = *det.detection;
+    inputs.push_back({d.t_ns, d.center_raw, d.center_normalized,
+                      Eigen::Vector2d(d.box_raw.width(), d.box_raw.height()), d.events});
+  }
+  const TrackerStep step = tracker_.update(w.t_end, inputs);
+  result.timings.tracking_ms = ms_since(tracking_start);
+  for (int id : step.deleted) estimators_.erase(id);
+  std::vector<int> to_solve = step.confirmed;
+  for (const TrackAssignment& a : step.assignments) {
+    if (a.track_id < 0) continue;
+    result.track_id = a.track_id;
+    const TrackerDetection& d = inputs[a.detection];
+    const auto T_W_E = camera_pose(d.t);
+    if (!T_W_E) {
+      warn_once("no pose", odometry_.empty()
+                               ? "no odometry: 3D estimation skipped (set assume_static_vehicle if the "
+                                 "vehicle does not move)"
+                               : "odometry does not cover a detection's time: its 3D observation skipped");
+      continue;
+    }
+    EventObservation obs;
+    obs.t = d.t;
+    obs.xn = d.centre_normalized;
+    obs.T_W_E = *T_W_E;
+    TrackEstimators& e = estimators_for(a.track_id);
+    e.fusion.add(obs);
+    if (e.mono) e.mono->add(obs);
+    const Track* track = tracker_.find(a.track_id);
+    if (track && track->confirmed() &&
+        std::find(to_solve.begin(), to_solve.end(), a.track_id) == to_solve.end())
+      to_solve.push_back(a.track_id);
+  }
+  for (int id : to_solve) estimate(id, w.t_end);
+  result.timings.total_ms = ms_since(start);
+  result.detector = &detector_;
+  if (callbacks_.on_window) callbacks_.on_window(result);
+}
+
+Perception::TrackEstimators& Perception::estimators_for(int track_id) {
+  auto it = estimators_.find(track_id);
+  if (it == estimators_.end()) {
+    TrackEstimators e{TrajectoryEstimator(options_.estimation), std::nullopt};
+    if (options_.monocular_baseline) {
+      EstimatorOptions mono = options_.estimation;
+      mono.mode = EstimatorMode::kMonocular;
+      e.mono.emplace(mono);
+    }
+    it = estimators_.emplace(track_id, std::move(e)).first;
+  }
+  return it->second;
+}
+
+void Perception::process_depth(const RegisteredDepth& depth) {
+  for (const Track& track : tracker_.tracks()) {
+    if (!track.confirmed()) continue;
+    const auto start = Clock::now();
+    const TrackPrediction p = track.predict(depth.t);
+    DepthQuery query;
+    query.centre_px = p.centre_px;
+    query.box_size_px = p.box_size_px;
+    auto it = estimators_.find(track.id());
+    const auto T_W_E = camera_pose(depth.t);
+    if (it != estimators_.end() && it->second.fusion.latest().usable && T_W_E) {
+      const TrajectoryEstimate& est = it->second.fusion.latest();
+      const Eigen::Vector3d p_E = T_W_E->inverse() * est.trajectory.position(depth.t);
+      query.expected_depth_m = p_E.z();
+      if (const auto cov = est.position_covariance(depth.t)) {
+        const Eigen::Vector3d axis_W = T_W_E->linear().col(2);
+        query.expected_depth_sigma_m = std::sqrt(std::max(0.0, axis_W.dot(*cov * axis_W)));
+      }
+    }
+    DepthResult r;
+    r.t = depth.t;
+    r.track_id = track.id();
+    r.segmentation = segment_object_depth(depth_view(depth), calibration_.event_camera, query,
+                                          options_.depth_segmentation);
+    r.ms = ms_since(start);
+    if (callbacks_.on_depth) callbacks_.on_depth(r);
+    if (!r.segmentation.observation || !T_W_E) continue;
+    ++counters_.depth_observations;
+    const DepthObservation& o = *r.segmentation.observation;
+    TrackEstimators& e = estimators_for(track.id());
+    if (e.fusion.add(DepthMeasurement{o.t, o.depth_m, o.sigma_m, *T_W_E}) == AddResult::kAccepted)
+      estimate(track.id(), depth.t);
+  }
+}
+
+void Perception::estimate(int track_id, TimeNs t) {
+  TrackEstimators& e = estimators_for(track_id);
+  auto solve_and_emit = [&](TrajectoryEstimator& estimator, EstimatorMode mode) {
+    const auto start = Clock::now();
+    const TrajectoryEstimate& est = estimator.solve();
+    ++counters_.estimates;
+    if (callbacks_.on_estimate) callbacks_.on_estimate({t, track_id, mode, &est, ms_since(start)});
+    return &est;
+  };
+  const TrajectoryEstimate* fused = solve_and_emit(e.fusion, EstimatorMode::kFusion);
+  if (e.mono) solve_and_emit(*e.mono, EstimatorMode::kMonocular);
+  if (!fused->usable || !callbacks_.on_prediction) return;
+  if (const auto vehicle = vehicle_state(t))
+    callbacks_.on_prediction({t, track_id, predict_collision(fused->trajectory, *vehicle, options_.prediction)});
+}
+
+}  // namespace fdv

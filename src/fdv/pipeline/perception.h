@@ -1,0 +1,195 @@
+#pragma once
+/// The streaming perception pipeline: push events, IMU, depth and odometry as they arrive, get
+/// detections, tracks, depth observations, 3D trajectory estimates and collision predictions back
+/// through callbacks. The CLI (`fdv run`) drives exactly this class.
+///
+///   Perception perception(calibration, options, {
+///       .on_window = [](const WindowResult& w) { ... },        // one per event window
+///       .on_estimate = [](const EstimateResult& e) { ... },    // after each new observation
+///       .on_prediction = [](const PredictionResult& p) { ... },
+///   });
+///   perception.push_imu(imu);  perception.push_events(events);  perception.push_depth(frame); ...
+///   perception.finish();                                        // flushes the last window
+///
+/// Data flow per window (paper Fig. 2): motion compensation -> time images, threshold,
+/// Gaussian fitting / region retrieval -> Detection2D -> association + Kalman filter. Per depth
+/// frame: registration into the event camera (also feeding the translational compensation) ->
+/// segmentation in the ROI of each live track -> DepthObservation. Per track: a fusion estimator
+/// (events + depth) and the monocular baseline (events only), re-solved on each new observation.
+///
+/// Ordering: each stream must be pushed in its own time order; streams may be interleaved in any
+/// order within `max_lateness_ns`: a completed window waits until IMU and odometry have reached its
+/// end, or until any stream is that much past it; within that bound the results do not depend on
+/// the interleaving. Depth is not waited for (a 30 Hz camera would add up to 33 ms of latency):
+/// a window is compensated with the newest depth frame not newer than its end among those that
+/// have arrived, and a frame is segmented once the windows up to its time are processed, or on
+/// arrival if they already are. A depth frame that arrives late is therefore used late.
+/// Callbacks run on the caller's thread, inside the push/finish call; references passed to them are
+/// valid only during the call. Not thread-safe: one instance per thread.
+#include <deque>
+#include <functional>
+#include <map>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "fdv/compensation/compensator.h"
+#include "fdv/core/calibration.h"
+#include "fdv/depth/depth_registration.h"
+#include "fdv/depth/depth_segmentation.h"
+#include "fdv/detection/detector.h"
+#include "fdv/estimation/collision.h"
+#include "fdv/estimation/trajectory_estimator.h"
+#include "fdv/pipeline/event_windower.h"
+#include "fdv/tracking/tracker.h"
+
+namespace fdv {
+
+struct PerceptionOptions {
+  EventWindowerOptions windows;
+  CompensationOptions compensation;
+  DetectorOptions detection;
+  DepthRegistrationOptions depth_registration;
+  TrackerOptions tracking;
+  DepthSegmentationOptions depth_segmentation;
+  /// Fusion estimator options; the monocular baseline runs with the same options in kMonocular.
+  /// event_focal_px is filled from the calibration when left 0.
+  EstimatorOptions estimation;
+  bool monocular_baseline = true;  ///< run Su & Shen's events-only estimator beside the fusion
+  PredictionOptions prediction;
+  /// How long (stream time) a completed window may wait for IMU and odometry to catch up [ns].
+  TimeNs max_lateness_ns = 50 * kNsPerMs;
+  /// Odometry extrapolation allowed when a pose is needed beyond the newest sample [ns].
+  TimeNs odometry_max_extrapolation_ns = 50 * kNsPerMs;
+  /// With no odometry at all, 3D estimation assumes the vehicle is static at the world origin
+  /// (W = B) only when this is set; otherwise estimation is skipped and a warning is given.
+  bool assume_static_vehicle = false;
+  std::string validate() const;
+};
+
+/// Wall-clock time of each stage of one window [ms] (steady clock).
+struct WindowTimings {
+  double compensation_ms = 0;
+  DetectionTimings detection;
+  double tracking_ms = 0;
+  double total_ms = 0;  ///< compensation + detection + tracking (+ estimation triggered by it)
+};
+
+struct WindowResult {
+  std::uint64_t index = 0;
+  TimeNs t_start = 0, t_end = 0;
+  std::size_t events = 0;        ///< events in the window (after the windower's decimation)
+  std::uint64_t decimated = 0;   ///< dropped by the windower's overload policy
+  CompensationReport compensation;
+  DetectionStatus status = DetectionStatus::kTooFewEvents;
+  std::optional<Detection2D> detection;
+  double theta = 0;
+  int track_id = -1;  ///< track the detection was assigned to; -1 none
+  WindowTimings timings;
+  /// The detector, for its intermediate images (visualisation); valid during the callback only.
+  const Detector* detector = nullptr;
+};
+
+struct DepthResult {
+  TimeNs t = 0;  ///< depth frame time
+  int track_id = -1;
+  DepthSegmentation segmentation;
+  double ms = 0;
+};
+
+struct EstimateResult {
+  TimeNs t = 0;  ///< time of the observation that triggered the solve
+  int track_id = -1;
+  EstimatorMode mode = EstimatorMode::kFusion;
+  const TrajectoryEstimate* estimate = nullptr;
+  double ms = 0;
+};
+
+struct PredictionResult {
+  TimeNs t = 0;  ///< vehicle state time the prediction starts from
+  int track_id = -1;
+  CollisionPrediction prediction;
+};
+
+struct PerceptionCallbacks {
+  std::function<void(const WindowResult&)> on_window;
+  std::function<void(const DepthResult&)> on_depth;
+  std::function<void(const EstimateResult&)> on_estimate;
+  std::function<void(const PredictionResult&)> on_prediction;
+  /// Once-per-cause notices (e.g. "no odometry: 3D estimation skipped").
+  std::function<void(const std::string&)> on_warning;
+};
+
+/// Counts of what the pipeline received, used and refused.
+struct PerceptionCounters {
+  std::uint64_t events = 0, windows = 0, detections = 0;
+  std::uint64_t imu = 0, imu_out_of_order = 0;
+  std::uint64_t odometry = 0, odometry_out_of_order = 0;
+  std::uint64_t depth_frames = 0, depth_rejected_registration = 0, depth_observations = 0;
+  std::uint64_t estimates = 0;
+};
+
+class Perception {
+ public:
+  /// Throws ConfigError for invalid options or a calibration that cannot serve them.
+  Perception(const Calibration& calibration, PerceptionOptions options, PerceptionCallbacks callbacks);
+  ~Perception();
+
+  void push_events(std::span<const Event> events);
+  void push_imu(const ImuSample& sample);
+  void push_odometry(const OdometrySample& sample);
+  void push_depth(const DepthFrame& frame);
+  /// End of input: processes everything still held.
+  void finish();
+
+  const PerceptionCounters& counters() const { return counters_; }
+  const Calibration& calibration() const { return calibration_; }
+  const Tracker& tracker() const { return tracker_; }
+
+ private:
+  struct PendingWindow {
+    TimeNs t_start = 0, t_end = 0;
+    std::uint64_t index = 0, decimated = 0;
+    std::vector<Event> events;
+  };
+  struct TrackEstimators {
+    TrajectoryEstimator fusion;
+    std::optional<TrajectoryEstimator> mono;
+  };
+
+  void enqueue(const EventWindow& w);
+  void advance_stream_time(TimeNs t);
+  void process_ready(bool flush);
+  bool window_ready(const PendingWindow& w, bool flush) const;
+  void process_window(PendingWindow& w);
+  void process_depth(const RegisteredDepth& depth);
+  void estimate(int track_id, TimeNs t);
+  std::optional<Eigen::Isometry3d> camera_pose(TimeNs t) const;
+  std::optional<OdometrySample> vehicle_state(TimeNs t) const;
+  TrackEstimators& estimators_for(int track_id);
+  void warn_once(const std::string& key, const std::string& message);
+
+  Calibration calibration_;
+  PerceptionOptions options_;
+  PerceptionCallbacks callbacks_;
+  EventWindower windower_;
+  std::unique_ptr<Compensator> compensator_;
+  Detector detector_;
+  std::optional<DepthRegistrar> registrar_;
+  Tracker tracker_;
+  std::vector<ImuSample> imu_;            ///< recent history; contiguous: the compensator takes a span
+  std::vector<OdometrySample> odometry_;  ///< recent history, time-sorted
+  std::deque<RegisteredDepth> recent_depth_;     ///< for the translational compensation
+  std::deque<RegisteredDepth> pending_depth_;    ///< awaiting segmentation
+  std::deque<PendingWindow> pending_windows_;
+  std::vector<std::vector<Event>> free_buffers_;
+  std::map<int, TrackEstimators> estimators_;
+  TimeNs stream_time_ = std::numeric_limits<TimeNs>::min();
+  TimeNs processed_until_ = std::numeric_limits<TimeNs>::min();  ///< t_end of the last window done
+  std::vector<std::string> warned_;
+  PerceptionCounters counters_;
+};
+
+}  // namespace fdv
