@@ -6,7 +6,7 @@
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <optional>
-#include <regex>
+#include <cstdio>
 
 #include "apps/commands.h"
 #include "fdv/core/error.h"
@@ -86,10 +86,11 @@ sim::ScenarioConfig build_config(const SimulateArgs& args) {
   if (args.duration_s) config.duration_s = *args.duration_s;
   if (args.threads) config.threads = *args.threads;
   if (!args.resolution.empty()) {
-    std::smatch m;
-    if (!std::regex_match(args.resolution, m, std::regex(R"((\d+)x(\d+))")))
+    int width = 0, height = 0;
+    char tail = 0;
+    if (std::sscanf(args.resolution.c_str(), "%dx%d%c", &width, &height, &tail) != 2 || width <= 0 || height <= 0)
       throw ConfigError("--resolution must look like 640x480, got '" + args.resolution + "'");
-    sim::set_event_resolution(config, std::stoi(m[1]), std::stoi(m[2]));
+    sim::set_event_resolution(config, width, height);
   }
   if (const auto why = config.validate(); !why.empty()) throw ConfigError(why);
   return config;
