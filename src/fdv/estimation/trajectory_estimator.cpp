@@ -211,18 +211,23 @@ TrajectoryEstimator::TrajectoryEstimator(EstimatorOptions options) : options_(st
   if (auto e = options_.validate(); !e.empty()) throw ConfigError("EstimatorOptions: " + e);
 }
 
+bool TrajectoryEstimator::admit(TimeNs t) {
+  if (any_ && t < newest_t_ - options_.max_lateness_ns) {
+    ++refused_;
+    return false;
+  }
+  newest_t_ = any_ ? std::max(newest_t_, t) : t;
+  any_ = true;
+  return true;
+}
+
 AddResult TrajectoryEstimator::add(const EventObservation& o) {
   if (!o.xn.allFinite() || !finite_pose(o.T_W_E) || !(o.sigma_n >= 0) ||
       !std::isfinite(o.sigma_n)) {
     ++refused_;
     return AddResult::kInvalid;
   }
-  if (any_ && o.t < newest_t_ - options_.max_lateness_ns) {
-    ++refused_;
-    return AddResult::kTooLate;
-  }
-  newest_t_ = any_ ? std::max(newest_t_, o.t) : o.t;
-  any_ = true;
+  if (!admit(o.t)) return AddResult::kTooLate;
   events_.push_back(o);
   drop_oldest_beyond_limit();
   return AddResult::kAccepted;
@@ -234,12 +239,7 @@ AddResult TrajectoryEstimator::add(const DepthMeasurement& o) {
     ++refused_;
     return AddResult::kInvalid;
   }
-  if (any_ && o.t < newest_t_ - options_.max_lateness_ns) {
-    ++refused_;
-    return AddResult::kTooLate;
-  }
-  newest_t_ = any_ ? std::max(newest_t_, o.t) : o.t;
-  any_ = true;
+  if (!admit(o.t)) return AddResult::kTooLate;
   depths_.push_back(o);
   drop_oldest_beyond_limit();
   return AddResult::kAccepted;

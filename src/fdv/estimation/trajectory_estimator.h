@@ -148,6 +148,8 @@ class TrajectoryEstimator {
   const EstimatorOptions& options() const { return options_; }
 
  private:
+  /// Lateness check shared by both observation kinds; updates the newest time when admitted.
+  bool admit(TimeNs t);
   void drop_oldest_beyond_limit();
   EstimatorOptions options_;
   std::vector<EventObservation> events_;
