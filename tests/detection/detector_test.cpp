@@ -129,12 +129,70 @@ TEST_F(DetectorTest, BurstFarAboveTheNormalRate) {
   // With c = 0 the burst passes θ and floods the segmentation: reported as such.
   DetectorOptions o;
   o.threshold_c = 0;
+  o.min_pixel_events = 1;  // the paper's S: single-event burst pixels count
   Detector permissive(o, lens());
   const CompensatedWindow& w = compensator_->compensate(
       {.events = with_burst(ev, 24 * kNsPerMs, 25 * kNsPerMs, 200'000, 6), .t_start_ns = s.t0, .t_end_ns = s.t0 + s.duration});
   const DetectionResult flooded = permissive.detect(view_of(w));
   EXPECT_FALSE(flooded.detection);
   EXPECT_EQ(flooded.status, DetectionStatus::kFlooded);
+}
+
+// A decoy stronger than the blob in P but with one event per pixel: a solid 24x24 patch all fired in
+// the window's last millisecond (N ≈ 1 everywhere on it). The density gate rejects it; with a
+// second candidate allowed, the blob is found; with one, the window has no detection.
+TEST_F(DetectorTest, NextCandidateIsTriedWhenTheStrongestPatternFailsTheEvidenceGates) {
+  test::BlobScene s;
+  std::vector<Event> ev = test::make_scene(lens(), s);
+  for (int y = 0; y < 24; ++y)
+    for (int x = 0; x < 24; ++x) {
+      Event e{s.t0 + 24 * kNsPerMs + (x + 24 * y) * 1000, 0, 0, true};
+      if (test::to_raw(lens(), {450.0 + x, 300.0 + y}, e)) ev.push_back(e);
+    }
+  std::sort(ev.begin(), ev.end(), [](const Event& a, const Event& b) { return a.t < b.t; });
+  DetectorOptions o;
+  o.min_pixel_events = 1;     // the decoy's single-event pixels enter S (the paper's S)
+  o.min_event_density = 2.0;  // the blob holds tens of events per pixel
+  o.max_candidates = 1;
+  const CompensatedWindow& w = compensator_->compensate({.events = ev, .t_start_ns = s.t0, .t_end_ns = s.t0 + s.duration});
+  const DetectionResult one = Detector(o, lens()).detect(view_of(w));
+  EXPECT_FALSE(one.detection);
+  EXPECT_EQ(one.status, DetectionStatus::kWeakEvidence);
+  EXPECT_EQ(one.candidates, 1);
+  o.max_candidates = 3;
+  const DetectionResult more = Detector(o, lens()).detect(view_of(w));
+  EXPECT_EQ(more.candidates, 2);
+  expect_on_blob(more, s, 2.0);
+  EXPECT_GE(more.detection->event_density, 2.0);
+  // Without the density gate the decoy wins: it is the strongest pattern.
+  o.min_event_density = 0;
+  const DetectionResult ungated = Detector(o, lens()).detect(view_of(w));
+  ASSERT_TRUE(ungated.detection);
+  EXPECT_NEAR(ungated.detection->center_undistorted.x(), 461.5, 3.0);
+}
+
+// A pattern under min_peak is taken only inside a confirmed track's gate, at prior_min_peak.
+TEST_F(DetectorTest, TrackPriorAdmitsAWeakerPatternOnlyInsideItsGate) {
+  test::BlobScene s;
+  const auto ev = test::make_scene(lens(), s);
+  const CompensatedWindow& w = compensator_->compensate({.events = ev, .t_start_ns = s.t0, .t_end_ns = s.t0 + s.duration});
+  DetectorOptions o;
+  o.min_peak = 0.99;  // nothing passes the normal gate
+  o.prior_min_peak = 0.3;
+  Detector detector(o, lens());
+  EXPECT_FALSE(detector.detect(view_of(w)).detection);
+  const PinholeCamera cam = lens();
+  auto raw_of = [&](const Eigen::Vector2d& uv) {
+    return cam.normalized_to_pixel({(uv.x() - cam.cx) / cam.fx, (uv.y() - cam.cy) / cam.fy});
+  };
+  // The prior where the blob is at mid-window (as a Kalman prediction would put it).
+  const DetectionPrior on_blob{raw_of(s.blob_at(s.t0 + s.duration / 2)), {14, 14}};
+  const DetectionResult aided = detector.detect(view_of(w), std::span(&on_blob, 1));
+  expect_on_blob(aided, s, 2.0);
+  EXPECT_TRUE(aided.detection->track_aided);
+  // A prior 100 px away opens a gate with only background in it.
+  const DetectionPrior elsewhere{raw_of(s.blob_at(s.t0) + Eigen::Vector2d(100, 100)), {14, 14}};
+  EXPECT_FALSE(detector.detect(view_of(w), std::span(&elsewhere, 1)).detection);
 }
 
 TEST_F(DetectorTest, InvalidOptionsAreRejected) {
@@ -145,6 +203,15 @@ TEST_F(DetectorTest, InvalidOptionsAreRejected) {
   o = {};
   o.fit_delta_center_px = 0;
   EXPECT_NE(o.validate().find("δ_C"), std::string::npos);
+  o = {};
+  o.max_candidates = 0;
+  EXPECT_NE(o.validate().find("max_candidates"), std::string::npos);
+  o = {};
+  o.min_pixel_events = 0;
+  EXPECT_NE(o.validate().find("min_pixel_events"), std::string::npos);
+  o = {};
+  o.min_event_density = -1;
+  EXPECT_NE(o.validate().find("min_event_density"), std::string::npos);
   EXPECT_TRUE(DetectorOptions{}.validate().empty());
 }
 

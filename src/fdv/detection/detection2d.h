@@ -39,8 +39,12 @@ struct Detection2D {
   /// in [0, 1]: the local density and recency of the segmented pattern; 1 = a fully segmented
   /// neighbourhood at N = 1. Same scale as DetectorOptions::min_peak, the detection threshold.
   double score = 0;
+  /// Compensated events per pixel of the box (gate DetectorOptions::min_event_density).
+  double event_density = 0;
   DetectionSource source = DetectionSource::kGaussianFit;
   int fit_iterations = 0;
+  /// Found only with a track's prior (DetectionPrior), at the lower evidence threshold.
+  bool track_aided = false;
 };
 
 }  // namespace fdv

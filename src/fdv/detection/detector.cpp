@@ -33,6 +33,7 @@ std::string_view to_string(DetectionStatus s) {
     case DetectionStatus::kRemovedAsNoise: return "removed as noise";
     case DetectionStatus::kNoRegion: return "no plausible region";
     case DetectionStatus::kTooFewEventsInBox: return "too few events in box";
+    case DetectionStatus::kWeakEvidence: return "weak evidence";
   }
   return "?";
 }
@@ -42,7 +43,8 @@ std::string DetectorOptions::validate() const {
   auto odd_positive = [](int k) { return k >= 1 && k % 2 == 1 && k <= 31; };
   const double coeffs[] = {threshold_a_s_per_rad, threshold_b_s_per_m, threshold_c, fit_delta_center_px,
                            fit_delta_size_px, fit_min_size_px, roi_max_fraction, roi_max_aspect, max_segmented_fraction,
-                           refine_box_scale, min_peak};
+                           refine_box_scale, min_peak, min_event_density, prior_min_peak, prior_gate_scale,
+                           prior_min_gate_px};
   for (double v : coeffs)
     if (!std::isfinite(v)) return "non-finite detector parameter";
   if (!odd_positive(mean_filter_px)) why << "mean_filter_px must be odd in [1, 31], got " << mean_filter_px;
@@ -51,6 +53,14 @@ std::string DetectorOptions::validate() const {
   else if (!(fit_delta_center_px > 0)) why << "fit_delta_center_px (δ_C) must be positive, got " << fit_delta_center_px;
   else if (!(fit_delta_size_px > 0)) why << "fit_delta_size_px (δ_L) must be positive, got " << fit_delta_size_px;
   else if (!(fit_min_size_px >= 1)) why << "fit_min_size_px must be at least 1, got " << fit_min_size_px;
+  else if (!(prior_min_peak >= 0 && prior_min_peak <= 1)) why << "prior_min_peak must be in [0, 1], got " << prior_min_peak;
+  else if (!(prior_gate_scale > 0)) why << "prior_gate_scale must be positive, got " << prior_gate_scale;
+  else if (!(prior_min_gate_px >= 0)) why << "prior_min_gate_px must be >= 0, got " << prior_min_gate_px;
+  else if (!(min_event_density >= 0)) why << "min_event_density must be >= 0, got " << min_event_density;
+  else if (max_candidates < 1 || max_candidates > 100)
+    why << "max_candidates must be in [1, 100], got " << max_candidates;
+  else if (min_pixel_events < 1 || min_pixel_events > 1000)
+    why << "min_pixel_events must be in [1, 1000], got " << min_pixel_events;
   else if (!(min_peak >= 0 && min_peak <= 1)) why << "min_peak must be in [0, 1], got " << min_peak;
   else if (!(roi_max_fraction > 0 && roi_max_fraction <= 1)) why << "roi_max_fraction must be in (0, 1], got " << roi_max_fraction;
   else if (!(roi_max_aspect >= 1)) why << "roi_max_aspect must be at least 1, got " << roi_max_aspect;
@@ -141,14 +151,89 @@ std::optional<std::pair<Eigen::Vector2d, double>> Detector::refine_with_events(c
   return std::make_pair(centroid, st / n);
 }
 
-DetectionResult Detector::detect(const CompensatedEventsView& window) {
+std::optional<Box2D> Detector::prior_gate(const DetectionPrior& prior) const {
+  const Eigen::Vector2d xn = camera_.pixel_to_normalized(prior.center_raw);
+  if (!xn.allFinite()) return std::nullopt;
+  const Eigen::Vector2d c(camera_.fx * xn.x() + camera_.cx, camera_.fy * xn.y() + camera_.cy);
+  const double half_w = std::max(0.5 * options_.prior_gate_scale * prior.box_size_px.x(), options_.prior_min_gate_px);
+  const double half_h = std::max(0.5 * options_.prior_gate_scale * prior.box_size_px.y(), options_.prior_min_gate_px);
+  return Box2D{c.x() - half_w, c.y() - half_h, c.x() + half_w, c.y() + half_h};
+}
+
+std::optional<Detector::Candidate> Detector::evaluate_candidate(const CompensatedEventsView& window,
+                                                               const cv::Mat& P, cv::Point seed, double min_peak,
+                                                               DetectionResult& res, DetectionStatus& why_not,
+                                                               Box2D& blank) {
+  const DetectorOptions& o = options_;
+  const int w = window.width, h = window.height;
+  // Algorithm 1 from the seed pattern, half-image initial ROI.
+  auto t = Clock::now();
+  const Eigen::Vector2d c0(seed.x, seed.y), l0(0.5 * w, 0.5 * h);
+  const Box2D initial{c0.x() - 0.5 * l0.x(), c0.y() - 0.5 * l0.y(), c0.x() + 0.5 * l0.x(), c0.y() + 0.5 * l0.y()};
+  res.fit = iterative_gaussian_fit(P, c0, l0, o);
+  const GaussianFit& fit = res.fit;
+  auto events_in = [&](const Box2D& box) {
+    const cv::Rect r = box_pixels(box, w, h);
+    return r.area() > 0 ? static_cast<int>(cv::sum(ti_.count(r))[0]) : 0;
+  };
+  res.fit_rejected = {};
+  if (!fit.converged) res.fit_rejected = fit.empty_roi ? "empty roi" : fit.diverged ? "diverged" : "not converged";
+  else if (fit.size.x() > o.roi_max_fraction * w || fit.size.y() > o.roi_max_fraction * h) res.fit_rejected = "too large";
+  else if (fit.size.maxCoeff() > o.roi_max_aspect * fit.size.minCoeff()) res.fit_rejected = "aspect ratio";
+  else if (events_in(fit.roi()) < o.roi_min_events) res.fit_rejected = "too few events";
+  res.timings.fit_ms += ms_since(t);
+
+  Candidate c;
+  if (res.fit_rejected.empty()) {
+    c.box = fit.roi();
+    c.center = fit.center;
+    c.source = DetectionSource::kGaussianFit;
+  } else {
+    // Moving-region retrieval: components within the initial (half-image) ROI around the seed;
+    // the heaviest one overlapping the failed ROI, else the heaviest overall.
+    t = Clock::now();
+    const cv::Rect search = box_pixels(initial, w, h);
+    std::optional<Region> region;
+    if (!fit.empty_roi) region = retrieve_region(P, fit.roi(), search, o, mask_, labels_, stats_, centroids_, mass_);
+    if (!region) region = retrieve_region(P, initial, search, o, mask_, labels_, stats_, centroids_, mass_);
+    res.timings.retrieval_ms += ms_since(t);
+    if (!region || region->box.width() > o.roi_max_fraction * w || region->box.height() > o.roi_max_fraction * h) {
+      why_not = DetectionStatus::kNoRegion;
+      if (region) blank = region->box;
+      return std::nullopt;
+    }
+    c.box = region->box;
+    c.center = region->center;
+    c.source = DetectionSource::kRegionRetrieval;
+  }
+  blank = c.box;
+  const cv::Rect r = box_pixels(c.box, w, h);
+  c.events = r.area() > 0 ? static_cast<int>(cv::sum(ti_.count(r))[0]) : 0;
+  if (c.events < o.roi_min_events) {
+    why_not = DetectionStatus::kTooFewEventsInBox;
+    return std::nullopt;
+  }
+  double peak_in_box = 0;
+  cv::minMaxLoc(P(r), nullptr, &peak_in_box);
+  c.score = std::clamp(std::sqrt(peak_in_box), 0.0, 1.0);
+  c.event_density = static_cast<double>(c.events) / r.area();
+  if (c.score < min_peak || c.event_density < o.min_event_density) {
+    why_not = DetectionStatus::kWeakEvidence;
+    return std::nullopt;
+  }
+  c.t_mean_s = cv::sum(ti_.sum_time_s(r))[0] / c.events;
+  return c;
+}
+
+DetectionResult Detector::detect(const CompensatedEventsView& window, std::span<const DetectionPrior> priors) {
   const auto t_total = Clock::now();
   DetectionResult res;
   const DetectorOptions& o = options_;
   const int w = window.width, h = window.height;
   auto finish = [&](DetectionStatus s) {
     if (s != DetectionStatus::kDetected && s != DetectionStatus::kNoRegion &&
-        s != DetectionStatus::kTooFewEventsInBox && s != DetectionStatus::kRemovedAsNoise)
+        s != DetectionStatus::kTooFewEventsInBox && s != DetectionStatus::kRemovedAsNoise &&
+        s != DetectionStatus::kWeakEvidence)
       P_.setTo(0);  // no stale image from an earlier window
     res.status = s;
     res.timings.total_ms = ms_since(t_total);
@@ -168,7 +253,7 @@ DetectionResult Detector::detect(const CompensatedEventsView& window) {
 
   t = Clock::now();
   res.theta = adaptive_threshold(ti_.mean_normalized, window.omega_rad_s, window.speed_m_s, o);
-  res.segmented_pixels = segment(ti_, res.theta, S_);
+  res.segmented_pixels = segment(ti_, res.theta, o.min_pixel_events, S_, mask_);
   res.timings.segmentation_ms = ms_since(t);
   if (!(ti_.t_max_s > ti_.t_min_s)) return finish(DetectionStatus::kNoTemporalContrast);
   if (res.segmented_pixels == 0) return finish(DetectionStatus::kNothingSegmented);
@@ -176,57 +261,56 @@ DetectionResult Detector::detect(const CompensatedEventsView& window) {
 
   t = Clock::now();
   preprocess(S_, o, P_, scratch_);
-  double p_max = 0;
-  cv::Point arg_max;
-  cv::minMaxLoc(P_, nullptr, &p_max, nullptr, &arg_max);
   res.timings.preprocess_ms = ms_since(t);
-  if (!(p_max > 0) || p_max < o.min_peak * o.min_peak) return finish(DetectionStatus::kRemovedAsNoise);
 
-  // Algorithm 1 from the pattern with the highest (filtered) mean timestamp, half-image ROI.
-  t = Clock::now();
-  const Eigen::Vector2d c0(arg_max.x, arg_max.y), l0(0.5 * w, 0.5 * h);
-  res.fit = iterative_gaussian_fit(P_, c0, l0, o);
-  const GaussianFit& fit = res.fit;
-  auto events_in = [&](const Box2D& box) {
-    const cv::Rect r = box_pixels(box, w, h);
-    return r.area() > 0 ? static_cast<int>(cv::sum(ti_.count(r))[0]) : 0;
-  };
-  if (!fit.converged) res.fit_rejected = fit.empty_roi ? "empty roi" : fit.diverged ? "diverged" : "not converged";
-  else if (fit.size.x() > o.roi_max_fraction * w || fit.size.y() > o.roi_max_fraction * h) res.fit_rejected = "too large";
-  else if (fit.size.maxCoeff() > o.roi_max_aspect * fit.size.minCoeff()) res.fit_rejected = "aspect ratio";
-  else if (events_in(fit.roi()) < o.roi_min_events) res.fit_rejected = "too few events";
-  res.timings.fit_ms = ms_since(t);
-
-  Box2D box;
-  Eigen::Vector2d center;
-  DetectionSource source = DetectionSource::kGaussianFit;
-  if (res.fit_rejected.empty()) {
-    box = fit.roi();
-    center = fit.center;
-  } else {
-    // Moving-region retrieval: components within the initial (half-image) ROI around the
-    // strongest pattern; the heaviest one overlapping the failed ROI, else the heaviest overall.
-    t = Clock::now();
-    const Box2D initial{c0.x() - 0.5 * l0.x(), c0.y() - 0.5 * l0.y(), c0.x() + 0.5 * l0.x(), c0.y() + 0.5 * l0.y()};
-    const cv::Rect search = box_pixels(initial, w, h);
-    std::optional<Region> region;
-    if (!fit.empty_roi) region = retrieve_region(P_, fit.roi(), search, o, mask_, labels_, stats_, centroids_, mass_);
-    if (!region) region = retrieve_region(P_, initial, search, o, mask_, labels_, stats_, centroids_, mass_);
-    res.timings.retrieval_ms = ms_since(t);
-    if (!region || region->box.width() > o.roi_max_fraction * w || region->box.height() > o.roi_max_fraction * h)
-      return finish(DetectionStatus::kNoRegion);
-    box = region->box;
-    center = region->center;
-    source = DetectionSource::kRegionRetrieval;
+  // Candidates: Algorithm 1 from the strongest pattern; a candidate that yields no plausible box or
+  // fails the evidence gates (min_peak, min_event_density) is blanked and the next strongest pattern
+  // is tried, up to max_candidates. The blanking works on a copy: P_ stays as pre-processed.
+  const cv::Mat* image = &P_;
+  std::optional<Candidate> found;
+  DetectionStatus why_not = DetectionStatus::kRemovedAsNoise;
+  for (int attempt = 0; attempt < o.max_candidates && !found; ++attempt) {
+    double p_max = 0;
+    cv::Point arg_max;
+    cv::minMaxLoc(*image, nullptr, &p_max, nullptr, &arg_max);
+    if (!(p_max > 0) || p_max < o.min_peak * o.min_peak) break;  // no pattern left can pass
+    ++res.candidates;
+    Box2D blank;
+    found = evaluate_candidate(window, *image, arg_max, o.min_peak, res, why_not, blank);
+    if (found) break;
+    if (image == &P_) {
+      P_.copyTo(blanked_);
+      image = &blanked_;
+    }
+    // The seed's own neighbourhood always goes, so that the next attempt starts elsewhere.
+    const double r = 0.5 * (o.mean_filter_px + o.opening_px);
+    blanked_(box_pixels({arg_max.x - r, arg_max.y - r, arg_max.x + r + 1, arg_max.y + r + 1}, w, h)).setTo(0);
+    blanked_(box_pixels(blank, w, h)).setTo(0);
   }
-
-  // The detection: events and mean time inside the box, score, raw-pixel mapping.
-  const cv::Rect r = box_pixels(box, w, h);
-  const int events = r.area() > 0 ? static_cast<int>(cv::sum(ti_.count(r))[0]) : 0;
-  if (events < o.roi_min_events) return finish(DetectionStatus::kTooFewEventsInBox);
-  double t_mean_s = cv::sum(ti_.sum_time_s(r))[0] / events;
-  double peak_in_box = 0;
-  cv::minMaxLoc(P_(r), nullptr, &peak_in_box);
+  // Track-aided look: where a confirmed track expects its object, the strongest pattern inside the
+  // gate may pass with the lower prior_min_peak (its box must stay centred inside the gate).
+  for (const DetectionPrior& prior : priors) {
+    if (found) break;
+    const auto gate = prior_gate(prior);
+    if (!gate) continue;
+    const cv::Rect g = box_pixels(*gate, w, h);
+    if (g.area() == 0) continue;
+    double p_max = 0;
+    cv::Point arg_max;
+    cv::minMaxLoc(P_(g), nullptr, &p_max, nullptr, &arg_max);
+    if (!(p_max > 0) || p_max < o.prior_min_peak * o.prior_min_peak) continue;
+    ++res.candidates;
+    Box2D blank;
+    found = evaluate_candidate(window, P_, arg_max + g.tl(), o.prior_min_peak, res, why_not, blank);
+    const Eigen::Vector2d fc = found ? found->center : Eigen::Vector2d::Zero();
+    if (found && !(fc.x() >= gate->x0 && fc.x() <= gate->x1 && fc.y() >= gate->y0 && fc.y() <= gate->y1)) found.reset();
+    if (found) res.track_aided = true;
+  }
+  if (!found) return finish(why_not);
+  Box2D box = found->box;
+  Eigen::Vector2d center = found->center;
+  double t_mean_s = found->t_mean_s;
+  const int events = found->events;
   if (o.refine_box_scale > 0) {
     t = Clock::now();
     if (const auto refined = refine_with_events(window, box, t_mean_s)) {
@@ -245,9 +329,11 @@ DetectionResult Detector::detect(const CompensatedEventsView& window) {
   d.center_raw = undistorted_to_raw(center);
   d.box_raw = undistorted_box_to_raw(box);
   d.events = events;
-  d.score = std::clamp(std::sqrt(peak_in_box), 0.0, 1.0);
-  d.source = source;
-  d.fit_iterations = fit.iterations;
+  d.score = found->score;
+  d.event_density = found->event_density;
+  d.source = found->source;
+  d.fit_iterations = res.fit.iterations;
+  d.track_aided = res.track_aided;
   res.detection = d;
   return finish(DetectionStatus::kDetected);
 }

@@ -14,6 +14,7 @@
 /// grid); detections are reported there and in raw sensor pixels through the lens model.
 /// A Detector keeps its image buffers between calls. Not thread-safe: one per thread.
 #include <optional>
+#include <span>
 #include <utility>
 #include <string_view>
 #include <vector>
@@ -35,6 +36,7 @@ enum class DetectionStatus {
   kRemovedAsNoise,     ///< nothing above θ survived the pre-processing as a solid pattern (min_peak)
   kNoRegion,           ///< the fit failed and no connected component qualified
   kTooFewEventsInBox,  ///< the final box holds fewer than roi_min_events events
+  kWeakEvidence,       ///< the box's peak (score) or event density is below min_peak / min_event_density
 };
 std::string_view to_string(DetectionStatus s);
 
@@ -55,23 +57,33 @@ struct DetectionResult {
   double theta = 0;             ///< θ(ω, v) used
   double mean_normalized = 0;   ///< mean(N) over pixels with events
   int segmented_pixels = 0;     ///< pixels with S > 0
-  GaussianFit fit;              ///< Algorithm 1's outcome (zero when not run)
+  int candidates = 0;           ///< patterns tried (DetectorOptions::max_candidates, + priors)
+  bool track_aided = false;     ///< found inside a track's gate with prior_min_peak
+  GaussianFit fit;              ///< Algorithm 1's outcome for the last candidate (zero when not run)
   /// Why the fitted ROI was not used ("" when it was): "not converged", "diverged", "empty roi",
   /// "too large", "aspect ratio", "too few events".
   std::string_view fit_rejected;
   DetectionTimings timings;
 };
 
+/// Where a confirmed track expects its object in a window (raw sensor pixels, the tracker's grid):
+/// when no pattern passes the normal evidence gates, the detector looks again inside
+/// DetectorOptions::prior_gate_scale × this box with the lower DetectorOptions::prior_min_peak.
+struct DetectionPrior {
+  Eigen::Vector2d center_raw = Eigen::Vector2d::Zero();
+  Eigen::Vector2d box_size_px = Eigen::Vector2d::Zero();
+};
+
 class Detector {
  public:
   /// Throws ConfigError for invalid options or camera.
   Detector(const DetectorOptions& options, const PinholeCamera& event_camera);
-  DetectionResult detect(const CompensatedEventsView& window);
+  DetectionResult detect(const CompensatedEventsView& window, std::span<const DetectionPrior> priors = {});
 
   // Intermediate images of the last call (valid until the next one), for visualisation.
   const TimeImages& time_images() const { return ti_; }
   const cv::Mat& segmentation() const { return S_; }   ///< S, CV_32F
-  const cv::Mat& preprocessed() const { return P_; }   ///< P = (open(mean(S)))², CV_32F
+  const cv::Mat& preprocessed() const { return P_; }   ///< P = (open(mean(S)))², CV_32F (before any blanking)
   const DetectorOptions& options() const { return options_; }
 
   /// Undistorted-grid point -> raw sensor pixel, and the box outline's raw bounding box.
@@ -79,6 +91,21 @@ class Detector {
   Box2D undistorted_box_to_raw(const Box2D& box) const;
 
  private:
+  /// One pattern's box that passed the plausibility and evidence gates.
+  struct Candidate {
+    Box2D box;
+    Eigen::Vector2d center = Eigen::Vector2d::Zero();
+    DetectionSource source = DetectionSource::kGaussianFit;
+    int events = 0;
+    double score = 0, event_density = 0, t_mean_s = 0;
+  };
+  /// Algorithm 1 from `seed` on `P`, else moving-region retrieval; then the gates. On failure sets
+  /// `why_not` and `blank` (the area to blank before the next attempt).
+  std::optional<Candidate> evaluate_candidate(const CompensatedEventsView& window, const cv::Mat& P, cv::Point seed,
+                                              double min_peak, DetectionResult& res, DetectionStatus& why_not,
+                                              Box2D& blank);
+  /// The search box on the undistorted grid of a prior, or nothing when its centre has no inverse.
+  std::optional<Box2D> prior_gate(const DetectionPrior& prior) const;
   /// Centroid and mean time [s since t_start] of the events in a time-complete slice around the
   /// box (DetectorOptions::refine_box_scale), or nothing when too few or outside the box.
   std::optional<std::pair<Eigen::Vector2d, double>> refine_with_events(const CompensatedEventsView& window,
@@ -86,7 +113,7 @@ class Detector {
   DetectorOptions options_;
   PinholeCamera camera_;
   TimeImages ti_;
-  cv::Mat S_, P_, scratch_, mask_, labels_, stats_, centroids_;
+  cv::Mat S_, P_, blanked_, scratch_, mask_, labels_, stats_, centroids_;
   std::vector<double> mass_;
 };
 

@@ -10,11 +10,15 @@ double adaptive_threshold(double mean_normalized, double omega_rad_s, double spe
   return mean_normalized + o.threshold_a_s_per_rad * omega_rad_s + o.threshold_b_s_per_m * speed_m_s + o.threshold_c;
 }
 
-int segment(const TimeImages& ti, double theta, cv::Mat& S) {
+int segment(const TimeImages& ti, double theta, int min_pixel_events, cv::Mat& S, cv::Mat& scratch_mask) {
   // S = N where N ≥ θ, else 0: "to zero" thresholding keeps values strictly above its threshold,
   // so the threshold is the float just below θ. Pixels without events have N = 0 and stay 0.
   const float th = std::nextafter(static_cast<float>(theta), -std::numeric_limits<float>::infinity());
   cv::threshold(ti.normalized, S, th, 0.0, cv::THRESH_TOZERO);
+  if (min_pixel_events > 1) {
+    cv::compare(ti.count, min_pixel_events, scratch_mask, cv::CMP_LT);
+    S.setTo(0, scratch_mask);
+  }
   return cv::countNonZero(S);
 }
 

@@ -132,9 +132,15 @@ DetectorOptions load_detector_options(const YAML::Node& node, const std::string&
   num("threshold_a_s_per_rad", o.threshold_a_s_per_rad);
   num("threshold_b_s_per_m", o.threshold_b_s_per_m);
   num("threshold_c", o.threshold_c);
+  integer("min_pixel_events", o.min_pixel_events);
   integer("mean_filter_px", o.mean_filter_px);
   integer("opening_px", o.opening_px);
   num("min_peak", o.min_peak);
+  num("min_event_density", o.min_event_density);
+  integer("max_candidates", o.max_candidates);
+  num("prior_min_peak", o.prior_min_peak);
+  num("prior_gate_scale", o.prior_gate_scale);
+  num("prior_min_gate_px", o.prior_min_gate_px);
   integer("fit_max_iterations", o.fit_max_iterations);
   num("fit_delta_center_px", o.fit_delta_center_px);
   num("fit_delta_size_px", o.fit_delta_size_px);
