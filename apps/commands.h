@@ -9,5 +9,6 @@ void add_simulate_command(CLI::App& app);
 void add_run_command(CLI::App& app);
 void add_eval_command(CLI::App& app);
 void add_demo_command(CLI::App& app);
+void add_table_commands(CLI::App& app);  ///< table1, table2
 
 }  // namespace fdv::cli

@@ -15,6 +15,7 @@
 #include "apps/experiment.h"
 #include "apps/reader_flags.h"
 #include "fdv/core/error.h"
+#include "fdv/eval/experiment.h"
 #include "fdv/eval/statistics.h"
 #include "fdv/io/config/frontend_config.h"
 #include "fdv/pipeline/perception.h"
@@ -123,6 +124,8 @@ class Outputs {
                                  {"t", to_seconds(d.t_ns)},
                                  {"events", d.events},
                                  {"score", d.score},
+                                 {"event_density", d.event_density},
+                                 {"track_aided", d.track_aided},
                                  {"source", to_string(d.source)},
                                  {"track", w.track_id}});
       ++detections_count_;

@@ -1,0 +1,133 @@
+#include "fdv/eval/detection_metrics.h"
+
+#include <algorithm>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+
+#include "fdv/core/error.h"
+#include "fdv/eval/ground_truth_box.h"
+#include "fdv/eval/statistics.h"
+
+namespace fdv {
+
+std::string DetectionMetricsOptions::validate() const {
+  std::ostringstream why;
+  if (!(min_fraction_in_view >= 0 && min_fraction_in_view <= 1))
+    why << "min_fraction_in_view must be in [0, 1], got " << min_fraction_in_view;
+  else if (!(min_span_px >= 0))
+    why << "min_span_px must be >= 0, got " << min_span_px;
+  else if (!(margin_px >= 0))
+    why << "margin_px must be >= 0, got " << margin_px;
+  return why.str();
+}
+
+void DetectionMetrics::merge(const DetectionMetrics& other) {
+  windows += other.windows;
+  eligible += other.eligible;
+  found += other.found;
+  false_detections += other.false_detections;
+  center_errors_px.insert(center_errors_px.end(), other.center_errors_px.begin(),
+                          other.center_errors_px.end());
+}
+
+nlohmann::json DetectionMetrics::to_json() const {
+  const Summary e = summarize(center_errors_px);
+  return {{"windows", windows},
+          {"eligible_windows", eligible},
+          {"eligible_windows_detected", found},
+          {"recall", recall()},
+          {"median_center_error_px", e.median},
+          {"center_error_px", e.to_json()},
+          {"false_detections", false_detections},
+          {"false_detections_per_window", false_per_window()}};
+}
+
+namespace {
+
+/// Each ball's true box over the window (raw pixels, distortion included).
+std::map<int, GroundTruthBox> window_boxes(const DatasetTruth& truth, const WindowDetections& w) {
+  std::map<int, GroundTruthBox> boxes;
+  for (const auto& [id, r] : truth.radius_m)
+    boxes[id] = ground_truth_box(truth.objects, id, r, truth.body, truth.calibration, w.t_start,
+                                 w.t_end - 1);
+  return boxes;
+}
+
+/// The ball whose box holds the detection; -1 for none (the last one wins where boxes overlap).
+int matched_ball(const std::map<int, GroundTruthBox>& boxes, const WindowDetections::Det& d,
+                 double margin_px) {
+  int matched = -1;
+  for (const auto& [id, b] : boxes)
+    if (b.contains(d.center_raw.x(), d.center_raw.y(), margin_px)) matched = id;
+  return matched;
+}
+
+}  // namespace
+
+DetectionMetrics detection_metrics(const DatasetTruth& truth,
+                                   const std::vector<WindowDetections>& windows,
+                                   const DetectionMetricsOptions& options) {
+  if (const std::string why = options.validate(); !why.empty())
+    throw ConfigError("detection metrics: " + why);
+  DetectionMetrics m;
+  for (const WindowDetections& w : windows) {
+    ++m.windows;
+    const std::map<int, GroundTruthBox> boxes = window_boxes(truth, w);
+    std::set<int> eligible;
+    for (const auto& [id, b] : boxes)
+      if (truth.in_flight(id, (w.t_start + w.t_end) / 2) && b.visible &&
+          b.fraction_in_view_min >= options.min_fraction_in_view &&
+          b.span_px_min >= options.min_span_px)
+        eligible.insert(id);
+    m.eligible += !eligible.empty();
+    bool found = false;
+    for (const auto& d : w.detections) {
+      const int ball = matched_ball(boxes, d, options.margin_px);
+      if (ball < 0) {
+        ++m.false_detections;
+        continue;
+      }
+      if (!eligible.count(ball)) continue;
+      found = true;
+      if (const auto s = truth.object_at(ball, d.t)) {
+        const Eigen::Isometry3d T_W_E = truth.body_at(d.t).T_W_B() * truth.calibration.T_B_E;
+        const Eigen::Vector3d p_E = T_W_E.inverse() * s->p_W;
+        if (p_E.z() > 0)
+          m.center_errors_px.push_back(
+              (truth.calibration.event_camera.project(p_E) - d.center_raw).norm());
+      }
+    }
+    m.found += found;
+  }
+  return m;
+}
+
+std::vector<int> tracks_following(const DatasetTruth& truth,
+                                  const std::vector<WindowDetections>& windows, int id,
+                                  const DetectionMetricsOptions& options) {
+  if (const std::string why = options.validate(); !why.empty())
+    throw ConfigError("detection metrics: " + why);
+  std::map<int, std::pair<int, int>> counts;  // track -> (detections on the ball, all detections)
+  for (const WindowDetections& w : windows) {
+    if (w.detections.empty()) continue;
+    const std::map<int, GroundTruthBox> boxes = window_boxes(truth, w);
+    for (const auto& d : w.detections) {
+      if (d.track < 0) continue;
+      auto& [on_ball, all] = counts[d.track];
+      on_ball += matched_ball(boxes, d, options.margin_px) == id;
+      ++all;
+    }
+  }
+  std::vector<std::pair<int, int>> following;  // (on_ball, track)
+  for (const auto& [track, c] : counts)
+    if (2 * c.first > c.second) following.emplace_back(c.first, track);
+  std::stable_sort(following.begin(), following.end(),
+                   [](const auto& a, const auto& b) { return a.first > b.first; });
+  std::vector<int> out;
+  for (const auto& f : following) out.push_back(f.second);
+  return out;
+}
+
+}  // namespace fdv

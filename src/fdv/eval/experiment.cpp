@@ -1,0 +1,162 @@
+#include "fdv/eval/experiment.h"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <charconv>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "fdv/core/error.h"
+#include "fdv/eval/relative_contrast.h"
+#include "fdv/io/time_ordered_merger.h"
+#include "fdv/sim/dataset_sink.h"
+#include "fdv/sim/simulator.h"
+
+namespace fdv {
+namespace fs = std::filesystem;
+
+PerceptionCounters replay(std::unique_ptr<RecordingReader> reader, const Calibration& calib,
+                          const PerceptionOptions& options, const PerceptionCallbacks& callbacks,
+                          ReadReport* reader_report) {
+  Perception perception(calib, options, callbacks);
+  std::vector<std::unique_ptr<RecordingReader>> sources;
+  sources.push_back(std::move(reader));
+  TimeOrderedMerger merger(std::move(sources));
+  StreamItem item;
+  while (merger.next(item)) {
+    switch (item.kind) {
+      case StreamKind::kEvents:
+        perception.push_events(item.events);
+        break;
+      case StreamKind::kImu:
+        perception.push_imu(*item.imu);
+        break;
+      case StreamKind::kDepth:
+        perception.push_depth(*item.depth);
+        break;
+      case StreamKind::kOdometry:
+        perception.push_odometry(*item.odometry);
+        break;
+      case StreamKind::kGroundTruth:
+        break;  // evaluation only, never the pipeline
+    }
+  }
+  perception.finish();
+  if (reader_report) *reader_report = merger.source(0).report();
+  return perception.counters();
+}
+
+namespace {
+std::string read_text(const fs::path& path) {
+  std::ifstream in(path);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+}  // namespace
+
+std::string ensure_simulated(const sim::ScenarioConfig& config, const std::string& dir) {
+  const std::string fingerprint = sim::to_yaml(config);
+  const fs::path marker = fs::path(dir) / kSimulationMarker;
+  if (fs::exists(marker) && read_text(marker) == fingerprint) {
+    spdlog::debug("reusing the simulated dataset {}", dir);
+    return dir;
+  }
+  if (fs::exists(dir))
+    spdlog::info("{}: incomplete or made with another configuration, simulating again", dir);
+  fs::remove_all(dir);
+  {
+    sim::Simulator simulator(config);
+    sim::DatasetSink sink(dir, simulator.calibration());
+    spdlog::info("simulating '{}' (seed {}) into {}", config.name, config.seed, dir);
+    simulator.run(sink);
+    sink.finish(simulator.manifest_yaml());
+  }
+  // The marker last, via a rename, so that a folder with a marker is always complete.
+  const fs::path tmp = marker.string() + ".tmp";
+  {
+    std::ofstream out(tmp);
+    out << fingerprint;
+    if (!out) throw InputError(tmp.string(), "", "cannot write the cache marker");
+  }
+  fs::rename(tmp, marker);
+  return dir;
+}
+
+std::string ensure_simulated(const std::string& preset, std::uint64_t seed,
+                             const std::string& cache_dir) {
+  const sim::ScenarioConfig config = sim::make_preset(preset, seed);
+  return ensure_simulated(config,
+                          (fs::path(cache_dir) / fmt::format("{}_seed{}", preset, seed)).string());
+}
+
+std::vector<double> window_relative_contrast(const DatasetTruth& truth, const cv::Mat& mean_time_s,
+                                             TimeNs t_start, TimeNs t_end) {
+  std::vector<double> etas;
+  cv::Mat clean;  // denoised once per window, only if some ball needs it
+  for (const auto& [id, r] : truth.radius_m) {
+    if (!truth.in_flight(id, (t_start + t_end) / 2)) continue;
+    const cv::Rect M = undistorted_truth_rect(truth, id, t_start, t_end - 1);
+    if (M.area() == 0) continue;
+    if (clean.empty()) clean = denoise_for_contrast(mean_time_s);
+    if (const auto eta = relative_contrast(clean, M)) etas.push_back(*eta);
+  }
+  return etas;
+}
+
+ExperimentRun run_experiment(const DatasetTruth& truth, const ExperimentOptions& options) {
+  ExperimentRun run;
+  PerceptionCallbacks callbacks;
+  callbacks.on_window = [&](const WindowResult& w) {
+    WindowDetections d{w.t_start, w.t_end, {}};
+    if (w.detection)
+      d.detections.push_back({w.detection->t_ns, w.detection->center_raw, w.track_id});
+    run.windows.push_back(std::move(d));
+    run.compensation_ms.push_back(w.timings.compensation_ms);
+    run.front_end_ms.push_back(w.timings.compensation_ms + w.timings.detection.total_ms);
+    if (options.relative_contrast && w.detector) {
+      const auto etas = window_relative_contrast(truth, w.detector->time_images().mean_time_s,
+                                                 w.t_start, w.t_end);
+      run.relative_contrast.insert(run.relative_contrast.end(), etas.begin(), etas.end());
+    }
+  };
+  callbacks.on_estimate = [&](const EstimateResult& e) {
+    if (!e.estimate || !e.estimate->usable) return;
+    run.estimates.push_back(
+        {e.t, e.track_id, e.mode, e.estimate->t_first, e.estimate->t_last, e.estimate->trajectory});
+  };
+  callbacks.on_warning = [&](const std::string& w) { spdlog::warn("{}: {}", truth.dir, w); };
+  run.counters =
+      replay(open_recording(truth.dir), truth.calibration, options.perception, callbacks);
+  return run;
+}
+
+std::vector<std::uint64_t> parse_seed_list(const std::string& text) {
+  std::vector<std::uint64_t> seeds;
+  auto number = [&](std::string_view s, const std::string& part) {
+    std::uint64_t v = 0;
+    const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+    if (ec != std::errc() || end != s.data() + s.size() || s.empty())
+      throw ConfigError("seeds '" + text + "': '" + part + "' is not a seed or a range A-B");
+    return v;
+  };
+  std::istringstream in(text);
+  for (std::string part; std::getline(in, part, ',');) {
+    const std::string_view p(part);
+    if (const auto dash = p.find('-'); dash != std::string_view::npos) {
+      const std::uint64_t a = number(p.substr(0, dash), part), b = number(p.substr(dash + 1), part);
+      if (b < a) throw ConfigError("seeds '" + text + "': range '" + part + "' runs backwards");
+      if (b - a >= 10000)
+        throw ConfigError("seeds '" + text + "': range '" + part + "' has over 10000 seeds");
+      for (std::uint64_t s = a; s <= b; ++s) seeds.push_back(s);
+    } else {
+      seeds.push_back(number(p, part));
+    }
+  }
+  if (seeds.empty()) throw ConfigError("seeds '" + text + "': no seed given");
+  return seeds;
+}
+
+}  // namespace fdv

@@ -1,0 +1,100 @@
+#pragma once
+/// The paper's two tables reproduced on the simulator (`fdv table1`, `fdv table2`), with the
+/// project's targets beside the figures, as Markdown for docs/RESULTS.md.
+///
+///   PaperTableOptions o;                        // seeds 101-105, cache out/cache
+///   const Table1 t1 = compute_table1(o);        // simulates what the cache lacks, runs 80 times
+///   std::cout << to_markdown(t1, {"fdv table1 ...", "2026-01-01", "abc1234"});
+///
+/// Table I (paper §V-B): per compensation method, the per-window compensation time and the
+/// relative contrast η on scene1_no_object / scene2_ball, plus detection metrics on four scenes.
+/// Table II (paper §V-C): APE of the final fusion and monocular estimates of the ball on
+/// fast_forward / swing, and on hover_headon how soon the first fusion estimate came and how well
+/// it predicted the closest approach. Every figure pools all seeds (see the notes in the Markdown).
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "fdv/eval/detection_metrics.h"
+#include "fdv/eval/estimate_metrics.h"
+#include "fdv/pipeline/perception.h"
+
+namespace fdv {
+
+struct PaperTableOptions {
+  std::vector<std::uint64_t> seeds{101, 102, 103, 104,
+                                   105};  ///< evaluation seeds (tuning uses others)
+  std::string cache_dir =
+      "out/cache";  ///< simulated datasets, reused between runs (ensure_simulated)
+  /// Base pipeline options; each row overrides compensation.method.
+  PerceptionOptions perception;
+  std::string validate() const;
+};
+
+/// Where the figures come from, for the document: the exact command, date and source revision.
+struct Provenance {
+  std::string command, date, commit;
+};
+
+/// One requirement checked against a figure.
+struct TableTarget {
+  std::string what, figure, goal;
+  bool met = false;
+};
+
+/// One (scene, compensation method) pooled over the seeds.
+struct CompensationRow {
+  std::string scene, method;
+  std::vector<double> compensation_ms, front_end_ms;  ///< every window of every seed
+  std::vector<double> relative_contrast;              ///< every window where η is defined
+  DetectionMetrics detection;
+};
+
+struct Table1 {
+  std::vector<std::uint64_t> seeds;
+  TimeNs window_ns = 0;               ///< Δt, the real-time bound
+  std::vector<CompensationRow> rows;  ///< scenes × methods, in display order
+  const CompensationRow* row(const std::string& scene, const std::string& method) const;
+};
+
+/// The scenes and methods of Table I.
+const std::vector<std::string>& table1_compensation_scenes();  ///< scene1_no_object, scene2_ball
+const std::vector<std::string>& table1_detection_scenes();     ///< + fast_forward, hover_headon
+const std::vector<std::string>&
+table1_methods();  ///< none, rotation, rotation_translation, contrast_max
+
+Table1 compute_table1(const PaperTableOptions& options);
+std::vector<TableTarget> table1_targets(const Table1& table);
+std::string to_markdown(const Table1& table, const Provenance& provenance);
+
+/// One (scene, estimator) of Table II pooled over the seeds.
+struct ApeRow {
+  std::string scene;
+  EstimatorMode mode = EstimatorMode::kFusion;
+  std::vector<double> samples;                       ///< APE at every truth sample, all seeds
+  std::vector<std::optional<double>> rmse_per_seed;  ///< nothing where that seed had no estimate
+  int seeds_with_estimate() const;
+};
+
+struct HeadOnRun {
+  std::uint64_t seed = 0;
+  BallEstimateTiming timing;
+};
+
+struct Table2 {
+  std::vector<std::uint64_t> seeds;
+  std::vector<ApeRow> ape;         ///< fast_forward, swing × fusion, mono
+  std::vector<HeadOnRun> head_on;  ///< hover_headon, one per seed
+  const ApeRow* row(const std::string& scene, EstimatorMode mode) const;
+};
+
+/// Runs the full pipeline (options.perception, rotation_translation) on each scene and seed.
+Table2 compute_table2(const PaperTableOptions& options);
+std::vector<TableTarget> table2_targets(const Table2& table);
+std::string to_markdown(const Table2& table, const Provenance& provenance);
+
+/// "101-105" for consecutive seeds, else "1, 3, 7".
+std::string seeds_text(const std::vector<std::uint64_t>& seeds);
+
+}  // namespace fdv

@@ -1,0 +1,117 @@
+// Detection metrics and ball-track selection on hand-made windows against a hand-made truth whose
+// pixels are known in closed form (tests/eval/handmade_truth.h).
+#include "fdv/eval/detection_metrics.h"
+
+#include <gtest/gtest.h>
+
+#include "eval/handmade_truth.h"
+#include "fdv/core/error.h"
+
+namespace fdv {
+namespace {
+
+using test::pixel_of;
+
+constexpr TimeNs ms(int m) { return m * kNsPerMs; }
+
+// A 0.25 m ball 5 m ahead crossing at 2 m/s: ~50 px wide, moving 2 px per 10 ms window.
+const Eigen::Vector3d kP0(-0.1, 0, 5), kV(2, 0, 0);
+Eigen::Vector3d ball_at(int t_ms) { return kP0 + 1e-3 * t_ms * kV; }
+
+WindowDetections window(int t0_ms, std::vector<WindowDetections::Det> dets = {}) {
+  return {ms(t0_ms), ms(t0_ms + 10), std::move(dets)};
+}
+
+TEST(DetectionMetrics, CountsFoundMissedAndFalseAgainstTheTruthBox) {
+  const DatasetTruth truth = test::straight_flight(kP0, kV);
+  const Eigen::Vector2d exact = pixel_of(ball_at(15));
+  const std::vector<WindowDetections> windows{
+      window(10, {{ms(15), exact, 1}}),  // found, error 0
+      window(20,
+             {{ms(25), pixel_of(ball_at(25)) + Eigen::Vector2d(1.5, 0), 1}}),  // found, error 1.5
+      window(30, {{ms(35), Eigen::Vector2d(50, 50), 2}}),  // far from the ball: false
+      window(40),                                          // missed
+  };
+  const DetectionMetrics m = detection_metrics(truth, windows);
+  EXPECT_EQ(m.windows, 4u);
+  EXPECT_EQ(m.eligible, 4u);
+  EXPECT_EQ(m.found, 2u);
+  EXPECT_EQ(m.false_detections, 1u);
+  EXPECT_DOUBLE_EQ(m.recall(), 0.5);
+  EXPECT_DOUBLE_EQ(m.false_per_window(), 0.25);
+  ASSERT_EQ(m.center_errors_px.size(), 2u);
+  EXPECT_NEAR(m.center_errors_px[0], 0.0, 1e-9);
+  EXPECT_NEAR(m.center_errors_px[1], 1.5, 1e-9);
+}
+
+TEST(DetectionMetrics, AHeldBallIsNotEligibleAndADetectionOnItIsNotFalse) {
+  const DatasetTruth truth = test::straight_flight(kP0, Eigen::Vector3d::Zero());  // held still
+  const DetectionMetrics m =
+      detection_metrics(truth, {window(10, {{ms(15), pixel_of(kP0), 1}}), window(20)});
+  EXPECT_EQ(m.eligible, 0u);
+  EXPECT_EQ(m.found, 0u);
+  EXPECT_EQ(m.false_detections, 0u);
+  EXPECT_TRUE(m.center_errors_px.empty());
+  EXPECT_EQ(m.recall(), 0.0);
+}
+
+TEST(DetectionMetrics, SmallOrHalfHiddenBallsAreNotEligible) {
+  // 2 cm ball at 5 m: 2 f r / Z = 4 px < 8 px.
+  EXPECT_EQ(detection_metrics(test::straight_flight(kP0, kV, 0.02), {window(10)}).eligible, 0u);
+  // Centre on the image's left edge (u = -0.5, X = (u - cx) Z / f = -3.2 m): about half the
+  // silhouette is out of view.
+  const Eigen::Vector3d edge(-3.2, 0, 5);
+  EXPECT_EQ(detection_metrics(test::straight_flight(edge, Eigen::Vector3d(0, 2, 0)), {window(10)})
+                .eligible,
+            0u);
+  // With the in-view bound lowered to 40 %, the same window counts.
+  DetectionMetricsOptions o;
+  o.min_fraction_in_view = 0.4;
+  EXPECT_EQ(
+      detection_metrics(test::straight_flight(edge, Eigen::Vector3d(0, 2, 0)), {window(10)}, o)
+          .eligible,
+      1u);
+}
+
+TEST(DetectionMetrics, MergePoolsRuns) {
+  DetectionMetrics a, b;
+  a.windows = 10, a.eligible = 4, a.found = 3, a.false_detections = 1, a.center_errors_px = {1, 2};
+  b.windows = 30, b.eligible = 6, b.found = 6, b.false_detections = 0, b.center_errors_px = {0.5};
+  a.merge(b);
+  EXPECT_EQ(a.windows, 40u);
+  EXPECT_EQ(a.eligible, 10u);
+  EXPECT_EQ(a.found, 9u);
+  EXPECT_EQ(a.false_detections, 1u);
+  EXPECT_EQ(a.center_errors_px, (std::vector<double>{1, 2, 0.5}));
+  EXPECT_DOUBLE_EQ(a.recall(), 0.9);
+}
+
+TEST(DetectionMetrics, InvalidOptionsAreRejected) {
+  DetectionMetricsOptions o;
+  o.min_fraction_in_view = 1.5;
+  EXPECT_THROW(detection_metrics(test::straight_flight(kP0, kV), {}, o), ConfigError);
+}
+
+TEST(TracksFollowing, MajorityOnTheBallOrderedByCount) {
+  const DatasetTruth truth = test::straight_flight(kP0, kV);
+  std::vector<WindowDetections> windows;
+  auto on_ball = [](int t0, int track) {
+    return window(t0, {{ms(t0 + 5), pixel_of(ball_at(t0 + 5)), track}});
+  };
+  auto off_ball = [](int t0, int track) {
+    return window(t0, {{ms(t0 + 5), Eigen::Vector2d(30, 400), track}});
+  };
+  // Track 3: 2 of 2 on the ball. Track 5: 3 of 4. Track 7: 1 of 3 (mostly background). -1:
+  // untracked.
+  for (int t0 : {0, 10}) windows.push_back(on_ball(t0, 3));
+  for (int t0 : {20, 30, 40}) windows.push_back(on_ball(t0, 5));
+  windows.push_back(off_ball(50, 5));
+  windows.push_back(on_ball(60, 7));
+  for (int t0 : {70, 80}) windows.push_back(off_ball(t0, 7));
+  windows.push_back(on_ball(90, -1));
+  EXPECT_EQ(tracks_following(truth, windows, 1), (std::vector<int>{5, 3}));
+  EXPECT_TRUE(tracks_following(truth, windows, 2).empty());  // no such ball
+}
+
+}  // namespace
+}  // namespace fdv
