@@ -1,5 +1,6 @@
 #include "fdv/compensation/compensator.h"
 
+#include <bit>
 #include <cmath>
 #include <sstream>
 
@@ -56,6 +57,7 @@ std::string CompensationOptions::validate() const {
   else if (hole_fill_radius_px < 0 || hole_fill_radius_px > 10)
     why << "hole_fill_radius_px must be in [0, 10], got " << hole_fill_radius_px;
   else if (max_events_per_window < 1) why << "max_events_per_window must be positive";
+  else if (threads < 1 || threads > 64) why << "threads must be in [1, 64], got " << threads;
   else if (const auto cm = contrast_max.validate(); !cm.empty()) why << "contrast_max." << cm;
   return why.str();
 }
@@ -83,10 +85,13 @@ std::string CompensationReport::brief() const {
 
 void CompensatedWindow::reserve_events(std::size_t n) {
   if (x_.size() >= n) return;
-  x_.resize(n);
-  y_.resize(n);
-  t_.resize(n);
-  pixel_.resize(n);
+  // Round up to a power of two: a stream whose window sizes wander grows the buffers a few times
+  // at most, not at each new largest window (no allocation per window once warmed up).
+  const std::size_t size = std::bit_ceil(n);
+  x_.resize(size);
+  y_.resize(size);
+  t_.resize(size);
+  pixel_.resize(size);
 }
 
 Eigen::Vector3d camera_velocity_E(const Calibration& calibration, const OdometrySample& odometry,

@@ -91,6 +91,10 @@ struct CompensationOptions {
   /// Overload guard: above this many events a window is decimated uniformly in time order and the
   /// dropped events are counted (5 M ev/s over 25 ms is 125 k events; 16x that is a burst).
   std::size_t max_events_per_window = 2'000'000;
+  /// Threads for the per-event warp of none / rotation / rotation_translation (OpenCV's pool,
+  /// fdv/core/parallel_parts.h): the events are split into this many parts. Results are identical
+  /// for any count. 1 = the calling thread only (docs/BENCHMARKS.md: what a second thread buys).
+  int threads = 1;
   ContrastMaxOptions contrast_max;
   std::string validate() const;
 };

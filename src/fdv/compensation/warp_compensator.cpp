@@ -2,59 +2,277 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
+#include <bit>
 #include <cmath>
+#include <cstring>
+#include <limits>
 #include <opencv2/imgproc.hpp>
+
+#include "fdv/core/parallel_parts.h"
 
 namespace fdv::internal {
 namespace {
 
-/// Rotation only: X ∝ (K·R_s)·[x; y; 1].
-struct RotationKernel {
-  const float* slots;
-  float slots_per_s;
-  int last_slot;
-  void prefetch(int) const {}
-  bool operator()(int, NormalizedRay r, float dt, float& u, float& v) const {
-    const int s = std::min(static_cast<int>(dt * slots_per_s), last_slot);
-    const float* m = slots + 9 * s;
-    const float X = m[0] * r.x + m[1] * r.y + m[2];
-    const float Y = m[3] * r.x + m[4] * r.y + m[5];
-    const float Z = m[6] * r.x + m[7] * r.y + m[8];
-    if (!(Z > 1e-6f)) return false;
-    const float iz = 1.0f / Z;
-    u = X * iz;
-    v = Y * iz;
-    return true;
-  }
+// The per-event loop of the three IMU / odometry driven strategies (reference_warp.h is the plain
+// version it is tested against). Why it looks like this (docs/BENCHMARKS.md has the figures):
+//  - events are taken four at a time; the arithmetic runs on 4-lane GCC vector extensions
+//    (baseline SSE2, no FMA: lane results equal the scalar code's, operation for operation);
+//  - events are time-sorted, so a whole quad nearly always shares one refresh slot: its K·R_s
+//    is broadcast once; a quad that straddles a slot boundary (25 per window) or holds
+//    out-of-order events takes the scalar path, each event with its own slot;
+//  - dropping is branch-free: every lane is written at the output position and the position
+//    advances only for kept events.
+using vf = float __attribute__((vector_size(16)));
+using vi = std::int32_t __attribute__((vector_size(16)));
+
+vi bits(vf v) { return std::bit_cast<vi>(v); }
+vf from_bits(vi v) { return std::bit_cast<vf>(v); }
+vf load4(const float* p) {
+  vf v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+void store4(float* p, vf v) { std::memcpy(p, &v, sizeof v); }
+vf select4(vi m, vf a, vf b) { return from_bits((bits(a) & m) | (bits(b) & ~m)); }
+/// Lane-wise `a > b ? a : b`, as the scalar code writes it.
+vf vmax(vf a, vf b) { return select4(a > b, a, b); }
+
+enum class Model { kNone, kRotation, kRotationTranslation };
+constexpr int kMaxParts = 64;  // CompensationOptions::threads ≤ 64
+
+/// Everything the loop reads, for one window.
+struct WarpParams {
+  const Event* events = nullptr;
+  std::size_t stride = 1;  ///< overload decimation: every stride-th event is visited
+  const NormalizedRay* rays = nullptr;
+  int width = 0, height = 0;
+  TimeNs t0 = 0, duration = 0, refresh = 1;
+  const float* slots = nullptr;      ///< K·R_s per slot, row-major 3x3
+  const float* inv_depth = nullptr;  ///< ρ per raw pixel, sign bit = missing-depth policy applied
+  float kv[3] = {0, 0, 0};           ///< K·v
+  float fx = 0, fy = 0, cx = 0, cy = 0;
 };
 
-/// Rotation and translation: X ∝ (K·R_s)·[x; y; 1] + ρ·(t − t0)·(K·v).
-/// inv_depth holds ρ per raw pixel with the sign bit set where the missing-depth policy was
-/// applied (one table, one lookup per event).
-struct RotationTranslationKernel {
-  const float* slots;
-  float slots_per_s;
-  int last_slot;
-  const float* inv_depth;
-  float kv[3];
-  std::uint64_t fallback_events = 0;
-  void prefetch(int raw) const { __builtin_prefetch(inv_depth + raw); }
-  bool operator()(int raw, NormalizedRay r, float dt, float& u, float& v) {
-    const int s = std::min(static_cast<int>(dt * slots_per_s), last_slot);
-    const float* m = slots + 9 * s;
-    const float stored = inv_depth[raw];
-    fallback_events += std::signbit(stored);
-    const float rho_dt = std::fabs(stored) * dt;
-    const float X = m[0] * r.x + m[1] * r.y + m[2] + rho_dt * kv[0];
-    const float Y = m[3] * r.x + m[4] * r.y + m[5] + rho_dt * kv[1];
-    const float Z = m[6] * r.x + m[7] * r.y + m[8] + rho_dt * kv[2];
-    if (!(Z > 1e-6f)) return false;
+struct WarpCounts {
+  std::size_t kept = 0;
+  std::uint64_t outside_window = 0, outside_sensor = 0, no_inverse = 0, left = 0, out_of_order = 0, fallback = 0;
+};
+
+struct Output {
+  float* x;
+  float* y;
+  float* t;
+  std::int32_t* pixel;
+};
+
+/// One event (the scalar path): warp of ray (rx, ry) at dt with slot matrix m and stored ρ.
+/// Returns whether the event is kept; u, v, pixel are written either way. Same operations, in the
+/// same order, as one lane of warp_quad().
+template <Model M>
+bool warp_one(const WarpParams& p, [[maybe_unused]] const float* m, float rx, float ry, [[maybe_unused]] float dt,
+              [[maybe_unused]] float stored_rho, float& u, float& v, std::int32_t& pixel) {
+  bool front = true;
+  if constexpr (M == Model::kNone) {
+    u = p.fx * rx + p.cx;
+    v = p.fy * ry + p.cy;
+  } else {
+    float X = m[0] * rx + m[1] * ry + m[2];
+    float Y = m[3] * rx + m[4] * ry + m[5];
+    float Z = m[6] * rx + m[7] * ry + m[8];
+    if constexpr (M == Model::kRotationTranslation) {
+      const float rho_dt = std::fabs(stored_rho) * dt;
+      X = X + rho_dt * p.kv[0];
+      Y = Y + rho_dt * p.kv[1];
+      Z = Z + rho_dt * p.kv[2];
+    }
+    front = Z > 1e-6f;
     const float iz = 1.0f / Z;
     u = X * iz;
     v = Y * iz;
-    return true;
   }
-};
+  const float u_hi = static_cast<float>(p.width) - 0.5f, v_hi = static_cast<float>(p.height) - 0.5f;
+  const bool keep = front && u >= -0.5f && u < u_hi && v >= -0.5f && v < v_hi;
+  // Nearest pixel: in range, u + 0.5 >= 0, so truncation is floor (round half up).
+  pixel = keep ? static_cast<std::int32_t>(v + 0.5f) * p.width + static_cast<std::int32_t>(u + 0.5f) : 0;
+  return keep;
+}
+
+/// True when every lane of the mask is set.
+bool all_set(vi m) {
+#if defined(__SSE__)
+  return __builtin_ia32_movmskps(from_bits(m)) == 0xF;
+#else
+  return (m[0] & m[1] & m[2] & m[3]) != 0;
+#endif
+}
+
+/// Visits [begin, end) (visit k = event k·stride), writes the kept events from `out` on.
+/// previous_t: time of the event visited before `begin` (for the out-of-order count).
+template <Model M>
+WarpCounts warp_range(const WarpParams& p, std::size_t begin, std::size_t end, TimeNs previous_t, Output out) {
+  WarpCounts c;
+  const int w = p.width, h = p.height;
+  const auto duration = static_cast<std::uint64_t>(p.duration);
+  std::size_t n = 0;
+  // The refresh slot of the fast path, in absolute time [slot_t0, slot_t1) (the whole window for
+  // "none"), and its K·R_s.
+  TimeNs slot_t0 = 0, slot_t1 = 0;
+  const float* m = p.slots;
+  vf m0{}, m1{}, m2{}, m3{}, m4{}, m5{}, m6{}, m7{}, m8{};
+  auto set_slot = [&](TimeNs d) {  // d in [0, duration)
+    if constexpr (M == Model::kNone) {
+      slot_t0 = p.t0;
+      slot_t1 = p.t0 + p.duration;
+    } else {
+      const TimeNs s = d / p.refresh;  // never past the last slot
+      slot_t0 = p.t0 + s * p.refresh;
+      slot_t1 = p.t0 + std::min(p.duration, (s + 1) * p.refresh);
+      m = p.slots + 9 * s;
+      m0 = vf{} + m[0], m1 = vf{} + m[1], m2 = vf{} + m[2], m3 = vf{} + m[3], m4 = vf{} + m[4];
+      m5 = vf{} + m[5], m6 = vf{} + m[6], m7 = vf{} + m[7], m8 = vf{} + m[8];
+    }
+  };
+  set_slot(0);
+  // The fast path converts t − t0 through int32: windows up to 2.1 s (all others take the slow path).
+  const bool fast_ok = p.duration <= std::numeric_limits<std::int32_t>::max();
+  const vf fx = vf{} + p.fx, fy = vf{} + p.fy, cx = vf{} + p.cx, cy = vf{} + p.cy;
+  const vf kv0 = vf{} + p.kv[0], kv1 = vf{} + p.kv[1], kv2 = vf{} + p.kv[2];
+  const vf u_hi = vf{} + (static_cast<float>(w) - 0.5f), v_hi = vf{} + (static_cast<float>(h) - 0.5f);
+  const vf half = vf{} + 0.5f, min_z = vf{} + 1e-6f, ns_to_s = vf{} + 1e-9f;
+  const vi width = vi{} + w;
+  vi no_inverse{}, left{}, fallback{};
+
+  // Slow path, one event with every check and its own slot: quads that straddle a slot boundary,
+  // hold out-of-order or out-of-window events or pixels outside the sensor, and the last 0-3.
+  auto one = [&](std::size_t kk) {
+    const Event& e = p.events[kk * p.stride];
+    c.out_of_order += e.t < previous_t;
+    previous_t = e.t;
+    // Unsigned difference: no overflow whatever the (bad) time; negative d wraps to large.
+    const auto d = static_cast<TimeNs>(static_cast<std::uint64_t>(e.t) - static_cast<std::uint64_t>(p.t0));
+    if (static_cast<std::uint64_t>(d) >= duration) {
+      ++c.outside_window;
+      return;
+    }
+    if (e.x >= w || e.y >= h) {
+      ++c.outside_sensor;
+      return;
+    }
+    const std::size_t raw = static_cast<std::size_t>(e.y) * w + e.x;
+    const NormalizedRay r = p.rays[raw];
+    if (std::isnan(r.x)) {
+      ++c.no_inverse;
+      return;
+    }
+    if (e.t < slot_t0 || e.t >= slot_t1) set_slot(d);
+    const float stored = M == Model::kRotationTranslation ? p.inv_depth[raw] : 0.0f;
+    const float t = static_cast<float>(d) * 1e-9f;
+    float u, v;
+    std::int32_t px;
+    const bool keep = warp_one<M>(p, m, r.x, r.y, t, stored, u, v, px);
+    c.left += !keep;
+    c.fallback += M == Model::kRotationTranslation && std::signbit(stored);
+    out.x[n] = u;
+    out.y[n] = v;
+    out.t[n] = t;
+    out.pixel[n] = px;
+    n += keep;
+  };
+
+  // Events arrive in time order, not pixel order: the table lookups are scattered over tables
+  // larger than L2. Prefetching a few events ahead hides most of that latency.
+  constexpr std::size_t kPrefetch = 64;
+  auto prefetch = [&](std::size_t kk) {
+    if (kk >= end) return;
+    const Event& a = p.events[kk * p.stride];
+    if (a.x < w && a.y < h) {
+      const std::size_t r = static_cast<std::size_t>(a.y) * w + a.x;
+      __builtin_prefetch(p.rays + r);
+      if constexpr (M == Model::kRotationTranslation) __builtin_prefetch(p.inv_depth + r);
+    }
+  };
+
+  std::size_t k = begin;
+  for (; k + 4 <= end; k += 4) {
+    for (std::size_t j = 0; j < 4; ++j) prefetch(k + j + kPrefetch);
+    const Event& e0 = p.events[k * p.stride];
+    const Event& e1 = p.events[(k + 1) * p.stride];
+    const Event& e2 = p.events[(k + 2) * p.stride];
+    const Event& e3 = p.events[(k + 3) * p.stride];
+    // Fast path: in time order (also after the previous event), all within the current slot
+    // (hence within the window), all inside the sensor. Non-short-circuit: no branch per test.
+    const bool fast = fast_ok & (previous_t <= e0.t) & (e0.t <= e1.t) & (e1.t <= e2.t) & (e2.t <= e3.t) &
+                      (e0.t >= slot_t0) & (e3.t < slot_t1) & (e0.x < w) & (e1.x < w) & (e2.x < w) & (e3.x < w) &
+                      (e0.y < h) & (e1.y < h) & (e2.y < h) & (e3.y < h);
+    if (!fast) {
+      for (std::size_t j = 0; j < 4; ++j) one(k + j);
+      continue;
+    }
+    previous_t = e3.t;
+    const std::size_t r0 = static_cast<std::size_t>(e0.y) * w + e0.x, r1 = static_cast<std::size_t>(e1.y) * w + e1.x;
+    const std::size_t r2 = static_cast<std::size_t>(e2.y) * w + e2.x, r3 = static_cast<std::size_t>(e3.y) * w + e3.x;
+    const NormalizedRay a0 = p.rays[r0], a1 = p.rays[r1], a2 = p.rays[r2], a3 = p.rays[r3];
+    const vf X0{a0.x, a1.x, a2.x, a3.x}, Y0{a0.y, a1.y, a2.y, a3.y};
+    // float(d) from int32 equals float(d) from int64: both are the rounding of the same integer.
+    const vi d{static_cast<std::int32_t>(e0.t - p.t0), static_cast<std::int32_t>(e1.t - p.t0),
+               static_cast<std::int32_t>(e2.t - p.t0), static_cast<std::int32_t>(e3.t - p.t0)};
+    const vf T = __builtin_convertvector(d, vf) * ns_to_s;
+    const vi has_ray = X0 == X0;  // NaN: no undistortion
+    no_inverse -= ~has_ray;
+    vf u, v;
+    vi front = vi{} - 1;
+    if constexpr (M == Model::kNone) {
+      u = fx * X0 + cx;
+      v = fy * Y0 + cy;
+    } else {
+      vf X = m0 * X0 + m1 * Y0 + m2;
+      vf Y = m3 * X0 + m4 * Y0 + m5;
+      vf Z = m6 * X0 + m7 * Y0 + m8;
+      if constexpr (M == Model::kRotationTranslation) {
+        const vi stored = bits(vf{p.inv_depth[r0], p.inv_depth[r1], p.inv_depth[r2], p.inv_depth[r3]});
+        fallback -= has_ray & (stored < 0);  // sign bit: the missing-depth policy was applied
+        const vf rho_dt = from_bits(stored & 0x7fffffff) * T;
+        X = X + rho_dt * kv0;
+        Y = Y + rho_dt * kv1;
+        Z = Z + rho_dt * kv2;
+      }
+      front = Z > min_z;
+      const vf iz = 1.0f / Z;
+      u = X * iz;
+      v = Y * iz;
+    }
+    const vi keep = has_ray & front & (u >= -half) & (u < u_hi) & (v >= -half) & (v < v_hi);
+    left -= has_ray & ~keep;
+    // Lanes that are not kept convert 0 (their positions may be out of the int range).
+    const vi px = __builtin_convertvector(from_bits(bits(v + half) & keep), vi) * width +
+                  __builtin_convertvector(from_bits(bits(u + half) & keep), vi);
+    if (all_set(keep)) {  // the common case: four vector stores
+      std::memcpy(out.x + n, &u, sizeof u);
+      std::memcpy(out.y + n, &v, sizeof v);
+      std::memcpy(out.t + n, &T, sizeof T);
+      std::memcpy(out.pixel + n, &px, sizeof px);
+      n += 4;
+      continue;
+    }
+    // Branch-free compaction: every lane is written, the position advances for kept ones.
+    for (int j = 0; j < 4; ++j) {
+      out.x[n] = u[j];
+      out.y[n] = v[j];
+      out.t[n] = T[j];
+      out.pixel[n] = px[j];
+      n += static_cast<std::size_t>(keep[j] & 1);
+    }
+  }
+  for (; k < end; ++k) one(k);
+  for (int j = 0; j < 4; ++j) {
+    c.no_inverse += static_cast<std::uint64_t>(no_inverse[j]);
+    c.left += static_cast<std::uint64_t>(left[j]);
+    c.fallback += static_cast<std::uint64_t>(fallback[j]);
+  }
+  c.kept = n;
+  return c;
+}
 
 }  // namespace
 
@@ -81,8 +299,6 @@ void WarpCompensator::build_rotation_slots(const Eigen::Vector3d& omega_E, TimeN
       m[6 + c] = static_cast<float>(R(2, c));
     }
   }
-  slots_per_s_ = static_cast<float>(1e9 / static_cast<double>(refresh));
-  last_slot_ = n - 1;
 }
 
 bool WarpCompensator::prepare_depth(const RegisteredDepth& depth) {
@@ -92,16 +308,12 @@ bool WarpCompensator::prepare_depth(const RegisteredDepth& depth) {
   depth_t_key_ = depth.t;
   const int w = depth.width, h = depth.height;
   const std::size_t n = static_cast<std::size_t>(w) * h;
-  inv_raw_.create(h, w, CV_32F);
-  median_scratch_.clear();
+  const float* z = depth.depth_m.data();
   // Median of the valid depths (strided so that at most ~50 k values are sorted).
+  median_scratch_.clear();
   const std::size_t stride = std::max<std::size_t>(1, n / 50'000);
-  for (std::size_t i = 0; i < n; ++i) {
-    const float z = depth.depth_m[i];
-    const bool valid = z > 0 && std::isfinite(z);
-    inv_raw_.ptr<float>()[i] = valid ? 1.0f / z : 0.0f;
-    if (valid && i % stride == 0) median_scratch_.push_back(z);
-  }
+  for (std::size_t i = 0; i < n; i += stride)
+    if (z[i] > 0 && std::isfinite(z[i])) median_scratch_.push_back(z[i]);
   if (median_scratch_.empty()) {
     depth_usable_ = false;
     return false;
@@ -109,18 +321,63 @@ bool WarpCompensator::prepare_depth(const RegisteredDepth& depth) {
   auto mid = median_scratch_.begin() + static_cast<std::ptrdiff_t>(median_scratch_.size() / 2);
   std::nth_element(median_scratch_.begin(), mid, median_scratch_.end());
   fallback_depth_m_ = *mid;
-  // Pinholes: the nearest surface among the neighbours (largest inverse depth).
-  const int r = options_.hole_fill_radius_px;
-  if (r > 0) {
-    cv::dilate(inv_raw_, inv_dilated_, cv::getStructuringElement(cv::MORPH_RECT, {2 * r + 1, 2 * r + 1}));
+  // ρ = 1/z where valid, 0 in holes. Four pixels at a time (`z <= FLT_MAX` is false for NaN and
+  // inf); the tail of a row-major image is done one by one.
+  raw_rho_.resize(n);
+  row_max_.resize(n);
+  inv_depth_.resize(n);
+  float* raw = raw_rho_.data();
+  const vf flt_max = vf{} + std::numeric_limits<float>::max(), one_f = vf{} + 1.0f;
+  std::size_t i = 0;
+  for (; i + 4 <= n; i += 4) {
+    const vf zi = load4(z + i);
+    const vi valid = (zi > 0) & (zi <= flt_max);
+    store4(raw + i, from_bits(bits(one_f / from_bits((bits(zi) & valid) | (bits(one_f) & ~valid))) & valid));
   }
+  for (; i < n; ++i) raw[i] = z[i] > 0 && z[i] <= std::numeric_limits<float>::max() ? 1.0f / z[i] : 0.0f;
+  // Holes take the nearest surface (largest ρ) among the neighbours within hole_fill_radius_px:
+  // a grey dilation with a square window, done as two 1-D running maxima (rows, then columns;
+  // the window is clipped at the border), then the missing-depth policy, marked by the sign bit.
+  // Whole-image vector passes: cheaper than visiting the holes one by one when a large part of
+  // the view is beyond the depth camera's range (a long hall: tens of per cent of the pixels).
+  const int r = options_.hole_fill_radius_px;
   const float fallback_rho =
       options_.missing_depth == MissingDepthPolicy::kMedianDepth ? 1.0f / fallback_depth_m_ : 0.0f;
-  inv_depth_.resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    float rho = inv_raw_.ptr<float>()[i];
-    if (rho == 0 && r > 0) rho = inv_dilated_.ptr<float>()[i];
-    inv_depth_[i] = rho == 0 ? -fallback_rho : rho;  // −0.0f still carries the sign bit
+  const std::size_t row_len = static_cast<std::size_t>(w);
+  // out[x] = max(out[x], in[x + shift]) over the x where x + shift is in the row.
+  auto max_into = [row_len](float* out, const float* in, std::ptrdiff_t shift) {
+    const std::size_t x0 = shift < 0 ? static_cast<std::size_t>(-shift) : 0;
+    const std::size_t x1 = shift > 0 ? row_len - std::min(row_len, static_cast<std::size_t>(shift)) : row_len;
+    std::size_t x = x0;
+    for (; x + 4 <= x1; x += 4) store4(out + x, vmax(load4(out + x), load4(in + x + shift)));
+    for (; x < x1; ++x) out[x] = out[x] > in[x + shift] ? out[x] : in[x + shift];
+  };
+  float* rows = row_max_.data();
+  float* rho = inv_depth_.data();
+  for (int y = 0; y < h; ++y) {
+    const float* in = raw + static_cast<std::size_t>(y) * row_len;
+    float* out = rows + static_cast<std::size_t>(y) * row_len;
+    std::memcpy(out, in, row_len * sizeof(float));
+    for (int d = 1; d <= r; ++d) {
+      max_into(out, in, d);
+      max_into(out, in, -d);
+    }
+  }
+  // Not vf{} + x: 0.0f + −0.0f would lose the sign bit.
+  const vf fallback{-fallback_rho, -fallback_rho, -fallback_rho, -fallback_rho}, zero{};
+  for (int y = 0; y < h; ++y) {
+    const float* self = raw + static_cast<std::size_t>(y) * row_len;
+    float* out = rho + static_cast<std::size_t>(y) * row_len;
+    std::memcpy(out, rows + static_cast<std::size_t>(y) * row_len, row_len * sizeof(float));
+    for (int yy = std::max(0, y - r); yy <= std::min(h - 1, y + r); ++yy)
+      if (yy != y) max_into(out, rows + static_cast<std::size_t>(yy) * row_len, 0);
+    // Valid: its own ρ; hole: the dilation, or the policy's −ρ (−0.0f still carries the sign bit).
+    std::size_t x = 0;
+    for (; x + 4 <= row_len; x += 4) {
+      const vf own = load4(self + x), dil = load4(out + x);
+      store4(out + x, select4(own != zero, own, select4(dil != zero, dil, fallback)));
+    }
+    for (; x < row_len; ++x) out[x] = self[x] != 0 ? self[x] : out[x] != 0 ? out[x] : -fallback_rho;
   }
   depth_usable_ = true;
   return true;
@@ -152,26 +409,83 @@ const CompensatedWindow& WarpCompensator::compensate(const CompensationInput& in
       used = CompensationMethod::kRotation;
   }
   rep.used = used;
+
   const PinholeCamera& cam = map_->camera();
-  if (used == CompensationMethod::kNone) {
-    IdentityKernel k{static_cast<float>(cam.fx), static_cast<float>(cam.fy), static_cast<float>(cam.cx),
-                     static_cast<float>(cam.cy)};
-    run_warp(in, k);
-    return out_;
+  WarpParams p;
+  const std::size_t n_events = in.events.size();
+  p.events = in.events.data();
+  p.stride = burst_stride(n_events);
+  const std::size_t visits = p.stride == 1 ? n_events : (n_events + p.stride - 1) / p.stride;
+  rep.dropped_burst = n_events - visits;
+  p.rays = map_->rays();
+  p.width = map_->width();
+  p.height = map_->height();
+  p.t0 = in.t_start_ns;
+  p.duration = std::max<TimeNs>(0, in.t_end_ns - in.t_start_ns);
+  p.refresh = options_.rotation_refresh_ns;
+  p.fx = static_cast<float>(cam.fx), p.fy = static_cast<float>(cam.fy);
+  p.cx = static_cast<float>(cam.cx), p.cy = static_cast<float>(cam.cy);
+  if (used != CompensationMethod::kNone) {
+    build_rotation_slots(rep.omega_E, p.duration);
+    p.slots = slots_.data();
   }
-  build_rotation_slots(rep.omega_E, in.t_end_ns - in.t_start_ns);
-  if (used == CompensationMethod::kRotation) {
-    RotationKernel k{slots_.data(), slots_per_s_, last_slot_};
-    run_warp(in, k);
-    return out_;
+  if (used == CompensationMethod::kRotationTranslation) {
+    const Eigen::Vector3d& v = rep.v_E;
+    p.inv_depth = inv_depth_.data();
+    p.kv[0] = static_cast<float>(cam.fx * v.x() + cam.cx * v.z());
+    p.kv[1] = static_cast<float>(cam.fy * v.y() + cam.cy * v.z());
+    p.kv[2] = static_cast<float>(v.z());
   }
-  const Eigen::Vector3d& v = rep.v_E;
-  RotationTranslationKernel k{slots_.data(), slots_per_s_, last_slot_, inv_depth_.data(),
-                              {static_cast<float>(cam.fx * v.x() + cam.cx * v.z()),
-                               static_cast<float>(cam.fy * v.y() + cam.cy * v.z()), static_cast<float>(v.z())}};
-  run_warp(in, k);
-  rep.depth_fallback_events = k.fallback_events;
-  if (options_.missing_depth == MissingDepthPolicy::kMedianDepth) rep.fallback_depth_m = fallback_depth_m_;
+
+  out_.reserve_events(visits);
+  const Output o{out_.x_data(), out_.y_data(), out_.t_data(), out_.pixel_data()};
+  // Parts of the visits, each written from its own first visit on (kept ≤ visited), then moved
+  // together in order: the same output as one pass. Small windows are not worth a second thread.
+  constexpr std::size_t kMinEventsPerPart = 16'384;
+  const int parts = static_cast<int>(std::clamp<std::size_t>(visits / kMinEventsPerPart, 1,
+                                                             static_cast<std::size_t>(options_.threads)));
+  std::array<WarpCounts, kMaxParts> part_counts;
+  std::array<std::size_t, kMaxParts + 1> first{};
+  for (int i = 0; i <= parts; ++i) first[i] = visits * static_cast<std::size_t>(i) / static_cast<std::size_t>(parts);
+  const auto warp_part = [&](int i) {
+    const std::size_t b = first[i], e = first[i + 1];
+    const TimeNs previous_t = b == 0 ? std::numeric_limits<TimeNs>::min() : p.events[(b - 1) * p.stride].t;
+    const Output part{o.x + b, o.y + b, o.t + b, o.pixel + b};
+    switch (used) {
+      case CompensationMethod::kRotation: part_counts[i] = warp_range<Model::kRotation>(p, b, e, previous_t, part); break;
+      case CompensationMethod::kRotationTranslation:
+        part_counts[i] = warp_range<Model::kRotationTranslation>(p, b, e, previous_t, part);
+        break;
+      default: part_counts[i] = warp_range<Model::kNone>(p, b, e, previous_t, part); break;
+    }
+  };
+  run_parts(parts, warp_part);
+  WarpCounts c;
+  for (int i = 0; i < parts; ++i) {
+    const WarpCounts& pc = part_counts[i];
+    if (i > 0 && first[i] != c.kept) {
+      for (float* a : {o.x, o.y, o.t}) std::memmove(a + c.kept, a + first[i], pc.kept * sizeof(float));
+      std::memmove(o.pixel + c.kept, o.pixel + first[i], pc.kept * sizeof(std::int32_t));
+    }
+    c.kept += pc.kept;
+    c.outside_window += pc.outside_window;
+    c.outside_sensor += pc.outside_sensor;
+    c.no_inverse += pc.no_inverse;
+    c.left += pc.left;
+    c.out_of_order += pc.out_of_order;
+    c.fallback += pc.fallback;
+  }
+  out_.set_size(c.kept);
+  rep.events_kept = c.kept;
+  rep.dropped_outside_window = c.outside_window;
+  rep.dropped_outside_sensor = c.outside_sensor;
+  rep.dropped_no_inverse = c.no_inverse;
+  rep.dropped_left_image = c.left;
+  rep.events_out_of_order = c.out_of_order;
+  if (used == CompensationMethod::kRotationTranslation) {
+    rep.depth_fallback_events = c.fallback;
+    if (options_.missing_depth == MissingDepthPolicy::kMedianDepth) rep.fallback_depth_m = fallback_depth_m_;
+  }
   return out_;
 }
 

@@ -1,7 +1,6 @@
 #pragma once
 /// Internal: the IMU / odometry / depth driven strategies "none", "rotation" (Falanga et al. 2020)
 /// and "rotation_translation" (the paper, eqs. 6-8). Create through make_compensator().
-#include <opencv2/core.hpp>
 #include <vector>
 
 #include "fdv/compensation/compensator_base.h"
@@ -23,8 +22,6 @@ class WarpCompensator final : public CompensatorBase {
   bool prepare_depth(const RegisteredDepth& depth);
 
   std::vector<float> slots_;  ///< n_slots × 9
-  float slots_per_s_ = 0;
-  int last_slot_ = 0;
   // Depth cache.
   const RegisteredDepth* depth_key_ = nullptr;
   const float* depth_data_key_ = nullptr;
@@ -33,8 +30,8 @@ class WarpCompensator final : public CompensatorBase {
   float fallback_depth_m_ = 0;
   /// ρ = 1/z per raw pixel [1/m]; sign bit set where the missing-depth policy was applied.
   std::vector<float> inv_depth_;
-  cv::Mat inv_raw_, inv_dilated_;
   std::vector<float> median_scratch_;
+  std::vector<float> raw_rho_, row_max_;  ///< ρ before hole filling; its running maximum along rows
 };
 
 }  // namespace fdv::internal

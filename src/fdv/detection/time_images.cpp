@@ -1,10 +1,163 @@
 #include "fdv/detection/time_images.h"
 
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <cstring>
 #include <limits>
-#include <opencv2/core.hpp>
-#include <opencv2/imgproc.hpp>
+
+#include "fdv/core/parallel_parts.h"
 
 namespace fdv {
+namespace {
+
+// Why this shape (docs/BENCHMARKS.md has the figures): a window touches a minority of the pixels,
+// and the earlier version spent most of its time in a dozen whole-image OpenCV passes. Here the
+// images are cut into blocks of 16 pixels (one cache line of a float image); accumulation marks
+// the blocks it touches, and only those (plus the ones to blank from the previous window) are
+// visited, twice: pass 1 writes I, Σt, T and finds min/max T; pass 2 writes N. The lanes are GCC
+// vector extensions (baseline SSE2, no FMA: the same IEEE results as the scalar reference).
+using vf = float __attribute__((vector_size(16)));
+using vi = std::int32_t __attribute__((vector_size(16)));
+using vd = double __attribute__((vector_size(16)));
+
+constexpr std::size_t kBlock = 16;
+/// Σ T is summed per chunk of this many blocks, then the chunks in order: a fixed order, so the
+/// result does not depend on how the blocks are split between threads.
+constexpr std::size_t kChunkBlocks = 256;
+constexpr std::uint8_t kNow = 1, kBefore = 2;
+
+vf load_f(const float* p) {
+  vf v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+vi load_i(const std::int32_t* p) {
+  vi v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+void store(float* p, vf v) { std::memcpy(p, &v, sizeof v); }
+void store(std::int32_t* p, vi v) { std::memcpy(p, &v, sizeof v); }
+vf select(vi m, vf a, vf b) {
+  return std::bit_cast<vf>((std::bit_cast<vi>(a) & m) | (std::bit_cast<vi>(b) & ~m));
+}
+
+struct Images {
+  float* acc;
+  std::int32_t* count;
+  float* sum;
+  float* mean;
+  float* norm;
+};
+
+/// Pass-1 results of a range of blocks.
+struct Extremes {
+  float t_min = std::numeric_limits<float>::infinity();
+  float t_max = -std::numeric_limits<float>::infinity();
+  int pixels = 0;
+};
+
+/// One pixel of pass 1 (tail of an image whose size is not a multiple of 16).
+void pixel_pass1(const Images& im, std::size_t i, Extremes& x, double& sum_t) {
+  const float c = im.acc[2 * i], s = im.acc[2 * i + 1];
+  const float t = s / (c > 0 ? c : 1.0f);  // c = 0 implies s = 0: T = 0
+  im.count[i] = static_cast<std::int32_t>(c);
+  im.sum[i] = s;
+  im.mean[i] = t;
+  im.acc[2 * i] = im.acc[2 * i + 1] = 0;
+  if (c > 0) {
+    x.t_min = std::min(x.t_min, t);
+    x.t_max = std::max(x.t_max, t);
+    ++x.pixels;
+    sum_t += t;
+  }
+}
+
+void blank_block(const Images& im, std::size_t i0, std::size_t n) {
+  std::memset(im.count + i0, 0, n * sizeof(std::int32_t));
+  std::memset(im.sum + i0, 0, n * sizeof(float));
+  std::memset(im.mean + i0, 0, n * sizeof(float));
+  std::memset(im.norm + i0, 0, n * sizeof(float));
+}
+
+/// Pass 1 over blocks [b0, b1): I, Σt, T from the accumulator (which is reset to 0 on the way),
+/// min/max T, pixel count and Σ T per chunk. b0 and b1 are multiples of kChunkBlocks (or the end).
+Extremes pass1(const Images& im, std::uint8_t* blocks, std::size_t b0, std::size_t b1, std::size_t npx,
+               double* chunk_sums) {
+  Extremes x;
+  vf lo = vf{} + x.t_min, hi = vf{} + x.t_max;
+  vi pixels{};
+  for (std::size_t c0 = b0; c0 < b1; c0 += kChunkBlocks) {
+    const std::size_t c1 = std::min(b1, c0 + kChunkBlocks);
+    vd sum_lanes[8] = {};
+    double sum_tail = 0;
+    for (std::size_t b = c0; b < c1; ++b) {
+      const std::uint8_t state = blocks[b];
+      if (!state) continue;
+      const std::size_t i0 = b * kBlock, n = std::min(kBlock, npx - i0);
+      if (!(state & kNow)) {
+        blank_block(im, i0, n);
+        continue;
+      }
+      if (n < kBlock) {
+        for (std::size_t i = i0; i < i0 + n; ++i) pixel_pass1(im, i, x, sum_tail);
+        continue;
+      }
+      for (int q = 0; q < 4; ++q) {
+        const std::size_t i = i0 + 4 * static_cast<std::size_t>(q);
+        const vf a = load_f(im.acc + 2 * i), b2 = load_f(im.acc + 2 * i + 4);
+        const vf c = __builtin_shufflevector(a, b2, 0, 2, 4, 6);
+        const vf s = __builtin_shufflevector(a, b2, 1, 3, 5, 7);
+        const vi has = c > 0;
+        const vf t = s / select(has, c, vf{} + 1.0f);
+        store(im.count + i, __builtin_convertvector(c, vi));
+        store(im.sum + i, s);
+        store(im.mean + i, t);
+        store(im.acc + 2 * i, vf{});
+        store(im.acc + 2 * i + 4, vf{});
+        lo = select(has & (t < lo), t, lo);
+        hi = select(has & (t > hi), t, hi);
+        pixels -= has;
+        // T is 0 on pixels without events: they add nothing.
+        sum_lanes[2 * q] += __builtin_convertvector(__builtin_shufflevector(t, t, 0, 1), vd);
+        sum_lanes[2 * q + 1] += __builtin_convertvector(__builtin_shufflevector(t, t, 2, 3), vd);
+      }
+    }
+    double chunk = 0;
+    for (const vd& l : sum_lanes) chunk += l[0] + l[1];
+    chunk_sums[c0 / kChunkBlocks] = chunk + sum_tail;
+  }
+  for (int j = 0; j < 4; ++j) {
+    x.t_min = std::min(x.t_min, lo[j]);
+    x.t_max = std::max(x.t_max, hi[j]);
+    x.pixels += pixels[j];
+  }
+  return x;
+}
+
+/// Pass 2 over blocks [b0, b1): N = (T − t_min)·scale where I > 0, else 0; block states advance
+/// (this window becomes the previous one).
+void pass2(const Images& im, std::uint8_t* blocks, std::size_t b0, std::size_t b1, std::size_t npx, float t_min,
+           float scale) {
+  const vf vmin = vf{} + t_min, vscale = vf{} + scale;
+  for (std::size_t b = b0; b < b1; ++b) {
+    const std::uint8_t state = blocks[b];
+    blocks[b] = state & kNow ? kBefore : 0;
+    if (!(state & kNow)) continue;
+    const std::size_t i0 = b * kBlock, n = std::min(kBlock, npx - i0);
+    if (n < kBlock) {
+      for (std::size_t i = i0; i < i0 + n; ++i) im.norm[i] = im.count[i] > 0 ? (im.mean[i] - t_min) * scale : 0.0f;
+      continue;
+    }
+    for (std::size_t i = i0; i < i0 + kBlock; i += 4) {
+      const vi has = load_i(im.count + i) > 0;
+      store(im.norm + i, select(has, (load_f(im.mean + i) - vmin) * vscale, vf{}));
+    }
+  }
+}
+
+}  // namespace
 
 void build_time_images(const CompensatedEventsView& view, TimeImages& out) {
   const int w = view.width, h = view.height;
@@ -12,63 +165,83 @@ void build_time_images(const CompensatedEventsView& view, TimeImages& out) {
   out.sum_time_s.create(h, w, CV_32F);
   out.mean_time_s.create(h, w, CV_32F);
   out.normalized.create(h, w, CV_32F);
-  // One interleaved accumulator: each event touches a single cache line (events arrive in time
-  // order, scattered over the image). Counts are exact in float up to 2^24 per pixel.
   out.accumulator.create(h, w, CV_32FC2);
-  out.accumulator.setTo(0);
-  float* acc = out.accumulator.ptr<float>();
   const std::size_t npx = static_cast<std::size_t>(w) * h;
+  const std::size_t n_blocks = (npx + kBlock - 1) / kBlock;
+  // First use, new buffers or a new size: everything is blanked once; afterwards the images are
+  // 0 outside the blocks the previous window marked.
+  const std::array<const void*, 5> keys{out.count.data, out.sum_time_s.data, out.mean_time_s.data,
+                                         out.normalized.data, out.accumulator.data};
+  if (keys != out.buffer_keys || out.blocks.size() != n_blocks) {
+    for (cv::Mat* m : {&out.count, &out.sum_time_s, &out.mean_time_s, &out.normalized, &out.accumulator}) m->setTo(0);
+    out.blocks.assign(n_blocks, 0);
+    out.chunk_sums.assign((n_blocks + kChunkBlocks - 1) / kChunkBlocks, 0.0);
+    out.buffer_keys = keys;
+  }
+  const Images im{out.accumulator.ptr<float>(), out.count.ptr<std::int32_t>(), out.sum_time_s.ptr<float>(),
+                  out.mean_time_s.ptr<float>(), out.normalized.ptr<float>()};
+  std::uint8_t* blocks = out.blocks.data();
+
+  // Parts: ranges of whole chunks of blocks (the chunk sums do not depend on the split); each
+  // part reads all events and accumulates those on its pixels, in event order (each pixel's Σt
+  // is summed in the same order whatever the split: bit-exact results). Small windows are not
+  // worth a second thread.
   const std::size_t n = std::min(view.pixel.size(), view.t_s.size());
-  int events = 0;
-  for (std::size_t k = 0; k < n; ++k) {
-    const std::int32_t p = view.pixel[k];
-    if (p < 0 || static_cast<std::size_t>(p) >= npx) continue;
-    acc[2 * p] += 1.0f;
-    acc[2 * p + 1] += view.t_s[k];
-    ++events;
-  }
-  // Per-pixel passes with OpenCV's vectorised operations only (a scalar pass over the image costs
-  // more than all of these together).
-  out.count_f.create(h, w, CV_32F);
-  std::vector<cv::Mat> channels{out.count_f, out.sum_time_s};
-  cv::split(out.accumulator, channels);
-  out.count_f.convertTo(out.count, CV_32S);
-  const int with_events = cv::countNonZero(out.count_f);
-  // T = Σt / I, NaN (0/0) where no events: first replaced by +big to find min T over pixels with
-  // events, then by 0.
-  constexpr float kBig = 1e30f;
-  cv::divide(out.sum_time_s, out.count_f, out.mean_time_s);
-  cv::patchNaNs(out.mean_time_s, kBig);
-  double t_min = 0, t_max = 0;
-  if (with_events > 0) cv::minMaxLoc(out.mean_time_s, &t_min, nullptr);
-  cv::threshold(out.mean_time_s, out.mean_time_s, 0.5 * kBig, 0.0, cv::THRESH_TOZERO_INV);
-  if (with_events > 0) {
-    if (t_min >= 0) {
-      cv::minMaxLoc(out.mean_time_s, nullptr, &t_max);  // empty pixels (0) cannot exceed it
-    } else {  // negative times (a hand-made view): mask out the empty pixels
-      cv::Mat has_events;
-      cv::compare(out.count_f, 0, has_events, cv::CMP_GT);
-      cv::minMaxLoc(out.mean_time_s, nullptr, &t_max, nullptr, nullptr, has_events);
+  const std::size_t n_chunks = (n_blocks + kChunkBlocks - 1) / kChunkBlocks;
+  constexpr std::size_t kMinEventsPerPart = 16'384;
+  constexpr int kMaxParts = 8;
+  const int parts = static_cast<int>(
+      std::clamp<std::size_t>(std::min(n / kMinEventsPerPart, n_chunks), 1, std::clamp(view.threads, 1, kMaxParts)));
+  std::array<std::size_t, kMaxParts + 1> first_block{};
+  for (int i = 0; i <= parts; ++i)
+    first_block[i] = std::min(n_blocks, n_chunks * static_cast<std::size_t>(i) / static_cast<std::size_t>(parts) * kChunkBlocks);
+  std::array<Extremes, kMaxParts> extremes;
+  std::array<int, kMaxParts> events{};
+  const std::int32_t* pixel = view.pixel.data();
+  const float* t_s = view.t_s.data();
+  run_parts(parts, [&](int part) {
+    const std::size_t lo = first_block[part] * kBlock, hi = std::min(npx, first_block[part + 1] * kBlock);
+    int count = 0;
+    // The accumulator is larger than L2 and events are scattered over it: prefetch ahead.
+    constexpr std::size_t kPrefetch = 64;
+    for (std::size_t k = 0; k < n; ++k) {
+      if (k + kPrefetch < n)
+        __builtin_prefetch(im.acc + 2 * std::min<std::size_t>(static_cast<std::uint32_t>(pixel[k + kPrefetch]), npx - 1));
+      // Unsigned: negative indices wrap far out of range.
+      const std::size_t p = static_cast<std::uint32_t>(pixel[k]);
+      if (p < lo || p >= hi) continue;
+      im.acc[2 * p] += 1.0f;
+      im.acc[2 * p + 1] += t_s[k];
+      blocks[p / kBlock] |= kNow;
+      ++count;
     }
+    events[part] = count;
+    extremes[part] = pass1(im, blocks, first_block[part], first_block[part + 1], npx, out.chunk_sums.data());
+  });
+  Extremes x;
+  int n_events = 0;
+  for (int i = 0; i < parts; ++i) {
+    x.t_min = std::min(x.t_min, extremes[i].t_min);
+    x.t_max = std::max(x.t_max, extremes[i].t_max);
+    x.pixels += extremes[i].pixels;
+    n_events += events[i];
   }
-  const double range = t_max - t_min;
-  const double inv = with_events > 0 && range > 0 ? 1.0 / range : 0.0;
-  // N = (T − min T)/(max T − min T) on pixels with events, 0 elsewhere.
-  out.mean_time_s.convertTo(out.normalized, CV_32F, inv, -t_min * inv);
-  if (t_min >= 0) {
-    cv::max(out.normalized, 0.0, out.normalized);  // empty pixels: (0 − min T)·inv ≤ 0 -> 0
-  } else {
-    cv::Mat empty;
-    cv::compare(out.count_f, 0, empty, cv::CMP_EQ);
-    out.normalized.setTo(0, empty);
-  }
-  out.events = events;
-  out.pixels_with_events = with_events;
-  out.t_min_s = static_cast<float>(t_min);
-  out.t_max_s = static_cast<float>(t_max);
+  const bool any = x.pixels > 0;
+  const float t_min = any ? x.t_min : 0.0f, t_max = any ? x.t_max : 0.0f;
+  const double range = static_cast<double>(t_max) - static_cast<double>(t_min);
+  const double inv = any && range > 0 ? 1.0 / range : 0.0;
+  run_parts(parts, [&](int part) {
+    pass2(im, blocks, first_block[part], first_block[part + 1], npx, t_min, static_cast<float>(inv));
+  });
+
+  double sum_t = 0;
+  for (double c : out.chunk_sums) sum_t += c;
+  out.events = n_events;
+  out.pixels_with_events = x.pixels;
+  out.t_min_s = t_min;
+  out.t_max_s = t_max;
   // mean(N) = (mean(T) − min T) / (max T − min T) over pixels with events (N is affine in T).
-  const double sum_t = cv::sum(out.mean_time_s)[0];
-  out.mean_normalized = with_events ? (sum_t / with_events - t_min) * inv : 0;
+  out.mean_normalized = any ? (sum_t / x.pixels - t_min) * inv : 0.0;
 }
 
 }  // namespace fdv

@@ -11,9 +11,20 @@
 ///   N_ij = (T_ij − min T) / (max T − min T)
 /// min and max are taken over pixels with I > 0 (T is undefined elsewhere); pixels with I = 0 are 0
 /// in T and N. When max T = min T (e.g. a single event) N is 0 everywhere: no temporal structure.
+///
+/// Arithmetic (float, so that results do not depend on the implementation): Σ(t − t0) is summed
+/// per pixel in event order; T = Σ / I; N = (T − min T)·s with s = float(1 / (max T − min T));
+/// mean_normalized is computed in double. reference_time_images.h is the plain version the
+/// optimised builder is tested against.
+///
+/// Pitfall: the images are reused, and each call rewrites only the 16-pixel blocks that held events
+/// in this window or the previous one (the rest are already 0): treat them as read-only (clone()
+/// before modifying). Assigning a different cv::Mat to a member is detected (full rebuild).
+#include <array>
 #include <cstdint>
 #include <opencv2/core.hpp>
 #include <span>
+#include <vector>
 
 #include "fdv/core/time.h"
 
@@ -33,6 +44,9 @@ struct CompensatedEventsView {
   /// t_s is non-decreasing (the compensators keep the input's time order and report it): lets the
   /// detector binary-search time slices. False is always safe.
   bool time_sorted = false;
+  /// Threads for build_time_images (OpenCV's pool, fdv/core/parallel_parts.h): the image is split
+  /// into this many pixel ranges. Results are identical for any count.
+  int threads = 1;
 };
 
 struct TimeImages {
@@ -44,8 +58,13 @@ struct TimeImages {
   int pixels_with_events = 0;
   float t_min_s = 0, t_max_s = 0;  ///< min / max of T over pixels with events
   double mean_normalized = 0;      ///< mean of N over pixels with events (threshold θ, §IV-B.1)
-  cv::Mat accumulator;             ///< scratch: interleaved (count, Σt) per pixel, CV_32FC2
-  cv::Mat count_f;                 ///< scratch: count as float
+
+  // Scratch, kept between windows (no allocation once warmed up).
+  cv::Mat accumulator;  ///< interleaved (count, Σt) per pixel, CV_32FC2; all 0 between calls
+  /// Per 16-pixel block: bit 0 = events in this window, bit 1 = events in the previous window.
+  std::vector<std::uint8_t> blocks;
+  std::vector<double> chunk_sums;  ///< Σ T per fixed chunk of blocks (summation order fixed)
+  std::array<const void*, 5> buffer_keys{};  ///< data pointers of the images when last built
 };
 
 /// Fills `out` (reusing its buffers). Events whose pixel index is out of range are ignored.

@@ -227,7 +227,15 @@ void Perception::process_window(PendingWindow& w) {
   view.time_sorted = cw.report.events_out_of_order == 0;  // lets the detector binary-search time slices
   view.omega_rad_s = cw.report.has_omega ? cw.report.omega_E.norm() : 0.0;
   view.speed_m_s = cw.report.has_velocity ? cw.report.v_E.norm() : 0.0;
-  const DetectionResult det = detector_.detect(view);
+  view.threads = options_.compensation.threads;  // the time images are split like the warp
+  // Where confirmed tracks expect their objects at the window's middle (track-aided detection).
+  priors_.clear();
+  for (const Track& track : tracker_.tracks()) {
+    if (!track.confirmed()) continue;
+    const TrackPrediction p = track.predict(w.t_start + (w.t_end - w.t_start) / 2);
+    priors_.push_back({p.centre_px, p.box_size_px});
+  }
+  const DetectionResult det = detector_.detect(view, priors_);
   result.status = det.status;
   result.detection = det.detection;
   result.theta = det.theta;

@@ -185,6 +185,7 @@ class Perception {
   std::deque<RegisteredDepth> pending_depth_;    ///< awaiting segmentation
   std::deque<PendingWindow> pending_windows_;
   std::vector<std::vector<Event>> free_buffers_;
+  std::vector<DetectionPrior> priors_;  ///< per window, reused
   std::map<int, TrackEstimators> estimators_;
   TimeNs stream_time_ = std::numeric_limits<TimeNs>::min();
   TimeNs processed_until_ = std::numeric_limits<TimeNs>::min();  ///< t_end of the last window done
