@@ -422,8 +422,17 @@ class RecordingReporter : public benchmark::ConsoleReporter {
 // both measured in this run (CPU time per iteration).
 int main(int argc, char** argv) {
   cv::setNumThreads(1);  // benchmarks that want two threads say so (CvThreads)
+  // --benchmark_format=csv/json: Google Benchmark's own reporter, no table.
+  bool console = true;
+  for (int i = 1; i < argc; ++i)
+    console = console && std::string(argv[i]).rfind("--benchmark_format=", 0) != 0;
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  if (!console) {
+    benchmark::RunSpecifiedBenchmarks();
+    benchmark::Shutdown();
+    return 0;
+  }
   fdv::RecordingReporter reporter;
   benchmark::RunSpecifiedBenchmarks(&reporter);
   std::printf("\nspeed-up of the optimised code over the reference, same run (one thread: CPU time; two "

@@ -92,14 +92,25 @@ SimStream simulate(const std::string& preset, std::uint64_t seed, double seconds
   return s;
 }
 
-/// Scales the contrast threshold until the rate is within 10 % of the target (0 = natural).
+/// Scales the contrast threshold until the rate is within 10 % of the target (0 = natural): the
+/// first step assumes rate ∝ 1/threshold, the next ones interpolate log(rate) against
+/// log(scale) between the last two simulations (the relation is steeper than 1/x at high
+/// thresholds, where faint edges stop firing at all).
 SimStream simulate_at_rate(const std::string& preset, std::uint64_t seed, double seconds, double target_meps,
                            double& scale) {
   scale = 1.0;
   SimStream s = simulate(preset, seed, seconds, scale);
   std::printf("# %s natural rate %.2f M ev/s (contrast threshold x1)\n", preset.c_str(), s.rate_meps());
-  for (int i = 0; i < 3 && target_meps > 0 && std::abs(s.rate_meps() / target_meps - 1) > 0.1; ++i) {
-    scale *= s.rate_meps() / target_meps;
+  double prev_scale = 0, prev_rate = 0;
+  for (int i = 0; i < 6 && target_meps > 0 && std::abs(s.rate_meps() / target_meps - 1) > 0.1; ++i) {
+    double next = scale * s.rate_meps() / target_meps;
+    if (prev_scale > 0 && prev_rate > 0 && prev_rate != s.rate_meps()) {
+      const double slope = std::log(s.rate_meps() / prev_rate) / std::log(scale / prev_scale);  // d log r / d log c
+      if (slope < -0.2) next = scale * std::exp(std::log(target_meps / s.rate_meps()) / slope);
+    }
+    prev_scale = scale;
+    prev_rate = s.rate_meps();
+    scale = std::clamp(next, 0.05, 20.0);
     s = simulate(preset, seed, seconds, scale);
     std::printf("# contrast threshold x%.3f: %.2f M ev/s\n", scale, s.rate_meps());
   }
