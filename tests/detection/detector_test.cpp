@@ -193,6 +193,10 @@ TEST_F(DetectorTest, TrackPriorAdmitsAWeakerPatternOnlyInsideItsGate) {
   // A prior 100 px away opens a gate with only background in it.
   const DetectionPrior elsewhere{raw_of(s.blob_at(s.t0) + Eigen::Vector2d(100, 100)), {14, 14}};
   EXPECT_FALSE(detector.detect(view_of(w), std::span(&elsewhere, 1)).detection);
+  // A gate 14 px ahead of the blob holds only its leading edge: the pattern is seeded there, but
+  // the box the fit finds is centred outside the gate, so it is not taken.
+  const DetectionPrior at_edge{raw_of(s.blob_at(s.t0 + s.duration) + Eigen::Vector2d(14, 0)), {2, 2}};
+  EXPECT_FALSE(detector.detect(view_of(w), std::span(&at_edge, 1)).detection);
 }
 
 TEST_F(DetectorTest, InvalidOptionsAreRejected) {

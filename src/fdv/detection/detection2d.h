@@ -14,6 +14,7 @@ struct Box2D {
   double width() const { return x1 - x0; }
   double height() const { return y1 - y0; }
   Eigen::Vector2d center() const { return {0.5 * (x0 + x1), 0.5 * (y0 + y1)}; }
+  bool contains(const Eigen::Vector2d& p) const { return p.x() >= x0 && p.x() <= x1 && p.y() >= y0 && p.y() <= y1; }
 };
 
 enum class DetectionSource {

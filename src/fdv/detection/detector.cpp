@@ -207,12 +207,12 @@ std::optional<Detector::Candidate> Detector::evaluate_candidate(const Compensate
     c.source = DetectionSource::kRegionRetrieval;
   }
   blank = c.box;
-  const cv::Rect r = box_pixels(c.box, w, h);
-  c.events = r.area() > 0 ? static_cast<int>(cv::sum(ti_.count(r))[0]) : 0;
+  c.events = events_in(c.box);
   if (c.events < o.roi_min_events) {
     why_not = DetectionStatus::kTooFewEventsInBox;
     return std::nullopt;
   }
+  const cv::Rect r = box_pixels(c.box, w, h);
   double peak_in_box = 0;
   cv::minMaxLoc(P(r), nullptr, &peak_in_box);
   c.score = std::clamp(std::sqrt(peak_in_box), 0.0, 1.0);
@@ -269,7 +269,7 @@ DetectionResult Detector::detect(const CompensatedEventsView& window, std::span<
   const cv::Mat* image = &P_;
   std::optional<Candidate> found;
   DetectionStatus why_not = DetectionStatus::kRemovedAsNoise;
-  for (int attempt = 0; attempt < o.max_candidates && !found; ++attempt) {
+  for (int attempt = 0; attempt < o.max_candidates; ++attempt) {
     double p_max = 0;
     cv::Point arg_max;
     cv::minMaxLoc(*image, nullptr, &p_max, nullptr, &arg_max);
@@ -302,9 +302,8 @@ DetectionResult Detector::detect(const CompensatedEventsView& window, std::span<
     ++res.candidates;
     Box2D blank;
     found = evaluate_candidate(window, P_, arg_max + g.tl(), o.prior_min_peak, res, why_not, blank);
-    const Eigen::Vector2d fc = found ? found->center : Eigen::Vector2d::Zero();
-    if (found && !(fc.x() >= gate->x0 && fc.x() <= gate->x1 && fc.y() >= gate->y0 && fc.y() <= gate->y1)) found.reset();
-    if (found) res.track_aided = true;
+    if (found && !gate->contains(found->center)) found.reset();
+    res.track_aided = found.has_value();
   }
   if (!found) return finish(why_not);
   Box2D box = found->box;
