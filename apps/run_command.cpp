@@ -204,6 +204,8 @@ class Outputs {
       for (int r = 0; r < 6; ++r)
         for (int c = 0; c < 6; ++c) cov.push_back((*est.covariance)(r, c));
       j["covariance"] = cov;
+      j["position_sigma"] = est.position_sigma_m;
+      j["horizon_sigma"] = est.horizon_sigma_m;
     }
     trajectories_ << j.dump() << "\n";
     timing_[fusion ? "estimation_fusion" : "estimation_mono"].push_back(e.ms);

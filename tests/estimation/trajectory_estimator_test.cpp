@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
+
 #include <algorithm>
 #include <random>
 
@@ -235,6 +237,50 @@ TEST(TrajectoryEstimator, DegenerateAxisGeometryIsFlaggedNotGarbage) {
     EXPECT_TRUE(e.usable) << e.brief_report();
     expect_truth(e, s.truth, 1e-6);
   }
+}
+
+/// Hovering vehicle; a ball thrown at it from 9 m (paper §V-D): mostly range rate, little bearing
+/// change. Events every 25 ms, depth at 30 Hz.
+Scene headon_scene(int events, int depths) {
+  Scene s;
+  s.T_W_B = [](TimeNs) {
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.translation() = Eigen::Vector3d(0, 0, 1.5);
+    return T;
+  };
+  s.truth = {0, {9.0, 0.6, 1.2}, {-9.0, -0.6, 3.0}, {0, 0, -9.81}};
+  for (int k = 0; k < events; ++k) s.event_times.push_back(k * 25 * kNsPerMs);
+  for (int k = 0; k < depths; ++k) s.depth_times.push_back(45 * kNsPerMs + k * 33 * kNsPerMs);
+  return s;
+}
+
+// The first estimates of a head-on throw pin the position at the newest observation (bearing +
+// one depth) but not the range rate: the old test (sigma at t_last only) called them usable and
+// they missed the closest approach by metres. usable now looks usable_horizon_s ahead.
+TEST(TrajectoryEstimator, ShortHeadOnArcIsNotUsableUntilTheVelocityIsPinned) {
+  std::mt19937 rng(1);
+  const Scene early = headon_scene(3, 1);
+  TrajectoryEstimator est(options_for(early));
+  const TrajectoryEstimate e = run_streaming(est, test::observe(early, rng, 0.0, false));
+  ASSERT_TRUE(e.covariance.has_value()) << e.brief_report();
+  EXPECT_LE(e.position_sigma_m, 1.0) << e.brief_report();  // the old criterion passed
+  EXPECT_GT(e.horizon_sigma_m, 1.0) << e.brief_report();
+  EXPECT_FALSE(e.usable) << e.brief_report();
+  EXPECT_NE(e.message.find("ahead"), std::string::npos) << e.message;
+  // horizon_sigma_m is the covariance of p(t_last + 0.5 s) = p0 + τ v0, propagated by hand.
+  const double tau = to_seconds(e.t_last - e.trajectory.t0) + 0.5;
+  Eigen::Matrix<double, 3, 6> J;
+  J << Eigen::Matrix3d::Identity(), tau * Eigen::Matrix3d::Identity();
+  const Eigen::Matrix3d P = J * *e.covariance * J.transpose();
+  EXPECT_NEAR(e.horizon_sigma_m, std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(P).eigenvalues()(2)),
+              1e-9);
+
+  const Scene later = headon_scene(10, 7);  // 225 ms of flight, 7 depth frames
+  TrajectoryEstimator est2(options_for(later));
+  const TrajectoryEstimate f = run_streaming(est2, test::observe(later, rng, 0.0, false));
+  EXPECT_TRUE(f.usable) << f.brief_report();
+  EXPECT_LE(f.horizon_sigma_m, 1.0) << f.brief_report();
+  expect_truth(f, later.truth, 1e-6);
 }
 
 struct MonteCarloResult {

@@ -121,6 +121,8 @@ std::string EstimatorOptions::validate() const {
   if (!(min_reciprocal_condition >= 1e-14 && min_reciprocal_condition < 1))
     return "min_reciprocal_condition must be in [1e-14, 1) (Ceres' covariance needs >= 1e-14)";
   if (!positive_finite(max_position_sigma_m)) return "max_position_sigma_m must be > 0";
+  if (!(usable_horizon_s >= 0) || !std::isfinite(usable_horizon_s))
+    return "usable_horizon_s must be >= 0";
   if (max_iterations < 1) return "max_iterations must be >= 1";
   if (!positive_finite(function_tolerance) || !positive_finite(parameter_tolerance))
     return "tolerances must be > 0";
@@ -145,7 +147,7 @@ std::string TrajectoryEstimate::brief_report() const {
     const auto& v = trajectory.v0_W;
     s += format(", p0 (%.3f %.3f %.3f)", p.x(), p.y(), p.z());
     s += format(" v0 (%.3f %.3f %.3f)", v.x(), v.y(), v.z());
-    s += format(", pos sigma %.3g m", position_sigma_m);
+    s += format(", pos sigma %.3g m (%.3g m at the horizon)", position_sigma_m, horizon_sigma_m);
   }
   if (!initialisation.empty()) s += ", init " + initialisation;
   if (!message.empty()) s += " (" + message + ")";
@@ -266,6 +268,7 @@ const TrajectoryEstimate& TrajectoryEstimator::solve() {
   e.event_observations = ne;
   e.depth_observations = nd;
   e.position_sigma_m = std::numeric_limits<double>::infinity();
+  e.horizon_sigma_m = std::numeric_limits<double>::infinity();
   if (options_.mode == EstimatorMode::kFusion && !use_depth)
     e.message = "no depth observation: event-only fit, range observable only through gravity";
 
@@ -421,13 +424,19 @@ const TrajectoryEstimate& TrajectoryEstimator::solve() {
     Eigen::Matrix<double, 6, 6, Eigen::RowMajor> C;
     if (covariance.Compute(blocks, &problem) && covariance.GetCovarianceBlock(x, x, C.data())) {
       e.covariance = C;
-      const Eigen::Matrix3d P = *e.position_covariance(t1);
-      e.position_sigma_m = std::sqrt(
-          std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(P).eigenvalues()(2)));
-      if (e.position_sigma_m > options_.max_position_sigma_m) {
+      auto largest_sigma_at = [&e](TimeNs t) {
+        const Eigen::Matrix3d P = *e.position_covariance(t);
+        return std::sqrt(
+            std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(P).eigenvalues()(2)));
+      };
+      e.position_sigma_m = largest_sigma_at(t1);
+      e.horizon_sigma_m =
+          largest_sigma_at(t1 + static_cast<TimeNs>(options_.usable_horizon_s * 1e9));
+      if (e.horizon_sigma_m > options_.max_position_sigma_m) {
         usable = false;
-        append(e.message, format("poorly constrained: position sigma %.2f m > %.2f m",
-                                 e.position_sigma_m, options_.max_position_sigma_m));
+        append(e.message, format("poorly constrained: position sigma %.2f m %.2f s ahead > %.2f m",
+                                 e.horizon_sigma_m, options_.usable_horizon_s,
+                                 options_.max_position_sigma_m));
       }
     } else {
       usable = false;

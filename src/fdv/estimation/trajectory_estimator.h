@@ -90,8 +90,11 @@ struct EstimatorOptions {
   /// Rank test on the whitened, robustified Jacobian: λ_min/λ_max of JᵀJ below this = degenerate
   /// (no covariance). Above Ceres' own 1e-14, so ceres::Covariance never fails afterwards.
   double min_reciprocal_condition = 1e-12;
-  /// usable requires the largest position std at the newest observation below this [m].
+  /// usable requires the largest position std, propagated from the newest observation to
+  /// usable_horizon_s beyond it, below this [m]. The horizon matters: a short arc pins the
+  /// position at its end but not the velocity, and a dodge acts on the position ~0.5 s ahead.
   double max_position_sigma_m = 1.0;
+  double usable_horizon_s = 0.5;
   bool compute_covariance = true;
   /// Ceres Levenberg-Marquardt limits.
   int max_iterations = 50;
@@ -109,6 +112,8 @@ struct TrajectoryEstimate {
   /// Covariance of (p0_W, v0_W) at trajectory.t0 [m², m²/s²], when the problem has full rank.
   std::optional<Eigen::Matrix<double, 6, 6>> covariance;
   double position_sigma_m = 0;  ///< sqrt of the largest eigenvalue of cov(p(t_last)); inf if none
+  /// The same at t_last + usable_horizon_s (the usable test); inf if none.
+  double horizon_sigma_m = 0;
   int event_observations = 0;   ///< used in this solve
   int depth_observations = 0;
   int outliers = 0;                ///< residual blocks beyond their Huber threshold at the solution

@@ -307,7 +307,11 @@ void Perception::process_depth(const RegisteredDepth& depth) {
     query.box_size_px = p.box_size_px;
     auto it = estimators_.find(track.id());
     const auto T_W_E = camera_pose(depth.t);
-    if (it != estimators_.end() && it->second.fusion.latest().usable && T_W_E) {
+    // Gate the depth on the trajectory only when that trajectory was itself fitted to depth: an
+    // event-only fit knows the range only through gravity's curvature, and its (linearised)
+    // covariance can be confidently wrong; gating on it locked the true depth out (swing).
+    if (it != estimators_.end() && it->second.fusion.latest().usable &&
+        it->second.fusion.latest().method == EstimateMethod::kFusion && T_W_E) {
       const TrajectoryEstimate& est = it->second.fusion.latest();
       const Eigen::Vector3d p_E = T_W_E->inverse() * est.trajectory.position(depth.t);
       query.expected_depth_m = p_E.z();
