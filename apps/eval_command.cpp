@@ -53,7 +53,7 @@ nlohmann::json evaluate(const std::string& results, const std::string& dataset) 
   metrics["relative_contrast"] =
       relative_contrast_of(truth, summary.value("method", "rotation_translation"));
 
-  // APE of each (track, method)'s final usable estimate over its observed interval.
+  // APE of each (track, method)'s final converged estimate over its observed interval (Table II).
   const std::vector<EstimateRecord> estimates = read_estimates(results);
   metrics["ape"] = nlohmann::json::array();
   for (const auto& [key, e] : final_estimates(estimates)) {
@@ -69,7 +69,8 @@ nlohmann::json evaluate(const std::string& results, const std::string& dataset) 
                               {"min", s.min},
                               {"max", s.max},
                               {"rmse", s.rmse},
-                              {"samples", s.count}});
+                              {"samples", s.count},
+                              {"usable", e.usable}});
   }
 
   // Prediction error at the true closest approach vs time since the track's first detection.
@@ -89,7 +90,8 @@ nlohmann::json evaluate(const std::string& results, const std::string& dataset) 
          {"method", mode_name(e.mode)},
          {"since_first_detection_s", to_seconds(e.t - first_detection[e.track])},
          {"t_closest_true", to_seconds(closest->t)},
-         {"error_m", *error}});
+         {"error_m", *error},
+         {"usable", e.usable}});
   }
   std::ofstream(results + "/metrics.json") << metrics.dump(2) << "\n";
   spdlog::info("metrics written to {}/metrics.json", results);

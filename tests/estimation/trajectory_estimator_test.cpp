@@ -266,6 +266,7 @@ TEST(TrajectoryEstimator, ShortHeadOnArcIsNotUsableUntilTheVelocityIsPinned) {
   EXPECT_LE(e.position_sigma_m, 1.0) << e.brief_report();  // the old criterion passed
   EXPECT_GT(e.horizon_sigma_m, 1.0) << e.brief_report();
   EXPECT_FALSE(e.usable) << e.brief_report();
+  EXPECT_TRUE(e.converged) << e.brief_report();  // an exact fit, only not trusted ahead
   EXPECT_NE(e.message.find("ahead"), std::string::npos) << e.message;
   // horizon_sigma_m is the covariance of p(t_last + 0.5 s) = p0 + τ v0, propagated by hand.
   const double tau = to_seconds(e.t_last - e.trajectory.t0) + 0.5;

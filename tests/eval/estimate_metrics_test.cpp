@@ -23,8 +23,8 @@ std::pair<Eigen::Vector3d, Eigen::Vector3d> thrown(double t) {
 const BallisticTrajectory kTrue{ms(50), {0.5, 0, 5}, {-2, 0, 0}, Eigen::Vector3d::Zero()};
 
 EstimateRecord record(int t_ms, int track, EstimatorMode mode, const BallisticTrajectory& traj,
-                      int first_ms = 50, int last_ms = 0) {
-  return {ms(t_ms), track, mode, ms(first_ms), ms(last_ms ? last_ms : t_ms), traj};
+                      int first_ms = 50, int last_ms = 0, bool usable = true) {
+  return {ms(t_ms), track, mode, ms(first_ms), ms(last_ms ? last_ms : t_ms), traj, usable};
 }
 
 BallisticTrajectory shifted(const Eigen::Vector3d& d) {
@@ -83,6 +83,7 @@ TEST(BallEstimateTiming, FirstEstimateOfATrackFollowingTheBall) {
   const std::vector<EstimateRecord> records{
       record(60, 9, EstimatorMode::kFusion, kTrue),     // a background track: not the ball's
       record(70, 3, EstimatorMode::kMonocular, kTrue),  // another estimator
+      record(75, 3, EstimatorMode::kFusion, shifted({0, 9, 0}), 50, 0, false),  // converged, not usable
       record(80, 3, EstimatorMode::kFusion, shifted({0, 0.1, 0})),  // first: 0.1 m off everywhere
       record(150, 3, EstimatorMode::kFusion, kTrue)};               // final: exact
   const BallEstimateTiming t = ball_estimate_timing(truth, windows, records, 1);

@@ -380,6 +380,7 @@ const TrajectoryEstimate& TrajectoryEstimator::solve() {
   }
   previous_ = e.trajectory;  // warm start for the next solve
   bool usable = summary.termination_type == ceres::CONVERGENCE;
+  e.converged = usable;
   if (!usable) append(e.message, "not converged: " + summary.message);
 
   // Outliers: whitened residual blocks beyond their Huber threshold (residual order = block order).

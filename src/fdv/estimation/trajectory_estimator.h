@@ -107,6 +107,9 @@ struct EstimatorOptions {
 /// Result of one solve, in the spirit of ceres::Solver::Summary.
 struct TrajectoryEstimate {
   bool usable = false;  ///< converged, well constrained, in front of the cameras
+  /// Ceres converged to a trajectory in front of the cameras (usable may still be false: rank
+  /// or covariance tests). The in-sample fit the paper's Table II scores.
+  bool converged = false;
   EstimateMethod method = EstimateMethod::kNone;
   BallisticTrajectory trajectory;
   /// Covariance of (p0_W, v0_W) at trajectory.t0 [m², m²/s²], when the problem has full rank.

@@ -50,7 +50,8 @@ BallEstimateTiming ball_estimate_timing(const DatasetTruth& truth,
   out.closest = true_closest_approach(truth, id);
   const std::vector<int> tracks = tracks_following(truth, windows, id);
   for (const EstimateRecord& e : records) {
-    if (e.mode != mode || std::find(tracks.begin(), tracks.end(), e.track) == tracks.end())
+    if (!e.usable || e.mode != mode ||
+        std::find(tracks.begin(), tracks.end(), e.track) == tracks.end())
       continue;
     if (!out.first || e.t < out.first->t) out.first = e;
     if (e.track == tracks.front()) out.final = e;

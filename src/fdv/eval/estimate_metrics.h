@@ -10,7 +10,9 @@
 ///   BallEstimateTiming timing = ball_estimate_timing(truth, windows, estimates, ball);
 ///
 /// Records come from a run in memory (run_experiment) or from a results folder (read_estimates).
-/// Only usable estimates are records.
+/// Records are the converged estimates; `usable` marks those fit to act on (the first-estimate
+/// timing counts only these; APE scores the final converged fit, usable or not, as Table II
+/// compares estimators on their in-sample fits).
 #include <map>
 #include <optional>
 #include <utility>
@@ -31,6 +33,7 @@ struct EstimateRecord {
   EstimatorMode mode = EstimatorMode::kFusion;
   TimeNs t_first = 0, t_last = 0;  ///< observed interval
   BallisticTrajectory trajectory;
+  bool usable = true;  ///< TrajectoryEstimate::usable (converged is implied)
 };
 
 /// The ball an estimate follows: the one closest to it on average over its observed interval; -1
@@ -48,7 +51,7 @@ std::vector<double> ape_samples(const DatasetTruth& truth, const EstimateRecord&
 std::optional<double> prediction_error(const DatasetTruth& truth, const EstimateRecord& e, int id,
                                        TimeNs t);
 
-/// How early a usable estimate of ball `id` came (paper §V-D: the ball must be estimated long
+/// How early a usable estimate of ball `id` came (records not usable are skipped) (paper §V-D: the ball must be estimated long
 /// before it arrives) and how well the first and the final one predicted the closest approach.
 struct BallEstimateTiming {
   std::optional<TimeNs> in_flight_from;        ///< truth: first_in_flight_in_view()

@@ -123,9 +123,9 @@ ExperimentRun run_experiment(const DatasetTruth& truth, const ExperimentOptions&
     }
   };
   callbacks.on_estimate = [&](const EstimateResult& e) {
-    if (!e.estimate || !e.estimate->usable) return;
-    run.estimates.push_back(
-        {e.t, e.track_id, e.mode, e.estimate->t_first, e.estimate->t_last, e.estimate->trajectory});
+    if (!e.estimate || !e.estimate->converged) return;
+    run.estimates.push_back({e.t, e.track_id, e.mode, e.estimate->t_first, e.estimate->t_last,
+                             e.estimate->trajectory, e.estimate->usable});
   };
   callbacks.on_warning = [&](const std::string& w) { spdlog::warn("{}: {}", truth.dir, w); };
   run.counters =

@@ -1,7 +1,7 @@
 #pragma once
 /// Running the pipeline for an experiment: replaying a recording through fdv::Perception, a cache
 /// of simulated datasets, and one run over a simulated dataset that keeps what the evaluation
-/// needs (detections, per-window timings, relative contrast, usable estimates) in memory.
+/// needs (detections, per-window timings, relative contrast, converged estimates, usable flagged) in memory.
 ///
 ///   const std::string dir = ensure_simulated("scene2_ball", 101, "out/cache");   // simulates once
 ///   const DatasetTruth truth = load_dataset_truth(dir);
@@ -65,7 +65,7 @@ struct ExperimentRun {
       compensation_ms;               ///< per window: ego-motion compensation (paper Table I's time)
   std::vector<double> front_end_ms;  ///< per window: compensation + detection
   std::vector<double> relative_contrast;  ///< η of every window and ball where it is defined
-  std::vector<EstimateRecord> estimates;  ///< every usable estimate, in the order they were made
+  std::vector<EstimateRecord> estimates;  ///< every converged estimate (usable flagged), in order made
   PerceptionCounters counters;
 };
 

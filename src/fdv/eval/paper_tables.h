@@ -74,6 +74,7 @@ struct ApeRow {
   EstimatorMode mode = EstimatorMode::kFusion;
   std::vector<double> samples;                       ///< APE at every truth sample, all seeds
   std::vector<std::optional<double>> rmse_per_seed;  ///< nothing where that seed had no estimate
+  int usable_final_seeds = 0;  ///< seeds whose scored (final converged) estimate was also usable
   int seeds_with_estimate() const;
 };
 

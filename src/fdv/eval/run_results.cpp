@@ -41,8 +41,11 @@ std::vector<EstimateRecord> read_estimates(const std::string& results_dir) {
   for (std::size_t n = 1; std::getline(in, line); ++n) {
     try {
       const auto j = nlohmann::json::parse(line);
-      if (!j.at("usable").get<bool>()) continue;
+      // "converged" is absent from results written before it existed: usable implied it.
+      const bool usable = j.at("usable").get<bool>();
+      if (!j.value("converged", usable)) continue;
       EstimateRecord e;
+      e.usable = usable;
       e.track = j.at("track");
       const std::string method = j.at("method");
       if (method != "fusion" && method != "mono")
