@@ -17,7 +17,7 @@
 #include "fdv/core/error.h"
 #include "fdv/eval/experiment.h"
 #include "fdv/eval/statistics.h"
-#include "fdv/io/config/frontend_config.h"
+#include "fdv/io/config/backend_config.h"
 #include "fdv/pipeline/perception.h"
 
 namespace fdv::cli {
@@ -43,20 +43,14 @@ PerceptionOptions load_options(const RunArgs& args) {
     YAML::Node root;
     try {
       root = YAML::LoadFile(args.config);
+    } catch (const YAML::BadFile&) {
+      throw InputError(args.config, "", "cannot open the file");
     } catch (const YAML::Exception& e) {
       throw InputError(args.config, "line " + std::to_string(e.mark.line + 1), e.msg);
     }
-    for (const auto& kv : root) {
-      const auto key = kv.first.as<std::string>();
-      if (key != "compensation" && key != "detector" && key != "depth_registration" && key != "window_ms")
-        throw InputError(args.config, "key " + key,
-                         "unknown section (expected compensation, detector, depth_registration, window_ms)");
-    }
-    o.compensation = load_compensation_options(root["compensation"], args.config);
-    o.detection = load_detector_options(root["detector"], args.config);
-    o.depth_registration = load_depth_registration_options(root["depth_registration"], args.config);
-    if (root["window_ms"]) o.windows.window_ns = from_seconds(root["window_ms"].as<double>() * 1e-3);
+    o = load_perception_options(root, args.config);
   }
+  // Command-line flags override the file.
   if (!args.method.empty()) {
     if (!parse_compensation_method(args.method))
       throw ConfigError("unknown --method '" + args.method +
@@ -187,6 +181,7 @@ class Outputs {
                         {"method", fusion ? "fusion" : "mono"},
                         {"fit", to_string(est.method)},
                         {"usable", est.usable},
+                        {"converged", est.converged},
                         {"t0", to_seconds(est.trajectory.t0)},
                         {"p0", vec_json(est.trajectory.p0_W)},
                         {"v0", vec_json(est.trajectory.v0_W)},
@@ -353,7 +348,8 @@ void add_run_command(CLI::App& app) {
   static RunArgs args;
   cmd->add_option("input", args.input, "recording file or dataset folder")->required();
   cmd->add_option("--calib", args.calib, "calibration file (project YAML or OpenCV XML/YAML)");
-  cmd->add_option("--config", args.config, "YAML options (sections compensation, detector, depth_registration)");
+  cmd->add_option("--config", args.config,
+                  "YAML options of every stage (docs/DETECTION.md, docs/ESTIMATION.md)");
   cmd->add_option("--method", args.method, "compensation: none, rotation, rotation_translation, contrast_max");
   cmd->add_option("--out", args.out, "output folder")->required();
   cmd->add_flag("--visualize", args.visualize, "write a PNG per window (N, segmentation, detection)");

@@ -2,103 +2,31 @@
 
 #include <yaml-cpp/yaml.h>
 
-#include <cmath>
-#include <functional>
-#include <limits>
-#include <map>
-
 #include "fdv/core/error.h"
+#include "fdv/io/config/yaml_section.h"
 
 namespace fdv {
-namespace {
-
-/// Applies each key of a YAML map through a table of named setters.
-class Section {
- public:
-  Section(const YAML::Node& node, std::string file, std::string name)
-      : node_(node), file_(std::move(file)), name_(std::move(name)) {
-    if (node_ && !node_.IsNull() && !node_.IsMap()) throw InputError(file_, "key " + name_, "expected a map of options");
-  }
-  using Setter = std::function<void(const YAML::Node&, const std::string& key)>;
-  void on(const std::string& key, Setter setter) { setters_[key] = std::move(setter); }
-
-  void apply() const {
-    if (!node_ || node_.IsNull()) return;
-    for (const auto& kv : node_) {
-      const std::string key = kv.first.as<std::string>();
-      const auto it = setters_.find(key);
-      if (it == setters_.end()) throw InputError(file_, "key " + name_ + "." + key, "unknown key");
-      it->second(kv.second, name_ + "." + key);
-    }
-  }
-
-  double number(const YAML::Node& n, const std::string& key) const {
-    double v;
-    try {
-      v = n.as<double>();
-    } catch (const YAML::Exception&) {
-      throw InputError(file_, "key " + key, "expected a number, got '" + scalar(n) + "'");
-    }
-    if (!std::isfinite(v)) throw InputError(file_, "key " + key, "expected a finite number");
-    return v;
-  }
-  long long integer(const YAML::Node& n, const std::string& key) const {
-    try {
-      return n.as<long long>();
-    } catch (const YAML::Exception&) {
-      throw InputError(file_, "key " + key, "expected an integer, got '" + scalar(n) + "'");
-    }
-  }
-  int int32(const YAML::Node& n, const std::string& key) const {
-    const long long v = integer(n, key);
-    if (v < std::numeric_limits<int>::min() || v > std::numeric_limits<int>::max())
-      throw InputError(file_, "key " + key, "integer out of range");
-    return static_cast<int>(v);
-  }
-  bool boolean(const YAML::Node& n, const std::string& key) const {
-    try {
-      return n.as<bool>();
-    } catch (const YAML::Exception&) {
-      throw InputError(file_, "key " + key, "expected true or false, got '" + scalar(n) + "'");
-    }
-  }
-  std::string text(const YAML::Node& n, const std::string& key) const {
-    if (!n.IsScalar()) throw InputError(file_, "key " + key, "expected a string");
-    return n.Scalar();
-  }
-  TimeNs millis(const YAML::Node& n, const std::string& key) const {
-    const double ms = number(n, key);
-    if (std::abs(ms) > 1e9) throw InputError(file_, "key " + key, "duration out of range");
-    return static_cast<TimeNs>(std::llround(ms * 1e6));
-  }
-  void check(const std::string& why) const {
-    if (!why.empty()) throw InputError(file_, "key " + name_, why);
-  }
-
- private:
-  static std::string scalar(const YAML::Node& n) { return n.IsScalar() ? n.Scalar() : "(not a scalar)"; }
-  YAML::Node node_;
-  std::string file_, name_;
-  std::map<std::string, Setter> setters_;
-};
-
-}  // namespace
+using config_internal::Section;
 
 CompensationOptions load_compensation_options(const YAML::Node& node, const std::string& file,
                                               const std::string& section) {
   CompensationOptions o;
   Section s(node, file, section);
   s.on("method", [&](const YAML::Node& n, const std::string& k) { o.method = s.text(n, k); });
-  s.on("rotation_refresh_ms", [&](const YAML::Node& n, const std::string& k) { o.rotation_refresh_ns = s.millis(n, k); });
-  s.on("max_imu_gap_ms", [&](const YAML::Node& n, const std::string& k) { o.max_imu_gap_ns = s.millis(n, k); });
-  s.on("max_depth_age_ms", [&](const YAML::Node& n, const std::string& k) { o.max_depth_age_ns = s.millis(n, k); });
+  s.on("rotation_refresh_ms",
+       [&](const YAML::Node& n, const std::string& k) { o.rotation_refresh_ns = s.millis(n, k); });
+  s.on("max_imu_gap_ms",
+       [&](const YAML::Node& n, const std::string& k) { o.max_imu_gap_ns = s.millis(n, k); });
+  s.on("max_depth_age_ms",
+       [&](const YAML::Node& n, const std::string& k) { o.max_depth_age_ns = s.millis(n, k); });
   s.on("missing_depth", [&](const YAML::Node& n, const std::string& k) {
     const std::string v = s.text(n, k);
     const auto p = parse_missing_depth_policy(v);
     if (!p) throw InputError(file, "key " + k, "'" + v + "' is not median_depth or rotation_only");
     o.missing_depth = *p;
   });
-  s.on("hole_fill_radius_px", [&](const YAML::Node& n, const std::string& k) { o.hole_fill_radius_px = s.int32(n, k); });
+  s.on("hole_fill_radius_px",
+       [&](const YAML::Node& n, const std::string& k) { o.hole_fill_radius_px = s.int32(n, k); });
   s.on("max_events_per_window", [&](const YAML::Node& n, const std::string& k) {
     const long long v = s.integer(n, k);
     if (v < 1) throw InputError(file, "key " + k, "must be positive");
@@ -107,12 +35,17 @@ CompensationOptions load_compensation_options(const YAML::Node& node, const std:
   s.on("contrast_max", [&](const YAML::Node& n, const std::string& k) {
     Section cm(n, file, k);
     ContrastMaxOptions& c = o.contrast_max;
-    cm.on("max_fit_events", [&](const YAML::Node& m, const std::string& kk) { c.max_fit_events = cm.int32(m, kk); });
-    cm.on("blur_sigma_px", [&](const YAML::Node& m, const std::string& kk) { c.blur_sigma_px = cm.number(m, kk); });
-    cm.on("max_iterations", [&](const YAML::Node& m, const std::string& kk) { c.max_iterations = cm.int32(m, kk); });
-    cm.on("max_expansion_per_s",
-          [&](const YAML::Node& m, const std::string& kk) { c.max_expansion_per_s = cm.number(m, kk); });
-    cm.on("warm_start", [&](const YAML::Node& m, const std::string& kk) { c.warm_start = cm.boolean(m, kk); });
+    cm.on("max_fit_events",
+          [&](const YAML::Node& m, const std::string& kk) { c.max_fit_events = cm.int32(m, kk); });
+    cm.on("blur_sigma_px",
+          [&](const YAML::Node& m, const std::string& kk) { c.blur_sigma_px = cm.number(m, kk); });
+    cm.on("max_iterations",
+          [&](const YAML::Node& m, const std::string& kk) { c.max_iterations = cm.int32(m, kk); });
+    cm.on("max_expansion_per_s", [&](const YAML::Node& m, const std::string& kk) {
+      c.max_expansion_per_s = cm.number(m, kk);
+    });
+    cm.on("warm_start",
+          [&](const YAML::Node& m, const std::string& kk) { c.warm_start = cm.boolean(m, kk); });
     cm.apply();
   });
   s.apply();
@@ -120,7 +53,8 @@ CompensationOptions load_compensation_options(const YAML::Node& node, const std:
   return o;
 }
 
-DetectorOptions load_detector_options(const YAML::Node& node, const std::string& file, const std::string& section) {
+DetectorOptions load_detector_options(const YAML::Node& node, const std::string& file,
+                                      const std::string& section) {
   DetectorOptions o;
   Section s(node, file, section);
   auto num = [&](const char* key, double& field) {
@@ -157,12 +91,15 @@ DetectorOptions load_detector_options(const YAML::Node& node, const std::string&
   return o;
 }
 
-DepthRegistrationOptions load_depth_registration_options(const YAML::Node& node, const std::string& file,
+DepthRegistrationOptions load_depth_registration_options(const YAML::Node& node,
+                                                         const std::string& file,
                                                          const std::string& section) {
   DepthRegistrationOptions o;
   Section s(node, file, section);
-  s.on("min_depth_m", [&](const YAML::Node& n, const std::string& k) { o.min_depth_m = s.number(n, k); });
-  s.on("max_depth_m", [&](const YAML::Node& n, const std::string& k) { o.max_depth_m = s.number(n, k); });
+  s.on("min_depth_m",
+       [&](const YAML::Node& n, const std::string& k) { o.min_depth_m = s.number(n, k); });
+  s.on("max_depth_m",
+       [&](const YAML::Node& n, const std::string& k) { o.max_depth_m = s.number(n, k); });
   s.apply();
   s.check(o.validate());
   return o;
