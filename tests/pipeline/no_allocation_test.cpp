@@ -1,11 +1,7 @@
 // No heap allocation per window in the event path once warmed up: windower -> compensation (all
-// three IMU / odometry driven methods, new depth frames included) -> time images. A counting
-// global operator new / delete replaces the library's in this test binary only (its own
+// three IMU / odometry driven methods, new depth frames included) -> time images -> detector. A
+// counting global operator new / delete replaces the library's in this test binary only (its own
 // executable: the replacement is process-wide), and counts while a window is being processed.
-//
-// The detector's allocations are measured too (DISABLED_ test, run it with
-// --gtest_also_run_disabled_tests): they come from OpenCV calls inside detector.cpp /
-// segmentation.cpp / gaussian_fit.cpp (docs/BENCHMARKS.md lists them), not from this path.
 #include <gtest/gtest.h>
 
 #include <atomic>
@@ -107,16 +103,18 @@ Stream make_stream() {
 struct Counts {
   long path = 0, detector = 0;
   int windows = 0;
+  int candidates = 0, retrievals = 0;  ///< detector paths taken (DetectionResult)
 };
 
-Counts run(const char* method, std::size_t max_events_per_window) {
+Counts run(const char* method, std::size_t max_events_per_window, const DetectorOptions& detector_options = {},
+           std::span<const DetectionPrior> priors = {}) {
   static const Stream s = make_stream();
   Calibration calib;
   calib.event_camera = camera();
   CompensationOptions copt;
   copt.method = method;
   auto comp = make_compensator(calib, copt);
-  Detector detector(DetectorOptions{}, calib.event_camera);
+  Detector detector(detector_options, calib.event_camera);
   EventWindower windower({.window_ns = kWindow, .max_events_per_window = max_events_per_window});
   TimeImages ti;
   Counts c;
@@ -131,12 +129,14 @@ Counts run(const char* method, std::size_t max_events_per_window) {
     CompensatedEventsView v{cw.t_start_ns, cw.t_end_ns, cw.width, cw.height, cw.pixel(), cw.t_s()};
     build_time_images(v, ti);
     const long before_detector = g_allocations.load();
-    detector.detect(v);
+    const DetectionResult r = detector.detect(v, priors);
     const long in_detector = g_allocations.load() - before_detector;
     g_allocations -= in_detector;  // what is left is the path's
     if (g_counting) {
       c.detector += in_detector;
       ++c.windows;
+      c.candidates += r.candidates;
+      c.retrievals += r.timings.retrieval_ms > 0;
     }
   };
   const std::span<const Event> all(s.events);
@@ -181,13 +181,27 @@ TEST(NoAllocation, CountingAllocatorSeesAllocations) {
   EXPECT_GE(g_allocations.exchange(0), 2);
 }
 
-// Not a pass/fail check of this path: the detector (detector.cpp, segmentation.cpp,
-// gaussian_fit.cpp) allocates inside OpenCV calls each window; run with
-// --gtest_also_run_disabled_tests to see how many.
-TEST(NoAllocation, DISABLED_Detector) {
+TEST(NoAllocation, DetectorAfterWarmUp) {
+  // Time images, segmentation, pre-processing, the candidates' Gaussian fits, region retrieval
+  // and refinement all work in the Detector's buffers (sized in its constructor).
   const Counts c = run("rotation_translation", 1'000'000);
-  std::printf("detector: %ld allocations in %d windows\n", c.detector, c.windows);
-  EXPECT_EQ(c.detector, 0);
+  ASSERT_EQ(c.windows, kWindows - kWarmUp - 1);
+  EXPECT_EQ(c.detector, 0) << "allocations in " << c.windows << " windows";
+}
+
+TEST(NoAllocation, DetectorRetrievalBlankingAndPriorsToo) {
+  // The paths a clean blob does not take: a fit that never converges (one iteration) sends every
+  // candidate to region retrieval, an unreachable event density fails them all (blanking and the
+  // next candidates), and a track's prior adds the track-aided look.
+  DetectorOptions o;
+  o.fit_max_iterations = 1;
+  o.min_event_density = 1e3;
+  const DetectionPrior prior{{200.0, 150.0}, {30.0, 30.0}};
+  const Counts c = run("rotation_translation", 1'000'000, o, std::span<const DetectionPrior>(&prior, 1));
+  ASSERT_EQ(c.windows, kWindows - kWarmUp - 1);
+  EXPECT_GT(c.candidates, c.windows);  // several candidates per window, and retrieval, were run
+  EXPECT_GT(c.retrievals, 0);
+  EXPECT_EQ(c.detector, 0) << "allocations in " << c.windows << " windows";
 }
 
 }  // namespace

@@ -7,10 +7,13 @@
 #include <sstream>
 
 #include "fdv/core/error.h"
-#include "fdv/detection/segmentation.h"
 
 namespace fdv {
 namespace {
+
+void validate_or_throw(const DetectorOptions& o) {
+  if (const auto why = o.validate(); !why.empty()) throw ConfigError("detector: " + why);
+}
 
 using Clock = std::chrono::steady_clock;
 double ms_since(Clock::time_point t0) {
@@ -75,9 +78,19 @@ std::string DetectorOptions::validate() const {
 }
 
 Detector::Detector(const DetectorOptions& options, const PinholeCamera& event_camera)
-    : options_(options), camera_(event_camera) {
-  if (const auto why = options.validate(); !why.empty()) throw ConfigError("detector: " + why);
+    : options_(options), camera_(event_camera), pre_((validate_or_throw(options), options)) {
   if (const auto why = event_camera.validate(); !why.empty()) throw ConfigError("detector: event camera: " + why);
+  allocate(camera_.width, camera_.height);
+}
+
+void Detector::allocate(int width, int height) {
+  S_.create(height, width, CV_32F);
+  S_.setTo(0);
+  pre_.allocate({width, height});
+  region_.reserve(width, height);
+  blanked_.create(height, width, CV_32F);
+  blanked_.setTo(0);
+  blanked_bounds_ = {};
 }
 
 Eigen::Vector2d Detector::undistorted_to_raw(const Eigen::Vector2d& uv) const {
@@ -194,8 +207,8 @@ std::optional<Detector::Candidate> Detector::evaluate_candidate(const Compensate
     t = Clock::now();
     const cv::Rect search = box_pixels(initial, w, h);
     std::optional<Region> region;
-    if (!fit.empty_roi) region = retrieve_region(P, fit.roi(), search, o, mask_, labels_, stats_, centroids_, mass_);
-    if (!region) region = retrieve_region(P, initial, search, o, mask_, labels_, stats_, centroids_, mass_);
+    if (!fit.empty_roi) region = retrieve_region(P, fit.roi(), search, o, region_);
+    if (!region) region = retrieve_region(P, initial, search, o, region_);
     res.timings.retrieval_ms += ms_since(t);
     if (!region || region->box.width() > o.roi_max_fraction * w || region->box.height() > o.roi_max_fraction * h) {
       why_not = DetectionStatus::kNoRegion;
@@ -234,7 +247,7 @@ DetectionResult Detector::detect(const CompensatedEventsView& window, std::span<
     if (s != DetectionStatus::kDetected && s != DetectionStatus::kNoRegion &&
         s != DetectionStatus::kTooFewEventsInBox && s != DetectionStatus::kRemovedAsNoise &&
         s != DetectionStatus::kWeakEvidence)
-      P_.setTo(0);  // no stale image from an earlier window
+      pre_.clear();  // no stale image from an earlier window
     res.status = s;
     res.timings.total_ms = ms_since(t_total);
     return res;
@@ -244,48 +257,55 @@ DetectionResult Detector::detect(const CompensatedEventsView& window, std::span<
   build_time_images(window, ti_);
   res.timings.time_images_ms = ms_since(t);
   res.mean_normalized = ti_.mean_normalized;
-  S_.create(h, w, CV_32F);
-  P_.create(h, w, CV_32F);
+  if (S_.rows != h || S_.cols != w) allocate(w, h);
   if (ti_.events < o.min_window_events) {
-    S_.setTo(0);
+    zero_rect(S_, {0, 0, w, h});
     return finish(DetectionStatus::kTooFewEvents);
   }
 
   t = Clock::now();
   res.theta = adaptive_threshold(ti_.mean_normalized, window.omega_rad_s, window.speed_m_s, o);
-  res.segmented_pixels = segment(ti_, res.theta, o.min_pixel_events, S_, mask_);
+  const SegmentResult seg = segment(ti_, res.theta, o.min_pixel_events, S_);
+  res.segmented_pixels = seg.pixels;
   res.timings.segmentation_ms = ms_since(t);
   if (!(ti_.t_max_s > ti_.t_min_s)) return finish(DetectionStatus::kNoTemporalContrast);
   if (res.segmented_pixels == 0) return finish(DetectionStatus::kNothingSegmented);
   if (res.segmented_pixels > o.max_segmented_fraction * w * h) return finish(DetectionStatus::kFlooded);
 
   t = Clock::now();
-  preprocess(S_, o, P_, scratch_);
+  const cv::Mat& P = pre_.run(S_, seg.bounds);
+  // P is 0 outside `support`: the maxima below search only there (the same first maximum in
+  // raster order as over the whole image).
+  const cv::Rect support = pre_.nonzero_bounds();
   res.timings.preprocess_ms = ms_since(t);
 
   // Candidates: Algorithm 1 from the strongest pattern; a candidate that yields no plausible box or
   // fails the evidence gates (min_peak, min_event_density) is blanked and the next strongest pattern
-  // is tried, up to max_candidates. The blanking works on a copy: P_ stays as pre-processed.
-  const cv::Mat* image = &P_;
+  // is tried, up to max_candidates. The blanking works on a copy: P stays as pre-processed.
+  const cv::Mat* image = &P;
   std::optional<Candidate> found;
   DetectionStatus why_not = DetectionStatus::kRemovedAsNoise;
-  for (int attempt = 0; attempt < o.max_candidates; ++attempt) {
+  for (int attempt = 0; attempt < o.max_candidates && support.area() > 0; ++attempt) {
     double p_max = 0;
     cv::Point arg_max;
-    cv::minMaxLoc(*image, nullptr, &p_max, nullptr, &arg_max);
+    cv::minMaxLoc((*image)(support), nullptr, &p_max, nullptr, &arg_max);
+    arg_max += support.tl();
     if (!(p_max > 0) || p_max < o.min_peak * o.min_peak) break;  // no pattern left can pass
     ++res.candidates;
     Box2D blank;
     found = evaluate_candidate(window, *image, arg_max, o.min_peak, res, why_not, blank);
     if (found) break;
-    if (image == &P_) {
-      P_.copyTo(blanked_);
+    if (image == &P) {
+      // Only P's support is copied; blanked_ is kept 0 elsewhere.
+      zero_rect(blanked_, blanked_bounds_);
+      P(support).copyTo(blanked_(support));
+      blanked_bounds_ = support;
       image = &blanked_;
     }
     // The seed's own neighbourhood always goes, so that the next attempt starts elsewhere.
     const double r = 0.5 * (o.mean_filter_px + o.opening_px);
-    blanked_(box_pixels({arg_max.x - r, arg_max.y - r, arg_max.x + r + 1, arg_max.y + r + 1}, w, h)).setTo(0);
-    blanked_(box_pixels(blank, w, h)).setTo(0);
+    zero_rect(blanked_, box_pixels({arg_max.x - r, arg_max.y - r, arg_max.x + r + 1, arg_max.y + r + 1}, w, h));
+    zero_rect(blanked_, box_pixels(blank, w, h));
   }
   // Track-aided look: where a confirmed track expects its object, the strongest pattern inside the
   // gate may pass with the lower prior_min_peak (its box must stay centred inside the gate).
@@ -297,11 +317,11 @@ DetectionResult Detector::detect(const CompensatedEventsView& window, std::span<
     if (g.area() == 0) continue;
     double p_max = 0;
     cv::Point arg_max;
-    cv::minMaxLoc(P_(g), nullptr, &p_max, nullptr, &arg_max);
+    cv::minMaxLoc(P(g), nullptr, &p_max, nullptr, &arg_max);
     if (!(p_max > 0) || p_max < o.prior_min_peak * o.prior_min_peak) continue;
     ++res.candidates;
     Box2D blank;
-    found = evaluate_candidate(window, P_, arg_max + g.tl(), o.prior_min_peak, res, why_not, blank);
+    found = evaluate_candidate(window, P, arg_max + g.tl(), o.prior_min_peak, res, why_not, blank);
     if (found && !gate->contains(found->center)) found.reset();
     res.track_aided = found.has_value();
   }

@@ -23,6 +23,7 @@
 #include "fdv/detection/detection2d.h"
 #include "fdv/detection/detector_options.h"
 #include "fdv/detection/gaussian_fit.h"
+#include "fdv/detection/segmentation.h"
 #include "fdv/detection/time_images.h"
 
 namespace fdv {
@@ -83,7 +84,7 @@ class Detector {
   // Intermediate images of the last call (valid until the next one), for visualisation.
   const TimeImages& time_images() const { return ti_; }
   const cv::Mat& segmentation() const { return S_; }   ///< S, CV_32F
-  const cv::Mat& preprocessed() const { return P_; }   ///< P = (open(mean(S)))², CV_32F (before any blanking)
+  const cv::Mat& preprocessed() const { return pre_.P(); }  ///< P = (open(mean(S)))², CV_32F (before any blanking)
   const DetectorOptions& options() const { return options_; }
 
   /// Undistorted-grid point -> raw sensor pixel, and the box outline's raw bounding box.
@@ -110,11 +111,18 @@ class Detector {
   /// box (DetectorOptions::refine_box_scale), or nothing when too few or outside the box.
   std::optional<std::pair<Eigen::Vector2d, double>> refine_with_events(const CompensatedEventsView& window,
                                                                       const Box2D& box, double t_box_s) const;
+  /// Sizes every image buffer for width × height (S = P = 0).
+  void allocate(int width, int height);
   DetectorOptions options_;
   PinholeCamera camera_;
+  // Buffers, sized to the image in the constructor: detect() does not allocate once the time
+  // images have seen a window (tests/pipeline/no_allocation_test.cpp).
   TimeImages ti_;
-  cv::Mat S_, P_, blanked_, scratch_, mask_, labels_, stats_, centroids_;
-  std::vector<double> mass_;
+  cv::Mat S_;
+  Preprocessor pre_;
+  RegionScratch region_;
+  cv::Mat blanked_;         ///< P with failed candidates blanked; zero outside blanked_bounds_
+  cv::Rect blanked_bounds_;
 };
 
 }  // namespace fdv

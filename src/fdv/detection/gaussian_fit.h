@@ -14,7 +14,9 @@
 /// "J_c ← J(D_P, T)" computes a quantity the paper never uses or defines; it is omitted.)
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
+#include <cstdint>
 #include <optional>
+#include <vector>
 
 #include "fdv/detection/detection2d.h"
 #include "fdv/detection/detector_options.h"
@@ -34,7 +36,9 @@ struct GaussianFit {
   }
 };
 
-/// Runs Algorithm 1 on the pre-processed image P (CV_32F, non-negative) from C0, L0.
+/// Runs Algorithm 1 on the pre-processed image P (CV_32F, non-negative) from C0, L0. Does not
+/// allocate. The marginal sums are summed in float in the order cv::reduce sums them (the earlier
+/// version called it), so results are the same to the bit.
 GaussianFit iterative_gaussian_fit(const cv::Mat& P, const Eigen::Vector2d& c0, const Eigen::Vector2d& l0,
                                    const DetectorOptions& o);
 
@@ -48,10 +52,39 @@ struct Region {
   int area_px = 0;
 };
 
+/// Size and bounding box of one connected component (as cv::connectedComponentsWithStats's stats).
+struct ComponentStats {
+  int left = 0, top = 0, width = 0, height = 0, area = 0;
+};
+
+/// 8-connected components of the pixels of `image` (CV_32F) greater than 0, labelled 1, 2, ... in
+/// the order cv::connectedComponentsWithStats gives them (its scan is by 2x2 blocks: a component's
+/// number follows the first block, in raster order of blocks, that holds one of its pixels);
+/// 0 = background. `labels` (CV_32S) receives the labels in its top-left image.size() corner (it is
+/// reallocated only when smaller than the image); `stats[i]` is label i's (stats[0] unused);
+/// `stack` is scratch. Returns the number of labels including the background, as OpenCV does.
+/// Allocation-free when `labels` is large enough and the vectors' capacities suffice (at most
+/// ⌈w/2⌉·⌈h/2⌉ + 1 components and w·h stack entries).
+int label_components(const cv::Mat& image, cv::Mat& labels, std::vector<ComponentStats>& stats,
+                     std::vector<std::int32_t>& stack);
+
+/// Scratch of retrieve_region, kept between calls: reserve(width, height) once and no call on an
+/// image of at most that size allocates.
+struct RegionScratch {
+  cv::Mat labels;  ///< CV_32S
+  std::vector<ComponentStats> stats;
+  std::vector<std::int32_t> stack;
+  void reserve(int width, int height);
+};
+
 /// Moving-region retrieval: connected components (8-connected) of P > 0 computed inside `search`
 /// (components are cut at its border); of those with at least region_min_area_px pixels that
-/// overlap `roi`, the one with the largest mass Σ P. Nothing when none qualifies. `mask`,
-/// `labels`, `stats`, `centroids`, `mass` are scratch (reused).
+/// overlap `roi`, the one with the largest mass Σ P (on a tie, the lower label). Nothing when none
+/// qualifies.
+std::optional<Region> retrieve_region(const cv::Mat& P, const Box2D& roi, const cv::Rect& search,
+                                      const DetectorOptions& o, RegionScratch& scratch);
+/// The same; the earlier signature (`labels` is reused, `mask`, `stats`, `centroids`, `mass` are no
+/// longer used; allocates its other scratch at each call).
 std::optional<Region> retrieve_region(const cv::Mat& P, const Box2D& roi, const cv::Rect& search,
                                       const DetectorOptions& o, cv::Mat& mask, cv::Mat& labels, cv::Mat& stats,
                                       cv::Mat& centroids, std::vector<double>& mass);

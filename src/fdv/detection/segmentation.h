@@ -3,23 +3,69 @@
 /// (§IV-B.2).
 ///
 ///   double theta = adaptive_threshold(ti.mean_normalized, omega, speed, options);
-///   int kept = segment(ti, theta, S);           // S = N where N ≥ θ (and I > 0), else 0
-///   preprocess(S, options, P, scratch);         // P = (open(mean_filter(S)))²
+///   SegmentResult s = segment(ti, theta, options.min_pixel_events, S);  // S = N where N ≥ θ, else 0
+///   Preprocessor pre(options);                                          // once: buffers are kept
+///   const cv::Mat& P = pre.run(S, s.bounds);                            // P = (open(mean_filter(S)))²
+///
+/// Both passes are allocation-free once their buffers have the image's size, and the
+/// pre-processing only visits the pixels S can make nonzero (the bounds of S grown by the mean
+/// filter's half-width): a window's segmentation is a small part of the image.
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "fdv/detection/detector_options.h"
 #include "fdv/detection/time_images.h"
 
 namespace fdv {
 
+/// m(r) = 0 for a CV_32F or CV_32S image (r clipped to m), row by row: cv::Mat::setTo allocates a
+/// block buffer at each call.
+void zero_rect(cv::Mat& m, const cv::Rect& r);
+
 /// θ(ω, v) = mean_N + a·‖ω‖ + b·‖v‖ + c, mean_N = mean of N over pixels with events.
 double adaptive_threshold(double mean_normalized, double omega_rad_s, double speed_m_s, const DetectorOptions& o);
 
-/// S_ij = N_ij where N_ij ≥ θ and I_ij ≥ min_pixel_events (≥ 1), else 0 (CV_32F). Returns the
-/// number of kept pixels. `scratch_mask` is reused.
+struct SegmentResult {
+  int pixels = 0;   ///< pixels with S > 0
+  cv::Rect bounds;  ///< bounding rectangle of those pixels (empty when none)
+};
+
+/// S_ij = N_ij where N_ij ≥ θ and I_ij ≥ min_pixel_events (≥ 1), else 0 (CV_32F, written over the
+/// whole image; reuses S's buffer when it has the size).
+SegmentResult segment(const TimeImages& ti, double theta, int min_pixel_events, cv::Mat& S);
+/// The same; the earlier signature (`scratch_mask` is no longer used). Returns the kept pixels.
 int segment(const TimeImages& ti, double theta, int min_pixel_events, cv::Mat& S, cv::Mat& scratch_mask);
 
-/// P = (open_k2(mean_k1(S)))², element-wise square, CV_32F. `scratch` is reused.
+/// P = (open_k2(mean_k1(S)))², element-wise square, CV_32F: a k1×k1 mean filter, then the opening
+/// (erosion followed by dilation) with a k2×k2 square, everything zero beyond the image border.
+/// The mean is Σ S over the k1×k1 neighbourhood (row sums, then the sum of k1 row sums, in float)
+/// times float(1/k1²): within 2e-7 of OpenCV's cv::sepFilter2D with a box kernel on values in
+/// [0, 1] (a few float roundings); the opening and the square are exact.
+class Preprocessor {
+ public:
+  /// Kernel sizes from o.mean_filter_px and o.opening_px (validated by DetectorOptions::validate).
+  explicit Preprocessor(const DetectorOptions& o);
+  /// S: CV_32F, zero outside `s_bounds`. Returns P (this object's buffer, valid until the next
+  /// call), the size of S, zero outside nonzero_bounds().
+  const cv::Mat& run(const cv::Mat& S, const cv::Rect& s_bounds);
+  /// Sizes the buffers for images of `size` (P = 0); run() does it when S's size differs.
+  void allocate(cv::Size size);
+  /// P = 0 everywhere (e.g. after a window with nothing to pre-process).
+  void clear();
+  const cv::Mat& P() const { return P_; }
+  /// P is zero outside this rectangle: the bounds of S grown by the mean filter's half-width (the
+  /// opening never extends the support of what it opens).
+  const cv::Rect& nonzero_bounds() const { return written_; }
+
+ private:
+  int h_mean_, h_open_;  // half-widths of the kernels
+  cv::Mat P_, a_, b_;  // P, and two strips of intermediate rows (the passes go through P in strips)
+  std::vector<float> line_;
+  cv::Rect written_;  // where P_ may be nonzero
+};
+
+/// The same computation over the whole image (P and `scratch` are reused when they have the size;
+/// a new Preprocessor's buffers are allocated at each call, so prefer the class in a loop).
 void preprocess(const cv::Mat& S, const DetectorOptions& o, cv::Mat& P, cv::Mat& scratch);
 
 }  // namespace fdv
