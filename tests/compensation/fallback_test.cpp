@@ -171,6 +171,50 @@ TEST(Fallback, PixelsWithoutDepthUseTheMedianAndAreCounted) {
   EXPECT_NEAR(out2.x()[2], expected_u(10, 2.0, 0.003), 1e-3);
 }
 
+// Preparing the depth frame on its arrival (Perception does, off the window path) gives the same
+// window as preparing it inside compensate(), and the window then reports it did not prepare it.
+TEST(Fallback, DepthPreparedOnArrivalGivesTheSameWindow) {
+  const Calibration c = plain_rig();
+  const TimeNs t0 = 0, t1 = 25 * kNsPerMs;
+  RegisteredDepth d = flat_depth(c, 5.0f, t0);
+  for (int y = 0; y < 240; ++y)
+    for (int x = 0; x < 150; ++x) d.depth_m[static_cast<std::size_t>(y) * 320 + x] = 2.0f;
+  d.depth_m[50 * 320 + 250] = 0.0f;
+  const auto ev = some_events(t0, 2000);
+  const auto imu = test::constant_imu({0.2, -0.1, 0.3}, -5 * kNsPerMs, 30 * kNsPerMs, kNsPerMs);
+  const OdometrySample odo = moving(0, {0.5, 0, 4.0});
+  CompensationOptions opt;
+  opt.method = "rotation_translation";
+  auto inside = make_compensator(c, opt), on_arrival = make_compensator(c, opt);
+  const CompensatedWindow& a = inside->compensate({ev, t0, t1, imu, odo, &d});
+  EXPECT_TRUE(a.report.depth_prepared_here);
+  on_arrival->prepare_depth_frame(d);
+  const CompensatedWindow& b = on_arrival->compensate({ev, t0, t1, imu, odo, &d});
+  EXPECT_FALSE(b.report.depth_prepared_here);
+  EXPECT_EQ(b.report.used, CompensationMethod::kRotationTranslation);
+  ASSERT_EQ(a.size(), b.size());
+  ASSERT_GT(a.size(), 1000u);
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    ASSERT_EQ(a.x()[i], b.x()[i]) << i;
+    ASSERT_EQ(a.y()[i], b.y()[i]) << i;
+  }
+  // The same frame again: already prepared. A new frame (another time stamp) is prepared again.
+  EXPECT_FALSE(inside->compensate({ev, t0, t1, imu, odo, &d}).report.depth_prepared_here);
+  RegisteredDepth later = d;
+  later.t = t0 + 5 * kNsPerMs;
+  EXPECT_TRUE(inside->compensate({ev, t0, t1, imu, odo, &later}).report.depth_prepared_here);
+  // Strategies without depth ignore it; a frame of the wrong size is not prepared (compensate
+  // reports it and falls back, as before).
+  opt.method = "rotation";
+  make_compensator(c, opt)->prepare_depth_frame(d);
+  RegisteredDepth wrong = flat_depth(c, 3.0f, t0);
+  wrong.width = 100;
+  on_arrival->prepare_depth_frame(wrong);
+  const CompensatedWindow& w = on_arrival->compensate({ev, t0, t1, imu, odo, &wrong});
+  EXPECT_TRUE(w.report.depth_wrong_size);
+  EXPECT_FALSE(w.report.depth_prepared_here);
+}
+
 TEST(Fallback, BurstIsDecimatedAndCounted) {
   const Calibration c = plain_rig();
   const TimeNs t0 = 0, t1 = 25 * kNsPerMs;

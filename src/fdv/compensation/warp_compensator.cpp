@@ -300,8 +300,19 @@ void WarpCompensator::build_rotation_slots(const Eigen::Vector3d& omega_E, TimeN
   }
 }
 
+bool WarpCompensator::depth_fits(const RegisteredDepth& depth) const {
+  return depth.width == map_->width() && depth.height == map_->height() &&
+         depth.depth_m.size() == static_cast<std::size_t>(map_->width()) * map_->height();
+}
+
+void WarpCompensator::prepare_depth_frame(const RegisteredDepth& depth) {
+  if (method_ == CompensationMethod::kRotationTranslation && !depth.empty() && depth_fits(depth))
+    prepare_depth(depth);
+}
+
 bool WarpCompensator::prepare_depth(const RegisteredDepth& depth) {
   if (&depth == depth_key_ && depth.depth_m.data() == depth_data_key_ && depth.t == depth_t_key_) return depth_usable_;
+  out_.report.depth_prepared_here = true;  // reset by begin_window(); meaningful inside compensate()
   depth_key_ = &depth;
   depth_data_key_ = depth.depth_m.data();
   depth_t_key_ = depth.t;
@@ -396,8 +407,7 @@ const CompensatedWindow& WarpCompensator::compensate(const CompensationInput& in
       rep.odometry_missing = true;
     } else if (!in.depth || in.depth->empty()) {
       rep.depth_missing = true;
-    } else if (in.depth->width != map_->width() || in.depth->height != map_->height() ||
-               in.depth->depth_m.size() != static_cast<std::size_t>(map_->width()) * map_->height()) {
+    } else if (!depth_fits(*in.depth)) {
       rep.depth_wrong_size = true;
     } else if ((rep.depth_age_ns = std::abs(t_mid - in.depth->t)) > options_.max_depth_age_ns) {
       rep.depth_stale = true;

@@ -12,6 +12,7 @@ class WarpCompensator final : public CompensatorBase {
   WarpCompensator(CompensationMethod method, const Calibration& calibration, const CompensationOptions& options,
                   std::shared_ptr<const UndistortionMap> map);
   const CompensatedWindow& compensate(const CompensationInput& input) override;
+  void prepare_depth_frame(const RegisteredDepth& depth) override;
 
  private:
   /// K·R_s for each refresh slot of the window (row-major 3x3 floats), R_s = exp([ω]× t_s) at
@@ -20,6 +21,8 @@ class WarpCompensator final : public CompensatorBase {
   /// Per raw pixel inverse depth ρ = 1/z (holes filled / fallback applied) and a fallback flag,
   /// rebuilt only when the depth frame changes. False when the frame holds no usable depth.
   bool prepare_depth(const RegisteredDepth& depth);
+  /// The frame checks of compensate(): the event camera's size and a matching buffer.
+  bool depth_fits(const RegisteredDepth& depth) const;
 
   std::vector<float> slots_;  ///< n_slots × 9
   // Depth cache.
