@@ -93,9 +93,12 @@ void demo(const DemoArgs& args) {
   }
   for (const auto& a : metrics["ape"])
     std::cout << fmt::format(
-        "  APE of track {} ({}): RMSE {:.3f} m, max {:.3f} m over {:.3f}-{:.3f} s\n",
+        "  APE of track {} ({}): RMSE {:.3f} m, max {:.3f} m over {:.3f}-{:.3f} s{}\n",
         a["track"].get<int>(), a["method"].get<std::string>(), a["rmse"].get<double>(),
-        a["max"].get<double>(), a["t_first"].get<double>(), a["t_last"].get<double>());
+        a["max"].get<double>(), a["t_first"].get<double>(), a["t_last"].get<double>(),
+        a.value("usable", true) ? ""
+                                : " (its final fit, flagged not usable: position too uncertain"
+                                  " 0.5 s ahead)");
   std::cout << "  outputs: " << results
             << " (detections, depth, trajectories, predictions, metrics)\n";
 }
