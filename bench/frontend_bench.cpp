@@ -312,8 +312,8 @@ const StageInputs& stage_inputs() {
     build_time_images(view_of(comp->compensate({.events = ev, .t_start_ns = s.t0, .t_end_ns = s.t0 + s.duration})), r.ti);
     const DetectorOptions o;
     r.theta = adaptive_threshold(r.ti.mean_normalized, 0, 0, o);
-    cv::Mat mask, scratch;
-    segment(r.ti, r.theta, o.min_pixel_events, r.S, mask);
+    cv::Mat scratch;
+    segment(r.ti, r.theta, o.min_pixel_events, r.S);
     preprocess(r.S, o, r.P, scratch);
     cv::minMaxLoc(r.P, nullptr, nullptr, nullptr, &r.arg_max);
     return r;
@@ -321,15 +321,17 @@ const StageInputs& stage_inputs() {
   return in;
 }
 
-// Segmentation (threshold θ on N) and pre-processing (mean filter, opening, square) of one window.
+// Segmentation (threshold θ on N) and pre-processing (mean filter, opening, square) of one window,
+// as the detector runs them (Preprocessor's buffers reused, only inside S's bounds).
 void BM_SegmentationPreprocess(benchmark::State& state) {
   const CvThreads cv_threads(1);
   const StageInputs& in = stage_inputs();
   const DetectorOptions o;
-  cv::Mat S, P, mask, scratch;
+  cv::Mat S;
+  Preprocessor pre(o);
   for (auto _ : state) {
-    benchmark::DoNotOptimize(segment(in.ti, in.theta, o.min_pixel_events, S, mask));
-    preprocess(S, o, P, scratch);
+    const SegmentResult seg = segment(in.ti, in.theta, o.min_pixel_events, S);
+    benchmark::DoNotOptimize(pre.run(S, seg.bounds).data);
   }
 }
 BENCHMARK(BM_SegmentationPreprocess)->Unit(benchmark::kMillisecond);
@@ -355,10 +357,10 @@ void BM_RegionRetrieval(benchmark::State& state) {
   const DetectorOptions o;
   const Box2D initial{in.arg_max.x - 160.0, in.arg_max.y - 120.0, in.arg_max.x + 160.0, in.arg_max.y + 120.0};
   const cv::Rect search = box_pixels(initial, 640, 480);
-  cv::Mat mask, labels, stats, centroids;
-  std::vector<double> mass;
+  RegionScratch scratch;
+  scratch.reserve(640, 480);
   for (auto _ : state) {
-    const auto region = retrieve_region(in.P, initial, search, o, mask, labels, stats, centroids, mass);
+    const auto region = retrieve_region(in.P, initial, search, o, scratch);
     benchmark::DoNotOptimize(region);
   }
 }

@@ -98,11 +98,11 @@ TEST(RegionRetrieval, PicksTheHeaviestComponentInTheRoi) {
   P(cv::Rect(80, 80, 10, 10)).setTo(1.0);    // D: mass 100, outside the ROI
   DetectorOptions o;
   o.region_min_area_px = 4;
-  cv::Mat mask, labels, stats, centroids;
-  std::vector<double> mass;
+  RegionScratch scratch;
+  scratch.reserve(100, 100);
   const Box2D roi{0, 0, 75, 75};
   const cv::Rect full(0, 0, 100, 100);
-  const auto r = retrieve_region(P, roi, full, o, mask, labels, stats, centroids, mass);
+  const auto r = retrieve_region(P, roi, full, o, scratch);
   ASSERT_TRUE(r);
   EXPECT_EQ(r->area_px, 9);
   EXPECT_NEAR(r->mass, 8 * 0.9 + 1.8, 1e-5);
@@ -115,21 +115,21 @@ TEST(RegionRetrieval, PicksTheHeaviestComponentInTheRoi) {
   EXPECT_NEAR(r->center.x(), 41.0, 1e-6);
   EXPECT_NEAR(r->center.y(), 40.9, 1e-6);
   // With an ROI around D only, D is chosen.
-  const auto d = retrieve_region(P, {78, 78, 95, 95}, full, o, mask, labels, stats, centroids, mass);
+  const auto d = retrieve_region(P, {78, 78, 95, 95}, full, o, scratch);
   ASSERT_TRUE(d);
   EXPECT_EQ(d->area_px, 100);
   // Components are computed inside the search area only: D cut to its left 5 columns is still
   // found (area 50), and B is out of reach when the search area excludes it.
-  const auto cut = retrieve_region(P, {78, 78, 95, 95}, cv::Rect(60, 60, 25, 40), o, mask, labels, stats, centroids, mass);
+  const auto cut = retrieve_region(P, {78, 78, 95, 95}, cv::Rect(60, 60, 25, 40), o, scratch);
   ASSERT_TRUE(cut);
   EXPECT_EQ(cut->area_px, 50);
   EXPECT_DOUBLE_EQ(cut->box.x0, 79.5);
   EXPECT_DOUBLE_EQ(cut->box.x1, 84.5);
-  const auto only_a = retrieve_region(P, roi, cv::Rect(0, 0, 35, 35), o, mask, labels, stats, centroids, mass);
+  const auto only_a = retrieve_region(P, roi, cv::Rect(0, 0, 35, 35), o, scratch);
   ASSERT_TRUE(only_a);
   EXPECT_EQ(only_a->area_px, 200);
   // An ROI over nothing: no region.
-  EXPECT_FALSE(retrieve_region(P, {50, 60, 60, 70}, full, o, mask, labels, stats, centroids, mass));
+  EXPECT_FALSE(retrieve_region(P, {50, 60, 60, 70}, full, o, scratch));
 }
 
 }  // namespace

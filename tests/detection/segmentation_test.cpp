@@ -20,18 +20,20 @@ TEST(Segmentation, KeepsNWhereItReachesTheThreshold) {
   TimeImages ti;
   ti.count = (cv::Mat_<std::int32_t>(1, 5) << 1, 2, 1, 3, 0);
   ti.normalized = (cv::Mat_<float>(1, 5) << 0.2f, 0.5f, 0.7f, 0.9f, 0.0f);
-  cv::Mat S, mask;
-  EXPECT_EQ(segment(ti, 0.5, 1, S, mask), 3);  // N ≥ θ keeps the boundary value 0.5
+  cv::Mat S;
+  const SegmentResult first = segment(ti, 0.5, 1, S);
+  EXPECT_EQ(first.pixels, 3);  // N ≥ θ keeps the boundary value 0.5
+  EXPECT_EQ(first.bounds, cv::Rect(1, 0, 3, 1));
   const float expected[5] = {0, 0.5f, 0.7f, 0.9f, 0};
   for (int i = 0; i < 5; ++i) EXPECT_FLOAT_EQ(S.at<float>(0, i), expected[i]) << i;
-  EXPECT_EQ(segment(ti, 0.8, 1, S, mask), 1);
+  EXPECT_EQ(segment(ti, 0.8, 1, S).pixels, 1);
   EXPECT_FLOAT_EQ(S.at<float>(0, 2), 0.0f);
   EXPECT_FLOAT_EQ(S.at<float>(0, 3), 0.9f);
   // θ ≤ 0 cannot turn pixels without events into foreground.
-  EXPECT_EQ(segment(ti, -1.0, 1, S, mask), 4);
+  EXPECT_EQ(segment(ti, -1.0, 1, S).pixels, 4);
   EXPECT_FLOAT_EQ(S.at<float>(0, 4), 0.0f);
   // At least 2 events per pixel: the single-event pixels (0.7) drop out, 0.5 (2) and 0.9 (3) stay.
-  EXPECT_EQ(segment(ti, 0.5, 2, S, mask), 2);
+  EXPECT_EQ(segment(ti, 0.5, 2, S).pixels, 2);
   EXPECT_FLOAT_EQ(S.at<float>(0, 1), 0.5f);
   EXPECT_FLOAT_EQ(S.at<float>(0, 2), 0.0f);
   EXPECT_FLOAT_EQ(S.at<float>(0, 3), 0.9f);

@@ -205,14 +205,4 @@ std::optional<Region> retrieve_region(const cv::Mat& P, const Box2D& roi, const 
   return r;
 }
 
-std::optional<Region> retrieve_region(const cv::Mat& P, const Box2D& roi, const cv::Rect& search,
-                                      const DetectorOptions& o, cv::Mat& /*mask*/, cv::Mat& labels,
-                                      cv::Mat& /*stats*/, cv::Mat& /*centroids*/, std::vector<double>& /*mass*/) {
-  RegionScratch scratch;
-  scratch.labels = labels;  // shares the caller's buffer
-  const auto region = retrieve_region(P, roi, search, o, scratch);
-  labels = scratch.labels;
-  return region;
-}
-
 }  // namespace fdv

@@ -83,10 +83,5 @@ struct RegionScratch {
 /// qualifies.
 std::optional<Region> retrieve_region(const cv::Mat& P, const Box2D& roi, const cv::Rect& search,
                                       const DetectorOptions& o, RegionScratch& scratch);
-/// The same; the earlier signature (`labels` is reused, `mask`, `stats`, `centroids`, `mass` are no
-/// longer used; allocates its other scratch at each call).
-std::optional<Region> retrieve_region(const cv::Mat& P, const Box2D& roi, const cv::Rect& search,
-                                      const DetectorOptions& o, cv::Mat& mask, cv::Mat& labels, cv::Mat& stats,
-                                      cv::Mat& centroids, std::vector<double>& mass);
 
 }  // namespace fdv

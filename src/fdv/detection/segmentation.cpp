@@ -174,10 +174,6 @@ SegmentResult segment(const TimeImages& ti, double theta, int min_pixel_events, 
   return res;
 }
 
-int segment(const TimeImages& ti, double theta, int min_pixel_events, cv::Mat& S, cv::Mat& /*scratch_mask*/) {
-  return segment(ti, theta, min_pixel_events, S).pixels;
-}
-
 Preprocessor::Preprocessor(const DetectorOptions& o) : h_mean_(o.mean_filter_px / 2), h_open_(o.opening_px / 2) {
   CV_Assert(o.mean_filter_px >= 1 && o.mean_filter_px % 2 == 1 && o.opening_px >= 1 && o.opening_px % 2 == 1);
 }

@@ -33,8 +33,6 @@ struct SegmentResult {
 /// S_ij = N_ij where N_ij ≥ θ and I_ij ≥ min_pixel_events (≥ 1), else 0 (CV_32F, written over the
 /// whole image; reuses S's buffer when it has the size).
 SegmentResult segment(const TimeImages& ti, double theta, int min_pixel_events, cv::Mat& S);
-/// The same; the earlier signature (`scratch_mask` is no longer used). Returns the kept pixels.
-int segment(const TimeImages& ti, double theta, int min_pixel_events, cv::Mat& S, cv::Mat& scratch_mask);
 
 /// P = (open_k2(mean_k1(S)))², element-wise square, CV_32F: a k1×k1 mean filter, then the opening
 /// (erosion followed by dilation) with a k2×k2 square, everything zero beyond the image border.
