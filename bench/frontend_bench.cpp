@@ -81,6 +81,12 @@ struct CvThreads {
   ~CvThreads() { cv::setNumThreads(saved); }
 };
 
+/// The benchmark window's events: uniformly random pixels, or the textured scene.
+std::span<const Event> bench_events(bool textured) {
+  static const std::vector<Event> scene = test::make_scene(bench_calibration().event_camera, bench_scene(false));
+  return textured ? std::span<const Event>(scene) : std::span<const Event>(bench_window().events);
+}
+
 void BM_Compensate(benchmark::State& state, const char* method, bool textured, int threads = 1) {
   const CvThreads cv_threads(threads);
   const BenchWindow& w = bench_window();
@@ -88,8 +94,7 @@ void BM_Compensate(benchmark::State& state, const char* method, bool textured, i
   opt.method = method;
   opt.threads = threads;
   auto comp = make_compensator(bench_calibration(), opt);
-  static const std::vector<Event> scene = test::make_scene(bench_calibration().event_camera, bench_scene(false));
-  const std::span<const Event> events = textured ? std::span<const Event>(scene) : std::span<const Event>(w.events);
+  const std::span<const Event> events = bench_events(textured);
   const CompensationInput in{events, 0, kWindow, w.imu, w.odometry, &w.depth};
   comp->compensate(in);  // warm-up: buffers, depth preparation
   for (auto _ : state) benchmark::DoNotOptimize(comp->compensate(in).size());
@@ -122,8 +127,7 @@ void BM_CompensateAndTimeImages(benchmark::State& state, const char* method, boo
   opt.method = method;
   opt.threads = threads;
   auto comp = make_compensator(bench_calibration(), opt);
-  static const std::vector<Event> scene = test::make_scene(bench_calibration().event_camera, bench_scene(false));
-  const std::span<const Event> events = textured ? std::span<const Event>(scene) : std::span<const Event>(w.events);
+  const std::span<const Event> events = bench_events(textured);
   const CompensationInput in{events, 0, kWindow, w.imu, w.odometry, &w.depth};
   const CompensatedWindow& warm = comp->compensate(in);
   const ReferenceMotion motion = reference_motion(warm.report, opt);

@@ -45,20 +45,27 @@ TEST(RunResults, MalformedLineNamesFileAndLine) {
   EXPECT_THROW(read_detections(dir + "/missing"), InputError);
 }
 
-TEST(RunResults, ReadsUsableEstimatesOnly) {
+TEST(RunResults, ReadsConvergedEstimatesWithTheirUsableFlag) {
   const std::string dir = test::scratch_dir("run_results_estimates");
   const std::string fields =
       R"("t0":0.05,"p0":[1,2,3],"v0":[4,5,6],"gravity":[0,0,-9.81],"t_first":0.05,"t_last":0.2)";
   write(dir + "/trajectories.jsonl",
-        R"({"t":0.1,"track":2,"method":"fusion","usable":false,)" + fields + "}\n" +
+        R"({"t":0.1,"track":2,"method":"fusion","usable":false,"converged":false,)" + fields + "}\n" +
+            R"({"t":0.15,"track":2,"method":"fusion","usable":false,"converged":true,)" + fields + "}\n" +
+            // Written before "converged" existed: usable implied it, a not usable line is skipped.
+            R"({"t":0.18,"track":2,"method":"fusion","usable":false,)" + fields + "}\n" +
             R"({"t":0.2,"track":2,"method":"mono","usable":true,)" + fields + "}\n");
   const auto e = read_estimates(dir);
-  ASSERT_EQ(e.size(), 1u);
-  EXPECT_EQ(e[0].mode, EstimatorMode::kMonocular);
-  EXPECT_EQ(e[0].track, 2);
-  EXPECT_EQ(e[0].t, 200 * kNsPerMs);
-  EXPECT_EQ(e[0].trajectory.p0_W, Eigen::Vector3d(1, 2, 3));
-  EXPECT_EQ(e[0].trajectory.v0_W, Eigen::Vector3d(4, 5, 6));
+  ASSERT_EQ(e.size(), 2u);
+  EXPECT_EQ(e[0].t, 150 * kNsPerMs);
+  EXPECT_EQ(e[0].mode, EstimatorMode::kFusion);
+  EXPECT_FALSE(e[0].usable);
+  EXPECT_TRUE(e[1].usable);
+  EXPECT_EQ(e[1].mode, EstimatorMode::kMonocular);
+  EXPECT_EQ(e[1].track, 2);
+  EXPECT_EQ(e[1].t, 200 * kNsPerMs);
+  EXPECT_EQ(e[1].trajectory.p0_W, Eigen::Vector3d(1, 2, 3));
+  EXPECT_EQ(e[1].trajectory.v0_W, Eigen::Vector3d(4, 5, 6));
   EXPECT_TRUE(read_estimates(dir + "/missing").empty());  // a run without 3D estimation
   write(dir + "/trajectories.jsonl",
         R"({"t":0.1,"track":2,"method":"stereo","usable":true,)" + fields + "}\n");

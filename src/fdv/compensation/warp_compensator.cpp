@@ -310,9 +310,12 @@ void WarpCompensator::prepare_depth_frame(const RegisteredDepth& depth) {
     prepare_depth(depth);
 }
 
+bool WarpCompensator::is_prepared(const RegisteredDepth& depth) const {
+  return &depth == depth_key_ && depth.depth_m.data() == depth_data_key_ && depth.t == depth_t_key_;
+}
+
 bool WarpCompensator::prepare_depth(const RegisteredDepth& depth) {
-  if (&depth == depth_key_ && depth.depth_m.data() == depth_data_key_ && depth.t == depth_t_key_) return depth_usable_;
-  out_.report.depth_prepared_here = true;  // reset by begin_window(); meaningful inside compensate()
+  if (is_prepared(depth)) return depth_usable_;
   depth_key_ = &depth;
   depth_data_key_ = depth.depth_m.data();
   depth_t_key_ = depth.t;
@@ -411,7 +414,7 @@ const CompensatedWindow& WarpCompensator::compensate(const CompensationInput& in
       rep.depth_wrong_size = true;
     } else if ((rep.depth_age_ns = std::abs(t_mid - in.depth->t)) > options_.max_depth_age_ns) {
       rep.depth_stale = true;
-    } else if (!prepare_depth(*in.depth)) {
+    } else if (rep.depth_prepared_here = !is_prepared(*in.depth); !prepare_depth(*in.depth)) {
       rep.depth_missing = true;  // a frame without a single valid depth
     }
     if (rep.odometry_missing || rep.depth_missing || rep.depth_wrong_size || rep.depth_stale)

@@ -21,6 +21,8 @@ class WarpCompensator final : public CompensatorBase {
   /// Per raw pixel inverse depth ρ = 1/z (holes filled / fallback applied) and a fallback flag,
   /// rebuilt only when the depth frame changes. False when the frame holds no usable depth.
   bool prepare_depth(const RegisteredDepth& depth);
+  /// `depth` (same object, buffer and time) is the frame prepare_depth last prepared.
+  bool is_prepared(const RegisteredDepth& depth) const;
   /// The frame checks of compensate(): the event camera's size and a matching buffer.
   bool depth_fits(const RegisteredDepth& depth) const;
 

@@ -432,7 +432,7 @@ const TrajectoryEstimate& TrajectoryEstimator::solve() {
       };
       e.position_sigma_m = largest_sigma_at(t1);
       e.horizon_sigma_m =
-          largest_sigma_at(t1 + static_cast<TimeNs>(options_.usable_horizon_s * 1e9));
+          largest_sigma_at(t1 + from_seconds(options_.usable_horizon_s));
       if (e.horizon_sigma_m > options_.max_position_sigma_m) {
         usable = false;
         append(e.message, format("poorly constrained: position sigma %.2f m %.2f s ahead > %.2f m",
