@@ -199,6 +199,62 @@ TEST_F(DetectorTest, TrackPriorAdmitsAWeakerPatternOnlyInsideItsGate) {
   EXPECT_FALSE(detector.detect(view_of(w), std::span(&at_edge, 1)).detection);
 }
 
+// A far, spinning, textured ball: events all over its disk throughout the window (the scene's
+// blob), moving slowly (8 px per window). With N's cue switched off (min_peak = prior_min_peak = 1),
+// only the dense-motion cue can find it, and only inside a track's gate.
+TEST_F(DetectorTest, DenseMotionCueFindsASlowDenseBlobInsideATrackGateOnly) {
+  test::BlobScene s;
+  s.radius_px = 9;
+  s.velocity_px_s = {0, -320};
+  s.blob_rate_ev_s = 2'000'000;
+  DetectorOptions o;
+  o.min_peak = 1.0;
+  o.prior_min_peak = 1.0;
+  const PinholeCamera cam = lens();
+  auto raw_of = [&](const Eigen::Vector2d& uv) {
+    return cam.normalized_to_pixel({(uv.x() - cam.cx) / cam.fx, (uv.y() - cam.cy) / cam.fy});
+  };
+  const DetectionPrior on_blob{raw_of(s.blob_at(s.t0 + s.duration / 2)), {18, 18}};
+  auto detect = [&](const test::BlobScene& scene, const DetectorOptions& options,
+                    std::span<const DetectionPrior> priors) {
+    const auto ev = test::make_scene(cam, scene);
+    const CompensatedWindow& w =
+        compensator_->compensate({.events = ev, .t_start_ns = scene.t0, .t_end_ns = scene.t0 + scene.duration});
+    Detector detector(options, cam);
+    return detector.detect(view_of(w), priors);
+  };
+
+  const DetectionResult found = detect(s, o, std::span(&on_blob, 1));
+  ASSERT_TRUE(found.detection) << to_string(found.status);
+  const Detection2D& d = *found.detection;
+  EXPECT_EQ(d.source, DetectionSource::kDenseMotion);
+  EXPECT_TRUE(d.track_aided);
+  EXPECT_GE(found.motion_cue_r2, o.motion_cue_min_r2);
+  EXPECT_DOUBLE_EQ(d.score, found.motion_cue_r2);
+  // T rises by 8 px per window along −y: across the 21 px square that is ≈ 2.6 windows on an
+  // infinite edge; the finite disk gives less, but well above the gate.
+  EXPECT_GT(found.motion_cue_span, 0.3);
+  EXPECT_LT((d.center_undistorted - s.blob_at(d.t_ns)).norm(), 2.0)
+      << d.center_undistorted.transpose() << " vs " << s.blob_at(d.t_ns).transpose();
+  EXPECT_LT(d.box_undistorted.width(), 4 * s.radius_px);
+
+  // Without a gate the cue does not run (it would report any dense moving thing, e.g. a person).
+  const DetectionResult no_prior = detect(s, o, {});
+  EXPECT_FALSE(no_prior.detection);
+  EXPECT_FALSE(no_prior.motion_cue_ran);
+  // Switched off.
+  DetectorOptions off = o;
+  off.motion_cue = false;
+  EXPECT_FALSE(detect(s, off, std::span(&on_blob, 1)).detection);
+  // The same dense blob standing still: no trend of T across it.
+  test::BlobScene still = s;
+  still.velocity_px_s = {0, 0};
+  const DetectionResult static_blob = detect(still, o, std::span(&on_blob, 1));
+  EXPECT_FALSE(static_blob.detection);
+  EXPECT_TRUE(static_blob.motion_cue_ran);
+  EXPECT_LT(static_blob.motion_cue_r2, o.motion_cue_min_r2);
+}
+
 TEST_F(DetectorTest, InvalidOptionsAreRejected) {
   DetectorOptions o;
   o.mean_filter_px = 4;
@@ -216,6 +272,15 @@ TEST_F(DetectorTest, InvalidOptionsAreRejected) {
   o = {};
   o.min_event_density = -1;
   EXPECT_NE(o.validate().find("min_event_density"), std::string::npos);
+  o = {};
+  o.motion_cue_density_px = 4;
+  EXPECT_NE(o.validate().find("motion_cue_density_px"), std::string::npos);
+  o = {};
+  o.motion_cue_min_r2 = 1.5;
+  EXPECT_NE(o.validate().find("motion_cue_min_r2"), std::string::npos);
+  o = {};
+  o.motion_cue_min_pixels = 2;
+  EXPECT_NE(o.validate().find("motion_cue_min_pixels"), std::string::npos);
   EXPECT_TRUE(DetectorOptions{}.validate().empty());
 }
 

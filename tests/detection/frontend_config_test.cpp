@@ -28,6 +28,10 @@ detector:
   refine_box_scale: 0
   fit_max_iterations: 12
   roi_min_events: 11
+  motion_cue: false
+  motion_cue_radius_px: 7
+  motion_cue_min_pixels: 9
+  motion_cue_min_r2: 0.35
 depth_registration: {min_depth_m: 0.2, max_depth_m: 12}
 )");
   const CompensationOptions c = load_compensation_options(root["compensation"], "cfg.yaml");
@@ -52,6 +56,10 @@ depth_registration: {min_depth_m: 0.2, max_depth_m: 12}
   EXPECT_DOUBLE_EQ(d.refine_box_scale, 0.0);
   EXPECT_EQ(d.fit_max_iterations, 12);
   EXPECT_EQ(d.roi_min_events, 11);
+  EXPECT_FALSE(d.motion_cue);
+  EXPECT_EQ(d.motion_cue_radius_px, 7);
+  EXPECT_EQ(d.motion_cue_min_pixels, 9);
+  EXPECT_DOUBLE_EQ(d.motion_cue_min_r2, 0.35);
   EXPECT_EQ(d.mean_filter_px, DetectorOptions{}.mean_filter_px);  // absent: default kept
   const DepthRegistrationOptions r = load_depth_registration_options(root["depth_registration"], "cfg.yaml");
   EXPECT_DOUBLE_EQ(r.min_depth_m, 0.2);

@@ -20,6 +20,7 @@ struct Box2D {
 enum class DetectionSource {
   kGaussianFit,      ///< Algorithm 1 converged to a plausible ROI
   kRegionRetrieval,  ///< connected component chosen after the fit failed (paper §IV-B.3)
+  kDenseMotion,      ///< the dense-motion cue (DetectorOptions::motion_cue), when N had no pattern
 };
 std::string_view to_string(DetectionSource s);
 
@@ -39,6 +40,7 @@ struct Detection2D {
   /// Peak of the filtered segmentation (mean-filtered, opened S, before squaring) inside the box,
   /// in [0, 1]: the local density and recency of the segmented pattern; 1 = a fully segmented
   /// neighbourhood at N = 1. Same scale as DetectorOptions::min_peak, the detection threshold.
+  /// For source kDenseMotion: the R² of the time plane (DetectorOptions::motion_cue_min_r2).
   double score = 0;
   /// Compensated events per pixel of the box (gate DetectorOptions::min_event_density).
   double event_density = 0;

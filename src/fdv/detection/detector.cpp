@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <Eigen/Cholesky>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
@@ -23,7 +24,12 @@ double ms_since(Clock::time_point t0) {
 }  // namespace
 
 std::string_view to_string(DetectionSource s) {
-  return s == DetectionSource::kGaussianFit ? "gaussian_fit" : "region_retrieval";
+  switch (s) {
+    case DetectionSource::kGaussianFit: return "gaussian_fit";
+    case DetectionSource::kRegionRetrieval: return "region_retrieval";
+    case DetectionSource::kDenseMotion: return "dense_motion";
+  }
+  return "?";
 }
 
 std::string_view to_string(DetectionStatus s) {
@@ -44,7 +50,7 @@ std::string_view to_string(DetectionStatus s) {
 std::string DetectorOptions::validate() const {
   std::ostringstream why;
   auto odd_positive = [](int k) { return k >= 1 && k % 2 == 1 && k <= 31; };
-  const double coeffs[] = {threshold_a_s_per_rad, threshold_b_s_per_m, threshold_c, fit_delta_center_px,
+  const double coeffs[] = {motion_cue_min_r2, motion_cue_min_span, threshold_a_s_per_rad, threshold_b_s_per_m, threshold_c, fit_delta_center_px,
                            fit_delta_size_px, fit_min_size_px, roi_max_fraction, roi_max_aspect, max_segmented_fraction,
                            refine_box_scale, min_peak, min_event_density, prior_min_peak, prior_gate_scale,
                            prior_min_gate_px};
@@ -71,6 +77,14 @@ std::string DetectorOptions::validate() const {
   else if (region_min_area_px < 1) why << "region_min_area_px must be positive, got " << region_min_area_px;
   else if (!(refine_box_scale == 0 || (refine_box_scale >= 1 && refine_box_scale <= 10)))
     why << "refine_box_scale must be 0 (off) or in [1, 10], got " << refine_box_scale;
+  else if (!odd_positive(motion_cue_density_px))
+    why << "motion_cue_density_px must be odd in [1, 31], got " << motion_cue_density_px;
+  else if (motion_cue_radius_px < 1 || motion_cue_radius_px > 100)
+    why << "motion_cue_radius_px must be in [1, 100], got " << motion_cue_radius_px;
+  else if (!(motion_cue_min_r2 >= 0 && motion_cue_min_r2 <= 1))
+    why << "motion_cue_min_r2 must be in [0, 1], got " << motion_cue_min_r2;
+  else if (motion_cue_min_pixels < 3) why << "motion_cue_min_pixels must be at least 3, got " << motion_cue_min_pixels;
+  else if (!(motion_cue_min_span >= 0)) why << "motion_cue_min_span must be >= 0, got " << motion_cue_min_span;
   else if (min_window_events < 1) why << "min_window_events must be positive, got " << min_window_events;
   else if (!(max_segmented_fraction > 0 && max_segmented_fraction <= 1))
     why << "max_segmented_fraction must be in (0, 1], got " << max_segmented_fraction;
@@ -91,6 +105,8 @@ void Detector::allocate(int width, int height) {
   blanked_.create(height, width, CV_32F);
   blanked_.setTo(0);
   blanked_bounds_ = {};
+  count_f_.create(height, width, CV_32F);
+  count_integral_.create(height + 1, width + 1, CV_64F);
 }
 
 Eigen::Vector2d Detector::undistorted_to_raw(const Eigen::Vector2d& uv) const {
@@ -238,6 +254,95 @@ std::optional<Detector::Candidate> Detector::evaluate_candidate(const Compensate
   return c;
 }
 
+std::optional<Detector::Candidate> Detector::dense_motion_candidate(double window_s, const cv::Rect& search,
+                                                                  DetectionResult& res) {
+  const DetectorOptions& o = options_;
+  const int w = ti_.count.cols, h = ti_.count.rows;
+  const cv::Rect area = search & cv::Rect(0, 0, w, h);
+  if (area.area() == 0) return std::nullopt;
+  res.motion_cue_ran = true;
+  // The box with the most active pixels (I ≥ min_pixel_events) in the search area (its centre
+  // pixel; boxes are clipped at the area's border). Counting pixels, not events, keeps a hot pixel
+  // from being "dense".
+  for (int y = 0; y < area.height; ++y) {
+    const std::int32_t* count = ti_.count.ptr<std::int32_t>(area.y + y) + area.x;
+    float* active = count_f_.ptr<float>(y);
+    for (int x = 0; x < area.width; ++x) active[x] = count[x] >= o.min_pixel_events ? 1.0f : 0.0f;
+  }
+  cv::Mat integral = count_integral_(cv::Rect(0, 0, area.width + 1, area.height + 1));
+  cv::integral(count_f_(cv::Rect(0, 0, area.width, area.height)), integral, CV_64F);
+  const int hk = o.motion_cue_density_px / 2;
+  double densest = 0;
+  cv::Point at(-1, -1);
+  for (int y = 0; y < area.height; ++y) {
+    const double* top = integral.ptr<double>(std::max(0, y - hk));
+    const double* bottom = integral.ptr<double>(std::min(area.height, y + hk + 1));
+    for (int x = 0; x < area.width; ++x) {
+      const int x0 = std::max(0, x - hk), x1 = std::min(area.width, x + hk + 1);
+      const double active_pixels = bottom[x1] - bottom[x0] - top[x1] + top[x0];
+      if (active_pixels > densest) {
+        densest = active_pixels;
+        at = {area.x + x, area.y + y};
+      }
+    }
+  }
+  if (at.x < 0) return std::nullopt;
+  // Count-weighted least squares T_ij ≈ a + g·(i − x_c, j − y_c) over the square; the weighted
+  // moments of I give the blob's centroid and spread as well.
+  const int r = o.motion_cue_radius_px;
+  const cv::Rect square = cv::Rect(at.x - r, at.y - r, 2 * r + 1, 2 * r + 1) & cv::Rect(0, 0, w, h);
+  Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d b = Eigen::Vector3d::Zero();
+  double n_sum = 0, t_sum = 0, tt_sum = 0, xx_sum = 0, yy_sum = 0;
+  int active_pixels = 0;
+  for (int y = square.y; y < square.y + square.height; ++y) {
+    const std::int32_t* count = ti_.count.ptr<std::int32_t>(y);
+    const float* mean_time = ti_.mean_time_s.ptr<float>(y);
+    for (int x = square.x; x < square.x + square.width; ++x) {
+      if (count[x] < o.min_pixel_events) continue;
+      ++active_pixels;
+      const double n = count[x], t = mean_time[x];
+      const Eigen::Vector3d f(1.0, x - at.x, y - at.y);
+      A.noalias() += n * f * f.transpose();
+      b += (n * t) * f;
+      n_sum += n;
+      t_sum += n * t;
+      tt_sum += n * t * t;
+      xx_sum += n * f.y() * f.y();
+      yy_sum += n * f.z() * f.z();
+    }
+  }
+  if (active_pixels < o.motion_cue_min_pixels || n_sum < o.roi_min_events) return std::nullopt;
+  const double total_ss = tt_sum - t_sum * t_sum / n_sum;
+  if (!(total_ss > 0)) return std::nullopt;
+  const Eigen::Vector3d plane = A.ldlt().solve(b);
+  const double residual_ss = tt_sum - 2.0 * plane.dot(b) + plane.dot(A * plane);
+  res.motion_cue_r2 = 1.0 - residual_ss / total_ss;
+  res.motion_cue_span = std::hypot(plane.y(), plane.z()) * square.width / window_s;
+  if (!(res.motion_cue_r2 >= o.motion_cue_min_r2) || !(res.motion_cue_span >= o.motion_cue_min_span))
+    return std::nullopt;
+  // The box: centroid ± 2σ of I over the square (Algorithm 1's L = 4σ), inside the square.
+  const Eigen::Vector2d mean(A(0, 1) / n_sum, A(0, 2) / n_sum);
+  const Eigen::Vector2d sigma(std::sqrt(std::max(0.0, xx_sum / n_sum - mean.x() * mean.x())),
+                              std::sqrt(std::max(0.0, yy_sum / n_sum - mean.y() * mean.y())));
+  const Eigen::Vector2d half = (2.0 * sigma).cwiseMax(0.5 * o.fit_min_size_px);
+  const Eigen::Vector2d c = mean + Eigen::Vector2d(at.x, at.y);
+  Candidate cand;
+  cand.box = Box2D{std::max<double>(square.x, c.x() - half.x()), std::max<double>(square.y, c.y() - half.y()),
+                   std::min<double>(square.x + square.width, c.x() + half.x()),
+                   std::min<double>(square.y + square.height, c.y() + half.y())};
+  cand.center = cand.box.center();
+  cand.source = DetectionSource::kDenseMotion;
+  const cv::Rect box = box_pixels(cand.box, w, h);
+  if (box.area() == 0) return std::nullopt;
+  cand.events = static_cast<int>(cv::sum(ti_.count(box))[0]);
+  cand.event_density = static_cast<double>(cand.events) / box.area();
+  if (cand.events < o.roi_min_events || cand.event_density < o.min_event_density) return std::nullopt;
+  cand.score = std::clamp(res.motion_cue_r2, 0.0, 1.0);
+  cand.t_mean_s = cv::sum(ti_.sum_time_s(box))[0] / cand.events;
+  return cand;
+}
+
 DetectionResult Detector::detect(const CompensatedEventsView& window, std::span<const DetectionPrior> priors) {
   const auto t_total = Clock::now();
   DetectionResult res;
@@ -269,9 +374,9 @@ DetectionResult Detector::detect(const CompensatedEventsView& window, std::span<
   res.segmented_pixels = seg.pixels;
   res.timings.segmentation_ms = ms_since(t);
   if (!(ti_.t_max_s > ti_.t_min_s)) return finish(DetectionStatus::kNoTemporalContrast);
-  if (res.segmented_pixels == 0) return finish(DetectionStatus::kNothingSegmented);
   if (res.segmented_pixels > o.max_segmented_fraction * w * h) return finish(DetectionStatus::kFlooded);
 
+  const double window_s = to_seconds(window.t_end_ns - window.t_start_ns);
   t = Clock::now();
   const cv::Mat& P = pre_.run(S_, seg.bounds);
   // P is 0 outside `support`: the maxima below search only there (the same first maximum in
@@ -284,7 +389,8 @@ DetectionResult Detector::detect(const CompensatedEventsView& window, std::span<
   // is tried, up to max_candidates. The blanking works on a copy: P stays as pre-processed.
   const cv::Mat* image = &P;
   std::optional<Candidate> found;
-  DetectionStatus why_not = DetectionStatus::kRemovedAsNoise;
+  DetectionStatus why_not =
+      res.segmented_pixels == 0 ? DetectionStatus::kNothingSegmented : DetectionStatus::kRemovedAsNoise;
   for (int attempt = 0; attempt < o.max_candidates && support.area() > 0; ++attempt) {
     double p_max = 0;
     cv::Point arg_max;
@@ -324,6 +430,17 @@ DetectionResult Detector::detect(const CompensatedEventsView& window, std::span<
     found = evaluate_candidate(window, P, arg_max + g.tl(), o.prior_min_peak, res, why_not, blank);
     if (found && !gate->contains(found->center)) found.reset();
     res.track_aided = found.has_value();
+  }
+  // Dense-motion cue, inside the same gates: a far, spinning object that N does not show.
+  for (const DetectionPrior& prior : priors) {
+    if (found || !o.motion_cue || !(window_s > 0)) break;
+    const auto gate = prior_gate(prior);
+    if (!gate) continue;
+    t = Clock::now();
+    found = dense_motion_candidate(window_s, box_pixels(*gate, w, h), res);
+    if (found && !gate->contains(found->center)) found.reset();
+    res.track_aided = found.has_value();
+    res.timings.motion_cue_ms += ms_since(t);
   }
   if (!found) return finish(why_not);
   Box2D box = found->box;

@@ -49,6 +49,7 @@ struct DetectionTimings {
   double fit_ms = 0;
   double retrieval_ms = 0;  ///< 0 when retrieval was not needed
   double refine_ms = 0;     ///< centre / time refinement from the events
+  double motion_cue_ms = 0; ///< the dense-motion cue (0 when not run)
   double total_ms = 0;
 };
 
@@ -64,6 +65,10 @@ struct DetectionResult {
   /// Why the fitted ROI was not used ("" when it was): "not converged", "diverged", "empty roi",
   /// "too large", "aspect ratio", "too few events".
   std::string_view fit_rejected;
+  /// The dense-motion cue (DetectorOptions::motion_cue), when it ran (no pattern of N passed): the
+  /// R² of its time plane and the plane's rise across the square as a fraction of the window.
+  bool motion_cue_ran = false;
+  double motion_cue_r2 = 0, motion_cue_span = 0;
   DetectionTimings timings;
 };
 
@@ -105,6 +110,9 @@ class Detector {
   std::optional<Candidate> evaluate_candidate(const CompensatedEventsView& window, const cv::Mat& P, cv::Point seed,
                                               double min_peak, DetectionResult& res, DetectionStatus& why_not,
                                               Box2D& blank);
+  /// The dense-motion cue: the densest patch of active pixels of I within `search`, accepted when
+  /// T rises across it as a plane (DetectorOptions::motion_cue_*) and its box passes the event gates.
+  std::optional<Candidate> dense_motion_candidate(double window_s, const cv::Rect& search, DetectionResult& res);
   /// The search box on the undistorted grid of a prior, or nothing when its centre has no inverse.
   std::optional<Box2D> prior_gate(const DetectionPrior& prior) const;
   /// Centroid and mean time [s since t_start] of the events in a time-complete slice around the
@@ -123,6 +131,7 @@ class Detector {
   RegionScratch region_;
   cv::Mat blanked_;         ///< P with failed candidates blanked; zero outside blanked_bounds_
   cv::Rect blanked_bounds_;
+  cv::Mat count_f_, count_integral_;  ///< I as float and its summed-area table (dense-motion cue)
 };
 
 }  // namespace fdv

@@ -36,6 +36,24 @@ struct DetectorOptions {
   double prior_gate_scale = 2.0;     ///< as the depth ROI (issue: the track's box × 2)
   double prior_min_gate_px = 10.0;   ///< [px]
 
+  /// Dense-motion cue (not in the paper; docs/DETECTION.md, "Dense moving blob"): when no pattern
+  /// of N passes, the densest patch of the count image I (box sums of motion_cue_density_px²) is
+  /// tested for motion by a count-weighted plane fit T ≈ a + g·(x − x_c) of the mean-time image over
+  /// the (2r+1)² square around it. A moving object fires late on its leading side and early on its
+  /// trailing side, so T rises along its image velocity; compensated background has no such trend.
+  /// It finds what N misses: a far, spinning, textured object whose events are spread over the
+  /// whole window (its mean time is mid-window, below θ). Tuned on training seeds 1-4.
+  bool motion_cue = true;
+  int motion_cue_density_px = 5;     ///< side of the box whose event count is the density [px] (odd)
+  int motion_cue_radius_px = 10;     ///< r: half-side of the square of the plane fit [px]
+  /// Active pixels (I ≥ min_pixel_events: the density and the plane use only these) the square
+  /// must hold: a plane through a few pixels (a hot pixel and its neighbours) explains anything.
+  int motion_cue_min_pixels = 20;
+  double motion_cue_min_r2 = 0.2;    ///< the plane must explain this fraction of T's variance
+  /// The plane's rise across the square, |g|·(2r+1), as a fraction of the window: a static blob
+  /// with a chance trend rises little.
+  double motion_cue_min_span = 0.1;
+
   // Iterative Gaussian fitting (Algorithm 1).
   int fit_max_iterations = 30;        ///< K, provisional (a blob converges in ~10 from the half-image ROI)
   double fit_delta_center_px = 0.25; ///< δ_C: centre change below which the fit has converged [px]

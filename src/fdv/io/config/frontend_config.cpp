@@ -86,6 +86,12 @@ DetectorOptions load_detector_options(const YAML::Node& node, const std::string&
   integer("min_window_events", o.min_window_events);
   num("refine_box_scale", o.refine_box_scale);
   num("max_segmented_fraction", o.max_segmented_fraction);
+  s.on("motion_cue", [&](const YAML::Node& n, const std::string& k) { o.motion_cue = s.boolean(n, k); });
+  integer("motion_cue_density_px", o.motion_cue_density_px);
+  integer("motion_cue_radius_px", o.motion_cue_radius_px);
+  integer("motion_cue_min_pixels", o.motion_cue_min_pixels);
+  num("motion_cue_min_r2", o.motion_cue_min_r2);
+  num("motion_cue_min_span", o.motion_cue_min_span);
   s.apply();
   s.check(o.validate());
   return o;
