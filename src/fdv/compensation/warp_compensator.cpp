@@ -28,12 +28,13 @@ using vi = std::int32_t __attribute__((vector_size(16)));
 
 vi bits(vf v) { return std::bit_cast<vi>(v); }
 vf from_bits(vi v) { return std::bit_cast<vf>(v); }
-vf load4(const float* p) {
-  vf v;
-  std::memcpy(&v, p, sizeof v);
-  return v;
-}
-void store4(float* p, vf v) { std::memcpy(p, &v, sizeof v); }
+// Unaligned vector accesses typed as their element (not memcpy: a memcpy store may alias
+// anything, and GCC then reloaded the window's parameters after every output store).
+using vf_u = float __attribute__((vector_size(16), aligned(4)));
+using vi_u = std::int32_t __attribute__((vector_size(16), aligned(4)));
+vf load4(const float* p) { return *reinterpret_cast<const vf_u*>(p); }
+void store4(float* p, vf v) { *reinterpret_cast<vf_u*>(p) = v; }
+void store4(std::int32_t* p, vi v) { *reinterpret_cast<vi_u*>(p) = v; }
 vf select4(vi m, vf a, vf b) { return from_bits((bits(a) & m) | (bits(b) & ~m)); }
 /// Lane-wise `a > b ? a : b`, as the scalar code writes it.
 vf vmax(vf a, vf b) { return select4(a > b, a, b); }
@@ -109,8 +110,10 @@ bool all_set(vi m) {
 
 /// Visits [begin, end) (visit k = event k·stride), writes the kept events from `out` on.
 /// previous_t: time of the event visited before `begin` (for the out-of-order count).
-template <Model M>
+/// kDecimated: false when stride = 1 (nearly always): the event addresses need no multiplication.
+template <Model M, bool kDecimated>
 WarpCounts warp_range(const WarpParams& p, std::size_t begin, std::size_t end, TimeNs previous_t, Output out) {
+  const std::size_t stride = kDecimated ? p.stride : 1;
   WarpCounts c;
   const int w = p.width, h = p.height;
   const auto duration = static_cast<std::uint64_t>(p.duration);
@@ -146,7 +149,7 @@ WarpCounts warp_range(const WarpParams& p, std::size_t begin, std::size_t end, T
   // Slow path, one event with every check and its own slot: quads that straddle a slot boundary,
   // hold out-of-order or out-of-window events or pixels outside the sensor, and the last 0-3.
   auto one = [&](std::size_t kk) {
-    const Event& e = p.events[kk * p.stride];
+    const Event& e = p.events[kk * stride];
     c.out_of_order += e.t < previous_t;
     previous_t = e.t;
     // Unsigned difference: no overflow whatever the (bad) time; negative d wraps to large.
@@ -189,16 +192,16 @@ WarpCounts warp_range(const WarpParams& p, std::size_t begin, std::size_t end, T
   for (; k + 4 <= end; k += 4) {
     if (k + 3 + kPrefetch < end) {
       for (std::size_t j = 0; j < 4; ++j) {
-        const Event& a = p.events[(k + j + kPrefetch) * p.stride];
+        const Event& a = p.events[(k + j + kPrefetch) * stride];
         const std::size_t r = std::min(static_cast<std::size_t>(a.y) * w + a.x, last_pixel);
         __builtin_prefetch(p.rays + r);
         if constexpr (M == Model::kRotationTranslation) __builtin_prefetch(p.inv_depth + r);
       }
     }
-    const Event& e0 = p.events[k * p.stride];
-    const Event& e1 = p.events[(k + 1) * p.stride];
-    const Event& e2 = p.events[(k + 2) * p.stride];
-    const Event& e3 = p.events[(k + 3) * p.stride];
+    const Event& e0 = p.events[k * stride];
+    const Event& e1 = p.events[(k + 1) * stride];
+    const Event& e2 = p.events[(k + 2) * stride];
+    const Event& e3 = p.events[(k + 3) * stride];
     // Fast path: in time order (also after the previous event), all within the current slot
     // (hence within the window), all inside the sensor. Non-short-circuit: no branch per test.
     const bool fast = fast_ok & (previous_t <= e0.t) & (e0.t <= e1.t) & (e1.t <= e2.t) & (e2.t <= e3.t) &
@@ -247,10 +250,10 @@ WarpCounts warp_range(const WarpParams& p, std::size_t begin, std::size_t end, T
     const vi px = __builtin_convertvector(from_bits(bits(v + half) & keep), vi) * width +
                   __builtin_convertvector(from_bits(bits(u + half) & keep), vi);
     if (all_set(keep)) {  // the common case: four vector stores
-      std::memcpy(out.x + n, &u, sizeof u);
-      std::memcpy(out.y + n, &v, sizeof v);
-      std::memcpy(out.t + n, &T, sizeof T);
-      std::memcpy(out.pixel + n, &px, sizeof px);
+      store4(out.x + n, u);
+      store4(out.y + n, v);
+      store4(out.t + n, T);
+      store4(out.pixel + n, px);
       n += 4;
       continue;
     }
@@ -463,12 +466,14 @@ const CompensatedWindow& WarpCompensator::compensate(const CompensationInput& in
     const std::size_t b = first[i], e = first[i + 1];
     const TimeNs previous_t = b == 0 ? std::numeric_limits<TimeNs>::min() : p.events[(b - 1) * p.stride].t;
     const Output part{o.x + b, o.y + b, o.t + b, o.pixel + b};
+    const auto run = [&]<Model M>() {
+      part_counts[i] = p.stride == 1 ? warp_range<M, false>(p, b, e, previous_t, part)
+                                     : warp_range<M, true>(p, b, e, previous_t, part);
+    };
     switch (used) {
-      case CompensationMethod::kRotation: part_counts[i] = warp_range<Model::kRotation>(p, b, e, previous_t, part); break;
-      case CompensationMethod::kRotationTranslation:
-        part_counts[i] = warp_range<Model::kRotationTranslation>(p, b, e, previous_t, part);
-        break;
-      default: part_counts[i] = warp_range<Model::kNone>(p, b, e, previous_t, part); break;
+      case CompensationMethod::kRotation: run.operator()<Model::kRotation>(); break;
+      case CompensationMethod::kRotationTranslation: run.operator()<Model::kRotationTranslation>(); break;
+      default: run.operator()<Model::kNone>(); break;
     }
   };
   run_parts(parts, warp_part);

@@ -27,18 +27,14 @@ constexpr std::size_t kBlock = 16;
 constexpr std::size_t kChunkBlocks = 256;
 constexpr std::uint8_t kNow = 1, kBefore = 2;
 
-vf load_f(const float* p) {
-  vf v;
-  std::memcpy(&v, p, sizeof v);
-  return v;
-}
-vi load_i(const std::int32_t* p) {
-  vi v;
-  std::memcpy(&v, p, sizeof v);
-  return v;
-}
-void store(float* p, vf v) { std::memcpy(p, &v, sizeof v); }
-void store(std::int32_t* p, vi v) { std::memcpy(p, &v, sizeof v); }
+// Unaligned vector accesses typed as their element (not memcpy: a memcpy store may alias
+// anything, and GCC then reloaded every pointer and spilled the sums after each store).
+using vf_u = float __attribute__((vector_size(16), aligned(4)));
+using vi_u = std::int32_t __attribute__((vector_size(16), aligned(4)));
+vf load_f(const float* p) { return *reinterpret_cast<const vf_u*>(p); }
+vi load_i(const std::int32_t* p) { return *reinterpret_cast<const vi_u*>(p); }
+void store(float* p, vf v) { *reinterpret_cast<vf_u*>(p) = v; }
+void store(std::int32_t* p, vi v) { *reinterpret_cast<vi_u*>(p) = v; }
 vf select(vi m, vf a, vf b) {
   return std::bit_cast<vf>((std::bit_cast<vi>(a) & m) | (std::bit_cast<vi>(b) & ~m));
 }
@@ -157,6 +153,28 @@ void pass2(const Images& im, std::uint8_t* blocks, std::size_t b0, std::size_t b
   }
 }
 
+/// Adds the events whose pixel is in [lo, hi) to the accumulator, in event order, and marks their
+/// blocks; returns how many. A function of its own with restrict pointers: inside the caller's
+/// lambda every byte store to `blocks` made GCC reload all the pointers and bounds per event.
+int accumulate(const std::int32_t* __restrict pixel, const float* __restrict t_s, std::size_t n, std::size_t lo,
+               std::size_t hi, std::size_t npx, float* __restrict acc, std::uint8_t* __restrict blocks) {
+  int count = 0;
+  // The accumulator is larger than L2 and events are scattered over it: prefetch ahead.
+  constexpr std::size_t kPrefetch = 64;
+  for (std::size_t k = 0; k < n; ++k) {
+    if (k + kPrefetch < n)
+      __builtin_prefetch(acc + 2 * std::min<std::size_t>(static_cast<std::uint32_t>(pixel[k + kPrefetch]), npx - 1));
+    // Unsigned: negative indices wrap far out of range.
+    const std::size_t p = static_cast<std::uint32_t>(pixel[k]);
+    if (p < lo || p >= hi) continue;
+    acc[2 * p] += 1.0f;
+    acc[2 * p + 1] += t_s[k];
+    blocks[p / kBlock] |= kNow;
+    ++count;
+  }
+  return count;
+}
+
 }  // namespace
 
 void build_time_images(const CompensatedEventsView& view, TimeImages& out) {
@@ -201,21 +219,7 @@ void build_time_images(const CompensatedEventsView& view, TimeImages& out) {
   const float* t_s = view.t_s.data();
   run_parts(parts, [&](int part) {
     const std::size_t lo = first_block[part] * kBlock, hi = std::min(npx, first_block[part + 1] * kBlock);
-    int count = 0;
-    // The accumulator is larger than L2 and events are scattered over it: prefetch ahead.
-    constexpr std::size_t kPrefetch = 64;
-    for (std::size_t k = 0; k < n; ++k) {
-      if (k + kPrefetch < n)
-        __builtin_prefetch(im.acc + 2 * std::min<std::size_t>(static_cast<std::uint32_t>(pixel[k + kPrefetch]), npx - 1));
-      // Unsigned: negative indices wrap far out of range.
-      const std::size_t p = static_cast<std::uint32_t>(pixel[k]);
-      if (p < lo || p >= hi) continue;
-      im.acc[2 * p] += 1.0f;
-      im.acc[2 * p + 1] += t_s[k];
-      blocks[p / kBlock] |= kNow;
-      ++count;
-    }
-    events[part] = count;
+    events[part] = accumulate(pixel, t_s, n, lo, hi, npx, im.acc, blocks);
     extremes[part] = pass1(im, blocks, first_block[part], first_block[part + 1], npx, out.chunk_sums.data());
   });
   Extremes x;
