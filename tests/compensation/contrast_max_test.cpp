@@ -91,5 +91,26 @@ TEST(ContrastMax, RecoversAConstantImageShift) {
   EXPECT_LT(n_cm * 3, n_none);
 }
 
+// The inverse of the fitted warp (Compensator::observed_position) takes every compensated event
+// back to the pixel where it was seen (this camera has no distortion: raw = undistorted).
+TEST(ContrastMax, ObservedPositionUndoesTheFittedWarp) {
+  Calibration c;
+  c.event_camera = {240, 180, 200.0, 200.0, 120.0, 90.0, {}};
+  const auto ev = moving_texture({300.0, -200.0}, 240, 180, 11);
+  CompensationOptions opt;
+  opt.method = "contrast_max";
+  auto comp = make_compensator(c, opt);
+  const CompensatedWindow& out = comp->compensate({.events = ev, .t_start_ns = 0, .t_end_ns = 25 * kNsPerMs});
+  ASSERT_EQ(out.size(), ev.size()) << out.report.brief();
+  double worst = 0, moved = 0;
+  for (std::size_t k = 0; k < ev.size(); ++k) {
+    const Eigen::Vector2d warped(out.x()[k], out.y()[k]), seen(ev[k].x, ev[k].y);
+    worst = std::max(worst, (comp->observed_position(warped, out.t_s()[k]) - seen).norm());
+    moved = std::max(moved, (warped - seen).norm());
+  }
+  EXPECT_LT(worst, 1e-3);
+  EXPECT_GT(moved, 5.0);
+}
+
 }  // namespace
 }  // namespace fdv

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <string>
 
 #include "fdv/compensation/compensator.h"
 #include "fdv/compensation/undistortion_map.h"
@@ -174,6 +175,55 @@ TEST(Warp, RotationTranslationIsExactOnPixelCentres) {
   // float32 arithmetic on ~600 px coordinates, normalised rays from the table, and the 0.5 µs
   // rotation step (|ω|·0.5 µs·f ≈ 0.001 px).
   EXPECT_LT(worst, 0.01);
+}
+
+// The inverse the detector's centre goes through (Compensator::observed_position): every
+// compensated event, taken back to its own time, must land where the sensor saw it (its raw pixel,
+// undistorted). Depth is a smooth slanted surface, as around a real object, and the rotation is
+// continuous (the inverse uses R(t) at t, the warp the refresh slot's R).
+TEST(Warp, ObservedPositionUndoesTheWarpOfEveryEvent) {
+  const Calibration calib = test_rig();
+  const PinholeCamera& cam = calib.event_camera;
+  const Eigen::Vector3d omega_E(-0.6, 1.4, -2.2), v_E(-1.2, 0.9, 3.0);
+  const TimeNs t0 = 3 * kNsPerS, dt = 25 * kNsPerMs;
+  RegisteredDepth depth;
+  depth.t = t0;
+  depth.width = cam.width;
+  depth.height = cam.height;
+  depth.depth_m.resize(static_cast<std::size_t>(cam.width) * cam.height);
+  for (int y = 0; y < cam.height; ++y)
+    for (int x = 0; x < cam.width; ++x)
+      depth.depth_m[static_cast<std::size_t>(y) * cam.width + x] = static_cast<float>(2.0 + 4.0 * x / cam.width + 1.0 * y / cam.height);
+  std::mt19937 rng(9);
+  std::uniform_int_distribution<int> ux(80, 560), uy(60, 420);
+  std::uniform_int_distribution<TimeNs> ut(0, dt - 1);
+  std::vector<TimeNs> times;
+  for (int i = 0; i < 2000; ++i) times.push_back(ut(rng));
+  std::sort(times.begin(), times.end());
+  std::vector<Event> ev;
+  for (TimeNs t : times) ev.push_back({t0 + t, static_cast<std::uint16_t>(ux(rng)), static_cast<std::uint16_t>(uy(rng)), true});
+  const Inputs inp = inputs_for(calib, omega_E, v_E, t0);
+  for (const char* method : {"none", "rotation", "rotation_translation"}) {
+    CompensationOptions opt;
+    opt.method = method;
+    opt.rotation_refresh_ns = 1 * kNsPerUs;
+    auto comp = make_compensator(calib, opt);
+    const CompensatedWindow& out = comp->compensate({ev, t0, t0 + dt, inp.imu, inp.odometry, &depth});
+    ASSERT_EQ(out.report.used, comp->method()) << out.report.brief();
+    ASSERT_EQ(out.size(), ev.size()) << out.report.brief();
+    double worst = 0, moved = 0;
+    for (std::size_t k = 0; k < ev.size(); ++k) {
+      const Eigen::Vector2d warped(out.x()[k], out.y()[k]);
+      const Eigen::Vector2d seen = cam.undistort_pixel({ev[k].x, ev[k].y});
+      worst = std::max(worst, (comp->observed_position(warped, out.t_s()[k]) - seen).norm());
+      moved = std::max(moved, (warped - seen).norm());
+    }
+    // float32 warp on ~600 px coordinates and the 0.5 µs rotation step.
+    EXPECT_LT(worst, 0.01) << method;
+    if (std::string(method) != "none") {
+      EXPECT_GT(moved, 10.0) << method << ": the warp must have moved events";
+    }
+  }
 }
 
 TEST(Warp, FlippedSignsDoNotCompensate) {

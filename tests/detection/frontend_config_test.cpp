@@ -26,6 +26,7 @@ detector:
   opening_px: 7
   min_peak: 0.3
   refine_box_scale: 0
+  refine_recentre_passes: 2
   fit_max_iterations: 12
   roi_min_events: 11
   motion_cue: false
@@ -54,6 +55,7 @@ depth_registration: {min_depth_m: 0.2, max_depth_m: 12}
   EXPECT_EQ(d.opening_px, 7);
   EXPECT_DOUBLE_EQ(d.min_peak, 0.3);
   EXPECT_DOUBLE_EQ(d.refine_box_scale, 0.0);
+  EXPECT_EQ(d.refine_recentre_passes, 2);
   EXPECT_EQ(d.fit_max_iterations, 12);
   EXPECT_EQ(d.roi_min_events, 11);
   EXPECT_FALSE(d.motion_cue);

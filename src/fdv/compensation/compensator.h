@@ -196,6 +196,13 @@ class Compensator {
   /// unchanged at the same address - does not pay for it. Results are the same either way. The
   /// strategies that use no depth ignore it; one frame is held prepared at a time.
   virtual void prepare_depth_frame(const RegisteredDepth& depth) { (void)depth; }
+  /// The inverse of the last window's warp: where the camera at t_start + t_s saw a point that an
+  /// event at t_s was warped to at `px` (compensated grid, undistorted pixels in and out). For
+  /// "rotation_translation", with the inverse depth the warp used where the camera saw it. Identity
+  /// for "none" (and a window that fell back to it). A detection's centre goes through it: the
+  /// events that make it were warped to t_start, but the camera pose paired with it is the one at
+  /// the detection's time. Valid until the next compensate() or prepare_depth_frame().
+  virtual Eigen::Vector2d observed_position(const Eigen::Vector2d& px, double t_s) const = 0;
 };
 
 /// The strategy named by options.method. Throws ConfigError for an unknown name, invalid options

@@ -207,5 +207,16 @@ const CompensatedWindow& ContrastMaxCompensator::compensate(const CompensationIn
   return out_;
 }
 
+Eigen::Vector2d ContrastMaxCompensator::observed_position(const Eigen::Vector2d& px, double t_s) const {
+  // The warp (WarpContrastObjective::warp) is linear in (u − cx, v − cy):
+  //   [U; V] = [a b; −b a]·[du; dv] − t·[h_x; h_y],  a = 1 − t·h_z, b = t·θ  ->  solve for (du, dv).
+  const PinholeCamera& cam = map_->camera();
+  const std::array<double, 4>& h = out_.report.warp_params;
+  const double a = 1 - t_s * h[2], b = t_s * h[3], det = a * a + b * b;
+  if (!(det > 0)) return px;
+  const double U = px.x() - cam.cx + t_s * h[0], V = px.y() - cam.cy + t_s * h[1];
+  return {cam.cx + (a * U - b * V) / det, cam.cy + (b * U + a * V) / det};
+}
+
 }  // namespace internal
 }  // namespace fdv

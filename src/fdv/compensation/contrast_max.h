@@ -50,6 +50,7 @@ class ContrastMaxCompensator final : public CompensatorBase {
   ContrastMaxCompensator(const Calibration& calibration, const CompensationOptions& options,
                          std::shared_ptr<const UndistortionMap> map);
   const CompensatedWindow& compensate(const CompensationInput& input) override;
+  Eigen::Vector2d observed_position(const Eigen::Vector2d& px, double t_s) const override;
 
  private:
   WarpContrastObjective objective_;

@@ -399,6 +399,41 @@ bool WarpCompensator::prepare_depth(const RegisteredDepth& depth) {
   return true;
 }
 
+double WarpCompensator::warp_inverse_depth_at(const Eigen::Vector2d& x) const {
+  const Eigen::Vector2d raw = map_->camera().normalized_to_pixel(x);
+  const double u = std::round(raw.x()), v = std::round(raw.y());
+  if (u >= 0 && v >= 0 && u < map_->width() && v < map_->height())
+    return std::fabs(inv_depth_[static_cast<std::size_t>(v) * map_->width() + static_cast<std::size_t>(u)]);
+  return options_.missing_depth == MissingDepthPolicy::kMedianDepth ? 1.0 / fallback_depth_m_ : 0.0;
+}
+
+Eigen::Vector2d WarpCompensator::observed_position(const Eigen::Vector2d& px, double t_s) const {
+  const CompensationReport& rep = out_.report;
+  if (rep.used == CompensationMethod::kNone) return px;
+  const PinholeCamera& cam = map_->camera();
+  // Forward (eqs. 6-8, header): X0 = R(t)·x + ρ·v·t, px = K·X0/z0, with x = (x, y, 1) the ray seen
+  // at t. Inverse: x = Rᵀ·(λ·d0 − ρ·v·t) with d0 = K⁻¹·px and λ fixed by x_z = 1.
+  const Eigen::Vector3d d0((px.x() - cam.cx) / cam.fx, (px.y() - cam.cy) / cam.fy, 1.0);
+  const double angle = rep.omega_E.norm() * t_s;
+  const Eigen::Matrix3d Rt =
+      angle > 0 ? Eigen::AngleAxisd(-angle, rep.omega_E.normalized()).toRotationMatrix() : Eigen::Matrix3d::Identity();
+  const Eigen::Vector3d r0 = Rt * d0;
+  if (!(r0.z() > 0)) return px;  // behind the camera at t: no image point
+  Eigen::Vector3d x = r0 / r0.z();
+  if (rep.used == CompensationMethod::kRotationTranslation) {
+    const Eigen::Vector3d rv = Rt * rep.v_E * t_s;
+    // ρ is looked up where the camera saw the point: first at the rotation-only guess, then once
+    // more at the result (ρ changes little over the few pixels the translation moves it).
+    for (int pass = 0; pass < 2; ++pass) {
+      const double rho = warp_inverse_depth_at(x.head<2>());
+      const double lambda = (1 + rho * rv.z()) / r0.z();
+      if (!(lambda > 0)) return px;
+      x = lambda * r0 - rho * rv;
+    }
+  }
+  return {cam.fx * x.x() + cam.cx, cam.fy * x.y() + cam.cy};
+}
+
 const CompensatedWindow& WarpCompensator::compensate(const CompensationInput& in) {
   const ImuWindowSummary imu = begin_window(in);
   CompensationReport& rep = out_.report;

@@ -13,6 +13,7 @@ class WarpCompensator final : public CompensatorBase {
                   std::shared_ptr<const UndistortionMap> map);
   const CompensatedWindow& compensate(const CompensationInput& input) override;
   void prepare_depth_frame(const RegisteredDepth& depth) override;
+  Eigen::Vector2d observed_position(const Eigen::Vector2d& px, double t_s) const override;
 
  private:
   /// K·R_s for each refresh slot of the window (row-major 3x3 floats), R_s = exp([ω]× t_s) at
@@ -25,6 +26,9 @@ class WarpCompensator final : public CompensatorBase {
   bool is_prepared(const RegisteredDepth& depth) const;
   /// The frame checks of compensate(): the event camera's size and a matching buffer.
   bool depth_fits(const RegisteredDepth& depth) const;
+  /// |ρ| the last window's warp used at normalised ray x (the nearest raw pixel), or the
+  /// missing-depth policy's value outside the sensor.
+  double warp_inverse_depth_at(const Eigen::Vector2d& x) const;
 
   std::vector<float> slots_;  ///< n_slots × 9
   // Depth cache.

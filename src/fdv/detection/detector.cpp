@@ -77,6 +77,8 @@ std::string DetectorOptions::validate() const {
   else if (region_min_area_px < 1) why << "region_min_area_px must be positive, got " << region_min_area_px;
   else if (!(refine_box_scale == 0 || (refine_box_scale >= 1 && refine_box_scale <= 10)))
     why << "refine_box_scale must be 0 (off) or in [1, 10], got " << refine_box_scale;
+  else if (refine_recentre_passes < 0 || refine_recentre_passes > 20)
+    why << "refine_recentre_passes must be in [0, 20], got " << refine_recentre_passes;
   else if (!odd_positive(motion_cue_density_px))
     why << "motion_cue_density_px must be odd in [1, 31], got " << motion_cue_density_px;
   else if (motion_cue_radius_px < 1 || motion_cue_radius_px > 100)
@@ -146,12 +148,7 @@ std::optional<std::pair<Eigen::Vector2d, double>> Detector::refine_with_events(c
   // Square: the segmented sweep can be a thin crescent across the motion, while the object
   // extends along it as well.
   const double half = 0.5 * options_.refine_box_scale * std::max(box.width(), box.height());
-  const cv::Rect e = box_pixels({c.x() - half, c.y() - half, c.x() + half, c.y() + half}, window.width, window.height);
-  if (e.area() == 0) return std::nullopt;
   const std::int32_t w = window.width;
-  const std::int32_t first_row = e.y * w, end_row = (e.y + e.height) * w;
-  double sx = 0, sy = 0, st = 0;
-  int n = 0;
   // Time-ordered windows (the compensators keep the input's order): only the slice is scanned.
   std::size_t begin = 0, end = std::min(window.pixel.size(), window.t_s.size());
   if (window.time_sorted) {
@@ -159,25 +156,43 @@ std::optional<std::pair<Eigen::Vector2d, double>> Detector::refine_with_events(c
     begin = static_cast<std::size_t>(std::lower_bound(t_begin, t_begin + static_cast<std::ptrdiff_t>(end), t_lo) - t_begin);
     end = static_cast<std::size_t>(std::upper_bound(t_begin, t_begin + static_cast<std::ptrdiff_t>(end), t_hi) - t_begin);
   }
-  const auto band = static_cast<std::uint32_t>(end_row - first_row);
-  for (std::size_t k = begin; k < end; ++k) {
-    const std::int32_t p = window.pixel[k];
-    if (static_cast<std::uint32_t>(p - first_row) >= band) continue;  // a narrow band of rows
-    const float t = window.t_s[k];
-    if (t < t_lo || t > t_hi) continue;
-    const std::int32_t y = p / w, x = p - y * w;
-    if (x < e.x || x >= e.x + e.width) continue;
-    sx += x;
-    sy += y;
-    st += t;
-    ++n;
+  // Mean shift with a flat square kernel: the region starts on the box, whose centre lies ahead of
+  // the object (the box holds the latest sweep), and residual background events inside it pull the
+  // centroid towards that centre. Re-centring the region on the centroid removes the pull: the
+  // fixed point is the region centred on the object's events.
+  Eigen::Vector2d centre = c;
+  double sx = 0, sy = 0, st = 0;
+  int n = 0;
+  for (int pass = 0; pass <= options_.refine_recentre_passes; ++pass) {
+    const cv::Rect e = box_pixels({centre.x() - half, centre.y() - half, centre.x() + half, centre.y() + half},
+                                  window.width, window.height);
+    if (e.area() == 0) return std::nullopt;
+    const std::int32_t first_row = e.y * w, end_row = (e.y + e.height) * w;
+    const auto band = static_cast<std::uint32_t>(end_row - first_row);
+    sx = sy = st = 0;
+    n = 0;
+    for (std::size_t k = begin; k < end; ++k) {
+      const std::int32_t p = window.pixel[k];
+      if (static_cast<std::uint32_t>(p - first_row) >= band) continue;  // a narrow band of rows
+      const float t = window.t_s[k];
+      if (t < t_lo || t > t_hi) continue;
+      const std::int32_t y = p / w, x = p - y * w;
+      if (x < e.x || x >= e.x + e.width) continue;
+      sx += x;
+      sy += y;
+      st += t;
+      ++n;
+    }
+    if (n < options_.roi_min_events) return std::nullopt;
+    const Eigen::Vector2d next(sx / n, sy / n);
+    const bool settled = (next - centre).norm() < 0.25;
+    centre = next;
+    if (settled) break;
   }
-  if (n < options_.roi_min_events) return std::nullopt;
-  const Eigen::Vector2d centroid(sx / n, sy / n);
   // Clutter guard: the object was inside the box at the end of its sweep, so within the slice its
   // centre is at most about one box size away; a centroid further off is background.
-  if ((centroid - c).norm() > std::max(box.width(), box.height())) return std::nullopt;
-  return std::make_pair(centroid, st / n);
+  if ((centre - c).norm() > std::max(box.width(), box.height())) return std::nullopt;
+  return std::make_pair(centre, st / n);
 }
 
 std::optional<Box2D> Detector::prior_gate(const DetectionPrior& prior) const {
@@ -461,9 +476,12 @@ DetectionResult Detector::detect(const CompensatedEventsView& window, std::span<
   d.t_ns = window.t_start_ns + from_seconds(t_mean_s);
   d.box_undistorted = box;
   d.center_undistorted = center;
-  d.center_normalized = {(center.x() - camera_.cx) / camera_.fx, (center.y() - camera_.cy) / camera_.fy};
-  d.center_raw = undistorted_to_raw(center);
-  d.box_raw = undistorted_box_to_raw(box);
+  // Seen by the camera at the detection's time (the events were warped to the window's start).
+  const Eigen::Vector2d seen = window.observed_at ? window.observed_at(center, t_mean_s) : center;
+  const Eigen::Vector2d moved = seen - center;
+  d.center_normalized = {(seen.x() - camera_.cx) / camera_.fx, (seen.y() - camera_.cy) / camera_.fy};
+  d.center_raw = undistorted_to_raw(seen);
+  d.box_raw = undistorted_box_to_raw({box.x0 + moved.x(), box.y0 + moved.y(), box.x1 + moved.x(), box.y1 + moved.y()});
   d.events = events;
   d.score = found->score;
   d.event_density = found->event_density;

@@ -71,7 +71,11 @@ struct DetectorOptions {
   /// time"): events inside the box enlarged by this factor and within ±τ of the box's mean event
   /// time (τ as large as the window allows) give the centroid and mean time of a time-complete
   /// slice of the object, which removes the forward bias of the segmented region's centroid. 0 = off.
-  double refine_box_scale = 3.0;
+  double refine_box_scale = 2.0;
+  /// Mean-shift passes of that region (re-centred on the events' centroid, same size) after the
+  /// first, while the centroid moves by ≥ 0.25 px: residual background events in a region centred
+  /// ahead of the object pull the centroid forwards; 0 = the region stays on the box.
+  int refine_recentre_passes = 6;
   // Whole-window guards.
   int min_window_events = 30;  ///< fewer compensated events: no detection ("too few events")
   /// More than this fraction of the image above θ means the compensation failed or a burst

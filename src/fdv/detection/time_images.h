@@ -20,8 +20,10 @@
 /// Pitfall: the images are reused, and each call rewrites only the 16-pixel blocks that held events
 /// in this window or the previous one (the rest are already 0): treat them as read-only (clone()
 /// before modifying). Assigning a different cv::Mat to a member is detected (full rebuild).
+#include <Eigen/Core>
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <opencv2/core.hpp>
 #include <span>
 #include <vector>
@@ -47,6 +49,11 @@ struct CompensatedEventsView {
   /// Threads for build_time_images (OpenCV's pool, fdv/core/parallel_parts.h): the image is split
   /// into this many pixel ranges. Results are identical for any count.
   int threads = 1;
+  /// Maps a point of this grid (the camera at t_start) to where the camera saw it t_s [s] later, on
+  /// the same undistorted grid: the inverse of the compensation's warp
+  /// (Compensator::observed_position). Empty = identity (no ego-motion). The detector reports its
+  /// centre_raw / centre_normalized / box_raw through it: the camera at the detection's time.
+  std::function<Eigen::Vector2d(const Eigen::Vector2d& px, double t_s)> observed_at = {};
 };
 
 struct TimeImages {
