@@ -64,7 +64,8 @@ struct DepthSegmentationOptions {
   int max_peaks = 3;
   /// Segmentation half-window about the peak's mean [m]: radius + window_sigmas·σ(z).
   double window_sigmas = 2.5;
-  /// Known object radius [m]; 0 = unknown: estimated from the box, r = ½·min(w, h)·z/f.
+  /// Known object radius [m]; 0 = unknown: estimated from the segmented pixels (silhouette radius
+  /// ρ = 2·σ of their x or y, the larger), r = ρ·z/f.
   double object_radius_m = 0.0;
   /// Radius assumed for the window when the radius is unknown [m] (a handball is 0.09 m).
   double default_window_radius_m = 0.10;
