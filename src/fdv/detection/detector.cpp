@@ -109,6 +109,8 @@ void Detector::allocate(int width, int height) {
   blanked_bounds_ = {};
   count_f_.create(height, width, CV_32F);
   count_integral_.create(height + 1, width + 1, CV_64F);
+  refine_count_.create(height, width, CV_32S);
+  refine_time_.create(height, width, CV_32F);
 }
 
 Eigen::Vector2d Detector::undistorted_to_raw(const Eigen::Vector2d& uv) const {
@@ -135,7 +137,7 @@ Box2D Detector::undistorted_box_to_raw(const Box2D& b) const {
 }
 
 std::optional<std::pair<Eigen::Vector2d, double>> Detector::refine_with_events(const CompensatedEventsView& window,
-                                                                              const Box2D& box, double t_box_s) const {
+                                                                              const Box2D& box, double t_box_s) {
   // A time slice symmetric about the box's mean event time, as wide as the window allows, and a
   // region large enough to hold the object throughout that slice: the object's events in it are
   // then complete, and their centroid is the object's position at their mean time (exact for
@@ -148,6 +150,16 @@ std::optional<std::pair<Eigen::Vector2d, double>> Detector::refine_with_events(c
   // Square: the segmented sweep can be a thin crescent across the motion, while the object
   // extends along it as well.
   const double half = 0.5 * options_.refine_box_scale * std::max(box.width(), box.height());
+  // The clutter guard below keeps the centre within one box size of the box's: the squares of all
+  // passes lie inside `outer`, whose slice events are binned once per pixel (count, Σt).
+  const double reach = std::max(box.width(), box.height());
+  const cv::Rect outer = box_pixels({c.x() - reach - half, c.y() - reach - half, c.x() + reach + half, c.y() + reach + half},
+                                    window.width, window.height);
+  if (outer.area() == 0) return std::nullopt;
+  for (int y = outer.y; y < outer.y + outer.height; ++y) {
+    std::fill_n(refine_count_.ptr<std::int32_t>(y) + outer.x, outer.width, 0);
+    std::fill_n(refine_time_.ptr<float>(y) + outer.x, outer.width, 0.0f);
+  }
   const std::int32_t w = window.width;
   // Time-ordered windows (the compensators keep the input's order): only the slice is scanned.
   std::size_t begin = 0, end = std::min(window.pixel.size(), window.t_s.size());
@@ -156,43 +168,53 @@ std::optional<std::pair<Eigen::Vector2d, double>> Detector::refine_with_events(c
     begin = static_cast<std::size_t>(std::lower_bound(t_begin, t_begin + static_cast<std::ptrdiff_t>(end), t_lo) - t_begin);
     end = static_cast<std::size_t>(std::upper_bound(t_begin, t_begin + static_cast<std::ptrdiff_t>(end), t_hi) - t_begin);
   }
-  // Mean shift with a flat square kernel: the region starts on the box, whose centre lies ahead of
+  const std::int32_t first_row = outer.y * w, end_row = (outer.y + outer.height) * w;
+  const auto band = static_cast<std::uint32_t>(end_row - first_row);
+  for (std::size_t k = begin; k < end; ++k) {
+    const std::int32_t p = window.pixel[k];
+    if (static_cast<std::uint32_t>(p - first_row) >= band) continue;  // a narrow band of rows
+    const float t = window.t_s[k];
+    if (t < t_lo || t > t_hi) continue;
+    const std::int32_t y = p / w, x = p - y * w;
+    if (x < outer.x || x >= outer.x + outer.width) continue;
+    ++refine_count_.ptr<std::int32_t>(y)[x];
+    refine_time_.ptr<float>(y)[x] += t;
+  }
+  // Mean shift with a flat square kernel: the square starts on the box, whose centre lies ahead of
   // the object (the box holds the latest sweep), and residual background events inside it pull the
-  // centroid towards that centre. Re-centring the region on the centroid removes the pull: the
-  // fixed point is the region centred on the object's events.
+  // centroid towards that centre. Re-centring the square on the centroid removes the pull: the
+  // fixed point is the square centred on the object's events.
   Eigen::Vector2d centre = c;
   double sx = 0, sy = 0, st = 0;
-  int n = 0;
+  long n = 0;
   for (int pass = 0; pass <= options_.refine_recentre_passes; ++pass) {
     const cv::Rect e = box_pixels({centre.x() - half, centre.y() - half, centre.x() + half, centre.y() + half},
-                                  window.width, window.height);
+                                  window.width, window.height) & outer;
     if (e.area() == 0) return std::nullopt;
-    const std::int32_t first_row = e.y * w, end_row = (e.y + e.height) * w;
-    const auto band = static_cast<std::uint32_t>(end_row - first_row);
     sx = sy = st = 0;
     n = 0;
-    for (std::size_t k = begin; k < end; ++k) {
-      const std::int32_t p = window.pixel[k];
-      if (static_cast<std::uint32_t>(p - first_row) >= band) continue;  // a narrow band of rows
-      const float t = window.t_s[k];
-      if (t < t_lo || t > t_hi) continue;
-      const std::int32_t y = p / w, x = p - y * w;
-      if (x < e.x || x >= e.x + e.width) continue;
-      sx += x;
-      sy += y;
-      st += t;
-      ++n;
+    for (int y = e.y; y < e.y + e.height; ++y) {
+      const std::int32_t* count = refine_count_.ptr<std::int32_t>(y);
+      const float* time = refine_time_.ptr<float>(y);
+      long row_n = 0;
+      for (int x = e.x; x < e.x + e.width; ++x) {
+        row_n += count[x];
+        sx += static_cast<double>(count[x]) * x;
+        st += time[x];
+      }
+      n += row_n;
+      sy += static_cast<double>(row_n) * y;
     }
     if (n < options_.roi_min_events) return std::nullopt;
-    const Eigen::Vector2d next(sx / n, sy / n);
+    const Eigen::Vector2d next = Eigen::Vector2d(sx, sy) / static_cast<double>(n);
     const bool settled = (next - centre).norm() < 0.25;
     centre = next;
+    // Clutter guard: the object was inside the box at the end of its sweep, so within the slice
+    // its centre is at most about one box size away; a centroid further off is background.
+    if ((centre - c).norm() > reach) return std::nullopt;
     if (settled) break;
   }
-  // Clutter guard: the object was inside the box at the end of its sweep, so within the slice its
-  // centre is at most about one box size away; a centroid further off is background.
-  if ((centre - c).norm() > std::max(box.width(), box.height())) return std::nullopt;
-  return std::make_pair(centre, st / n);
+  return std::make_pair(centre, st / static_cast<double>(n));
 }
 
 std::optional<Box2D> Detector::prior_gate(const DetectionPrior& prior) const {

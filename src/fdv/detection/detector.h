@@ -118,7 +118,7 @@ class Detector {
   /// Centroid and mean time [s since t_start] of the events in a time-complete slice around the
   /// box (DetectorOptions::refine_box_scale), or nothing when too few or outside the box.
   std::optional<std::pair<Eigen::Vector2d, double>> refine_with_events(const CompensatedEventsView& window,
-                                                                      const Box2D& box, double t_box_s) const;
+                                                                      const Box2D& box, double t_box_s);
   /// Sizes every image buffer for width × height (S = P = 0).
   void allocate(int width, int height);
   DetectorOptions options_;
@@ -132,6 +132,7 @@ class Detector {
   cv::Mat blanked_;         ///< P with failed candidates blanked; zero outside blanked_bounds_
   cv::Rect blanked_bounds_;
   cv::Mat count_f_, count_integral_;  ///< I as float and its summed-area table (dense-motion cue)
+  cv::Mat refine_count_, refine_time_;  ///< the refinement's slice events per pixel: count, Σt (CV_32S, CV_32F)
 };
 
 }  // namespace fdv
