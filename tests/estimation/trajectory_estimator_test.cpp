@@ -80,6 +80,23 @@ TEST(TrajectoryEstimator, NoiseFreeMonocularRecoversTruth) {
   expect_truth(e, s.truth, 1e-6);
 }
 
+// A fit farther than max_range_m from the event camera is not a ball (the monocular range runs
+// away): no such trajectory is started from or reported as converged. Here the true ball (5-6 m)
+// lies beyond a 2 m bound; the default 50 m bound reproduces the truth (test above).
+TEST(TrajectoryEstimator, NothingBeyondMaxRangeIsReportedConverged) {
+  const Scene s = test::forward_scene();
+  std::mt19937 rng(1);
+  EstimatorOptions o = options_for(s, EstimatorMode::kMonocular);
+  o.max_range_m = 2.0;
+  TrajectoryEstimator est(o);
+  const TrajectoryEstimate e = run_streaming(est, test::observe(s, rng, 0.0, false));
+  EXPECT_FALSE(e.converged);
+  EXPECT_FALSE(e.usable);
+  EXPECT_NE(e.message.find("max_range_m"), std::string::npos) << e.message;
+  o.max_range_m = 0.01;  // not above min_depth_in_front_m
+  EXPECT_THROW(TrajectoryEstimator{o}, ConfigError);
+}
+
 // The paper's bug was using the latest pose: with exact data, using the pose at each
 // observation's own time recovers the truth while the latest pose gives a visibly wrong fit.
 TEST(TrajectoryEstimator, UsesEachObservationsOwnPose) {

@@ -117,6 +117,8 @@ std::string EstimatorOptions::validate() const {
   if (max_lateness_ns < 0) return "max_lateness_ns must be >= 0";
   if (max_observations < min_residuals) return "max_observations must be >= min_residuals";
   if (!(min_depth_in_front_m > 0)) return "min_depth_in_front_m must be > 0";
+  if (!(max_range_m > min_depth_in_front_m) || !std::isfinite(max_range_m))
+    return "max_range_m must be finite and > min_depth_in_front_m";
   if (!positive_finite(mono_prior_depth_m)) return "mono_prior_depth_m must be > 0";
   if (!(min_reciprocal_condition >= 1e-14 && min_reciprocal_condition < 1))
     return "min_reciprocal_condition must be in [1e-14, 1) (Ceres' covariance needs >= 1e-14)";
@@ -317,8 +319,15 @@ const TrajectoryEstimate& TrajectoryEstimator::solve() {
   auto set_x = [&x](const BallisticTrajectory& tr) {
     for (int i = 0; i < 3; ++i) x[i] = tr.p0_W[i], x[3 + i] = tr.v0_W[i];
   };
+  // The farthest the object is from the event camera at any observation [m].
+  auto largest_range = [&](const BallisticTrajectory& tr) {
+    double z = 0;
+    for (const auto& o : events_) z = std::max(z, depth_in_camera(tr, o.T_W_E, o.t));
+    return z;
+  };
   auto feasible_cost = [&](const BallisticTrajectory& tr) -> std::optional<double> {
     if (!tr.p0_W.allFinite() || !tr.v0_W.allFinite()) return std::nullopt;
+    if (!(largest_range(tr) <= options_.max_range_m)) return std::nullopt;
     for (const auto& o : depths)
       if (!(depth_in_camera(tr, o.T_W_C, o.t) > options_.min_depth_in_front_m)) return std::nullopt;
     set_x(tr);
@@ -351,7 +360,8 @@ const TrajectoryEstimate& TrajectoryEstimator::solve() {
   }
   if (!start) {
     append(e.message,
-           "initialisation failed: no feasible starting point (object behind a camera?)");
+           "initialisation failed: no feasible starting point (object behind a camera, or beyond "
+           "max_range_m?)");
     latest_ = e;
     return latest_;
   }
@@ -374,7 +384,10 @@ const TrajectoryEstimate& TrajectoryEstimator::solve() {
   e.trajectory = BallisticTrajectory{t0, Eigen::Vector3d(x[0], x[1], x[2]),
                                      Eigen::Vector3d(x[3], x[4], x[5]), g};
   if (!summary.IsSolutionUsable() || !feasible_cost(e.trajectory)) {
-    append(e.message, "solver failed: " + summary.message);
+    if (const double z = largest_range(e.trajectory); summary.IsSolutionUsable() && z > options_.max_range_m)
+      append(e.message, format("diverged: the fit puts the object %.3g m away (max_range_m %.0f m)", z, options_.max_range_m));
+    else
+      append(e.message, "solver failed: " + summary.message);
     latest_ = e;
     return latest_;
   }

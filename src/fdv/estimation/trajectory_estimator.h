@@ -85,6 +85,10 @@ struct EstimatorOptions {
   int max_observations = 200;
   /// Least depth in front of every camera for a valid trajectory [m].
   double min_depth_in_front_m = 0.05;
+  /// Most depth in front of the event camera at any event observation for a valid trajectory [m]:
+  /// a thrown ball farther than this is a few pixels at most, so a fit out there is the
+  /// monocular range running away (it is weakly observable, through gravity only), not a ball.
+  double max_range_m = 50.0;
   /// Monocular initialisation fallback: depth assumed along the bearings [m] (docs/ESTIMATION.md).
   double mono_prior_depth_m = 5.0;
   /// Rank test on the whitened, robustified Jacobian: λ_min/λ_max of JᵀJ below this = degenerate

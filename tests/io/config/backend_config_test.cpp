@@ -79,6 +79,7 @@ FieldComparison compare(const EstimatorOptions& a, const EstimatorOptions& b) {
   FDV_COMPARE_FIELD(max_lateness_ns);
   FDV_COMPARE_FIELD(max_observations);
   FDV_COMPARE_FIELD(min_depth_in_front_m);
+  FDV_COMPARE_FIELD(max_range_m);
   FDV_COMPARE_FIELD(mono_prior_depth_m);
   FDV_COMPARE_FIELD(min_reciprocal_condition);
   FDV_COMPARE_FIELD(max_position_sigma_m);
@@ -166,6 +167,7 @@ estimation:
   max_lateness_ms: 150
   max_observations: 100
   min_depth_in_front_m: 0.1
+  max_range_m: 30
   mono_prior_depth_m: 4
   min_reciprocal_condition: 1.0e-10
   max_position_sigma_m: 0.5
@@ -228,6 +230,7 @@ TEST(BackendConfig, FullFileRoundTripsEveryKey) {
   est.max_lateness_ns = 150'000'000;
   est.max_observations = 100;
   est.min_depth_in_front_m = 0.1;
+  est.max_range_m = 30;
   est.mono_prior_depth_m = 4;
   est.min_reciprocal_condition = 1.0e-10;
   est.max_position_sigma_m = 0.5;

@@ -94,6 +94,7 @@ EstimatorOptions load_estimator_options(const YAML::Node& node, const std::strin
   s.bind_ms("max_lateness_ms", o.max_lateness_ns);
   s.bind("max_observations", o.max_observations);
   s.bind("min_depth_in_front_m", o.min_depth_in_front_m);
+  s.bind("max_range_m", o.max_range_m);
   s.bind("mono_prior_depth_m", o.mono_prior_depth_m);
   s.bind("min_reciprocal_condition", o.min_reciprocal_condition);
   s.bind("max_position_sigma_m", o.max_position_sigma_m);
