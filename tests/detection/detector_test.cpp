@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <functional>
 #include <random>
+#include <vector>
 
 #include "fdv/compensation/compensator.h"
 #include "fdv/core/error.h"
@@ -338,30 +340,22 @@ TEST_F(DetectorTest, InvalidOptionsAreRejected) {
   o.mean_filter_px = 4;
   EXPECT_NE(o.validate().find("mean_filter_px"), std::string::npos);
   EXPECT_THROW(Detector(o, lens()), ConfigError);
-  o = {};
-  o.fit_delta_center_px = 0;
-  EXPECT_NE(o.validate().find("δ_C"), std::string::npos);
-  o = {};
-  o.max_candidates = 0;
-  EXPECT_NE(o.validate().find("max_candidates"), std::string::npos);
-  o = {};
-  o.min_pixel_events = 0;
-  EXPECT_NE(o.validate().find("min_pixel_events"), std::string::npos);
-  o = {};
-  o.min_event_density = -1;
-  EXPECT_NE(o.validate().find("min_event_density"), std::string::npos);
-  o = {};
-  o.motion_cue_density_px = 4;
-  EXPECT_NE(o.validate().find("motion_cue_density_px"), std::string::npos);
-  o = {};
-  o.motion_cue_min_r2 = 1.5;
-  EXPECT_NE(o.validate().find("motion_cue_min_r2"), std::string::npos);
-  o = {};
-  o.refine_recentre_passes = -1;
-  EXPECT_NE(o.validate().find("refine_recentre_passes"), std::string::npos);
-  o = {};
-  o.motion_cue_min_pixels = 2;
-  EXPECT_NE(o.validate().find("motion_cue_min_pixels"), std::string::npos);
+  // Each bad value alone, and the words the message must name.
+  const std::vector<std::pair<const char*, std::function<void(DetectorOptions&)>>> cases = {
+      {"δ_C", [](DetectorOptions& x) { x.fit_delta_center_px = 0; }},
+      {"max_candidates", [](DetectorOptions& x) { x.max_candidates = 0; }},
+      {"min_pixel_events", [](DetectorOptions& x) { x.min_pixel_events = 0; }},
+      {"min_event_density", [](DetectorOptions& x) { x.min_event_density = -1; }},
+      {"motion_cue_density_px", [](DetectorOptions& x) { x.motion_cue_density_px = 4; }},
+      {"motion_cue_min_r2", [](DetectorOptions& x) { x.motion_cue_min_r2 = 1.5; }},
+      {"refine_recentre_passes", [](DetectorOptions& x) { x.refine_recentre_passes = -1; }},
+      {"motion_cue_min_pixels", [](DetectorOptions& x) { x.motion_cue_min_pixels = 2; }},
+  };
+  for (const auto& [name, make_bad] : cases) {
+    DetectorOptions bad;
+    make_bad(bad);
+    EXPECT_NE(bad.validate().find(name), std::string::npos) << name;
+  }
   EXPECT_TRUE(DetectorOptions{}.validate().empty());
 }
 

@@ -15,6 +15,7 @@ struct Box2D {
   double height() const { return y1 - y0; }
   Eigen::Vector2d center() const { return {0.5 * (x0 + x1), 0.5 * (y0 + y1)}; }
   bool contains(const Eigen::Vector2d& p) const { return p.x() >= x0 && p.x() <= x1 && p.y() >= y0 && p.y() <= y1; }
+  Box2D moved_by(const Eigen::Vector2d& d) const { return {x0 + d.x(), y0 + d.y(), x1 + d.x(), y1 + d.y()}; }
 };
 
 enum class DetectionSource {

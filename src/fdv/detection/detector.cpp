@@ -487,8 +487,7 @@ DetectionResult Detector::detect(const CompensatedEventsView& window, std::span<
   if (o.refine_box_scale > 0) {
     t = Clock::now();
     if (const auto refined = refine_with_events(window, box, t_mean_s)) {
-      const Eigen::Vector2d shift = refined->first - center;
-      box = {box.x0 + shift.x(), box.y0 + shift.y(), box.x1 + shift.x(), box.y1 + shift.y()};
+      box = box.moved_by(refined->first - center);
       center = refined->first;
       t_mean_s = refined->second;
     }
@@ -500,10 +499,9 @@ DetectionResult Detector::detect(const CompensatedEventsView& window, std::span<
   d.center_undistorted = center;
   // Seen by the camera at the detection's time (the events were warped to the window's start).
   const Eigen::Vector2d seen = window.observed_at ? window.observed_at(center, t_mean_s) : center;
-  const Eigen::Vector2d moved = seen - center;
   d.center_normalized = {(seen.x() - camera_.cx) / camera_.fx, (seen.y() - camera_.cy) / camera_.fy};
   d.center_raw = undistorted_to_raw(seen);
-  d.box_raw = undistorted_box_to_raw({box.x0 + moved.x(), box.y0 + moved.y(), box.x1 + moved.x(), box.y1 + moved.y()});
+  d.box_raw = undistorted_box_to_raw(box.moved_by(seen - center));
   d.events = events;
   d.score = found->score;
   d.event_density = found->event_density;
