@@ -63,19 +63,19 @@ TEST(WindowRelativeContrast, BallInFlightOnlyAfterTheSharedDenoising) {
   cv::Mat T(480, 640, CV_32F, cv::Scalar(0));
   T(cv::Rect(318, 238, 5, 5)).setTo(0.020f);  // the ball's late events: max over M
   T(cv::Rect(100, 100, 5, 5)).setTo(0.005f);  // the background's pattern: max over B
-  T.at<float>(400, 600) = 0.025f;             // an isolated noise event: removed by the 3x3 median
+  T.at<float>(400, 600) = 0.025f;             // an isolated noise event: removed by the shared denoising
   const TimeNs t0 = 10 * kNsPerMs, t1 = 20 * kNsPerMs;
 
-  const auto in_flight = window_relative_contrast(test::straight_flight(p, {2, 0, 0}), T, t0, t1);
+  const auto in_flight = window_relative_contrast(test::straight_flight(p, {2, 0, 0}), T, t0, t1, {});
   ASSERT_EQ(in_flight.size(), 1u);
   EXPECT_NEAR(in_flight[0], (0.020 - 0.005) / 0.020, 1e-6);  // η = (max_M − max_B) / max_M
 
   // The same ball held still: η is not defined (no moving object).
-  EXPECT_TRUE(window_relative_contrast(test::straight_flight(p, Eigen::Vector3d::Zero()), T, t0, t1)
+  EXPECT_TRUE(window_relative_contrast(test::straight_flight(p, Eigen::Vector3d::Zero()), T, t0, t1, {})
                   .empty());
   // Behind the camera: no box in the image.
   EXPECT_TRUE(
-      window_relative_contrast(test::straight_flight({0, 0, -5}, {2, 0, 0}), T, t0, t1).empty());
+      window_relative_contrast(test::straight_flight({0, 0, -5}, {2, 0, 0}), T, t0, t1, {}).empty());
 }
 
 TEST(ParseSeedList, RangesAndLists) {

@@ -93,14 +93,14 @@ std::string ensure_simulated(const std::string& preset, std::uint64_t seed,
 }
 
 std::vector<double> window_relative_contrast(const DatasetTruth& truth, const cv::Mat& mean_time_s,
-                                             TimeNs t_start, TimeNs t_end) {
+                                             TimeNs t_start, TimeNs t_end, const DetectorOptions& detector) {
   std::vector<double> etas;
   cv::Mat clean;  // denoised once per window, only if some ball needs it
   for (const auto& [id, r] : truth.radius_m) {
     if (!truth.in_flight(id, (t_start + t_end) / 2)) continue;
     const cv::Rect M = undistorted_truth_rect(truth, id, t_start, t_end - 1);
     if (M.area() == 0) continue;
-    if (clean.empty()) clean = denoise_for_contrast(mean_time_s);
+    if (clean.empty()) clean = denoise_for_contrast(mean_time_s, detector.mean_filter_px, detector.opening_px);
     if (const auto eta = relative_contrast(clean, M)) etas.push_back(*eta);
   }
   return etas;
@@ -118,7 +118,7 @@ ExperimentRun run_experiment(const DatasetTruth& truth, const ExperimentOptions&
     run.front_end_ms.push_back(w.timings.compensation_ms + w.timings.detection.total_ms);
     if (options.relative_contrast && w.detector) {
       const auto etas = window_relative_contrast(truth, w.detector->time_images().mean_time_s,
-                                                 w.t_start, w.t_end);
+                                                 w.t_start, w.t_end, options.perception.detection);
       run.relative_contrast.insert(run.relative_contrast.end(), etas.begin(), etas.end());
     }
   };

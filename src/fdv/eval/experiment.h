@@ -47,12 +47,12 @@ std::string ensure_simulated(const sim::ScenarioConfig& config, const std::strin
 inline constexpr const char* kSimulationMarker = "simulation_complete.yaml";
 
 /// Relative contrast η (paper §V-B) of one compensated window: the mean-time image after the
-/// shared denoising (denoise_for_contrast), M = the true box over the window on the undistorted
+/// shared denoising (denoise_for_contrast with the detector's filter sizes), M = the true box over the window on the undistorted
 /// grid of each ball in flight at the window's middle (true speed >= 1 m/s) whose box is non-empty
 /// in the image. A held or lying ball, or a window without a ball, gives nothing: η is undefined
 /// without a moving object (the paper computes it on scene 2 only).
 std::vector<double> window_relative_contrast(const DatasetTruth& truth, const cv::Mat& mean_time_s,
-                                             TimeNs t_start, TimeNs t_end);
+                                             TimeNs t_start, TimeNs t_end, const DetectorOptions& detector);
 
 struct ExperimentOptions {
   PerceptionOptions perception;

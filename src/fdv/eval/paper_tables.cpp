@@ -236,7 +236,7 @@ std::string to_markdown(const Table1& table, const Provenance& provenance) {
       "alone; "
       "real-time = every window under Δt. η (paper §V-B) = (max over M − max over B) / max over M "
       "of the "
-      "mean-time image after one shared 3x3 median filter, M = the ball's exact ground-truth box "
+      "mean-time image after one shared denoising (the paper's own, §IV-B.2: the detector's 3x3 mean filter and 3x3 opening), M = the ball's exact ground-truth box "
       "over the "
       "window on the undistorted grid, B = the rest of the image; computed on scene2_ball only, "
       "over the "

@@ -5,10 +5,14 @@
 
 namespace fdv {
 
-cv::Mat denoise_for_contrast(const cv::Mat& image) {
+cv::Mat denoise_for_contrast(const cv::Mat& image, int mean_filter_px, int opening_px) {
   if (image.type() != CV_32F) throw std::invalid_argument("denoise_for_contrast: expected a CV_32F image");
+  if (mean_filter_px < 1 || mean_filter_px % 2 == 0 || opening_px < 1 || opening_px % 2 == 0)
+    throw std::invalid_argument("denoise_for_contrast: filter sizes must be odd and positive");
   cv::Mat out;
-  cv::medianBlur(image, out, 3);
+  cv::blur(image, out, cv::Size(mean_filter_px, mean_filter_px));
+  cv::morphologyEx(out, out, cv::MORPH_OPEN,
+                   cv::getStructuringElement(cv::MORPH_RECT, cv::Size(opening_px, opening_px)));
   return out;
 }
 

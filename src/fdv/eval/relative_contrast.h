@@ -7,21 +7,25 @@
 /// M = the pixels of the object's box, B = every other pixel of the image. Like the paper, η is
 /// computed after one "unified denoising" that is the same for every compensation method:
 ///
-///   cv::Mat clean = denoise_for_contrast(time_images.mean_time_s);   // CV_32F in, CV_32F out
+///   cv::Mat clean = denoise_for_contrast(time_images.mean_time_s, 3, 3);  // CV_32F in and out
 ///   std::optional<double> eta = relative_contrast(clean, box_pixels);  // nothing if undefined
 ///
-/// Unified denoising = a 3x3 median filter of the mean-time image T (seconds since the window
-/// start, 0 where no event fell). A pixel keeps a value only when most of its 3x3 neighbourhood
-/// has events, so the isolated noise events the paper warns about (their timestamps spread "from
-/// oldest to newest" and would otherwise set both maxima) are removed, while the object's and the
-/// background's extended patterns survive. See docs/DETECTION.md.
+/// Unified denoising = the paper's own denoising (§IV-B.2: "mean filter and morphological
+/// operations ... to eliminate salt-and-pepper noise") applied to the mean-time image T (seconds
+/// since the window start, 0 where no event fell): a k x k mean filter, then a morphological opening
+/// with a square element, with the detector's sizes (mean_filter_px, opening_px). The isolated noise
+/// events the paper warns about (timestamps spread "from oldest to newest", which would otherwise
+/// set both maxima) are removed; the object's and the background's extended patterns keep their
+/// interior values. The element-wise square that follows in the detector enhances contrast and is
+/// not denoising, so it is not applied. See docs/DETECTION.md.
 #include <opencv2/core.hpp>
 #include <optional>
 
 namespace fdv {
 
-/// The shared denoising step: 3x3 median filter (cv::medianBlur) of a CV_32F image.
-cv::Mat denoise_for_contrast(const cv::Mat& image);
+/// The shared denoising step of a CV_32F image: mean filter (cv::blur, `mean_filter_px` square),
+/// then opening (cv::morphologyEx, `opening_px` square). Sizes must be odd and positive.
+cv::Mat denoise_for_contrast(const cv::Mat& image, int mean_filter_px, int opening_px);
 
 /// η of `image` for the object box `M` (pixel rectangle, clipped to the image). Nothing when
 /// the box is empty after clipping, covers the whole image, or max over M is not positive.
