@@ -2,6 +2,7 @@
 // relative contrast restricted to windows with a ball in flight, and the seed list.
 #include "fdv/eval/experiment.h"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -9,6 +10,7 @@
 
 #include "eval/handmade_truth.h"
 #include "fdv/core/error.h"
+#include "fdv/sim/simulator.h"
 #include "test_support.h"
 
 namespace fdv {
@@ -50,6 +52,22 @@ TEST(EnsureSimulated, SimulatesOnceThenReusesUntilIncompleteOrChanged) {
   other.seed = 2;
   ensure_simulated(other, dir);
   EXPECT_FALSE(fs::exists(sentinel)) << "another configuration must be simulated again";
+
+  // The same configuration from an earlier simulator revision (its marker says so): made again.
+  std::ofstream(sentinel) << "x";
+  const fs::path marker = fs::path(dir) / kSimulationMarker;
+  std::string text;
+  {
+    std::ifstream in(marker);
+    std::getline(in, text, '\0');
+  }
+  const std::string now = fmt::format("revision {}\n", sim::kSimulatorRevision);
+  const auto at = text.find(now);
+  ASSERT_NE(at, std::string::npos) << "the marker names the simulator revision";
+  text.replace(at, now.size(), fmt::format("revision {}\n", sim::kSimulatorRevision - 1));
+  std::ofstream(marker, std::ios::trunc) << text;
+  ensure_simulated(other, dir);
+  EXPECT_FALSE(fs::exists(sentinel)) << "a dataset from another simulator revision must be simulated again";
 }
 
 TEST(EnsureSimulated, PresetFolderNameAndUnknownPreset) {

@@ -58,14 +58,17 @@ std::string read_text(const fs::path& path) {
 }  // namespace
 
 std::string ensure_simulated(const sim::ScenarioConfig& config, const std::string& dir) {
-  const std::string fingerprint = sim::to_yaml(config);
+  // The configuration and the simulator's revision: either changed = another dataset.
+  const std::string fingerprint =
+      fmt::format("# fdv simulator revision {}\n{}", sim::kSimulatorRevision, sim::to_yaml(config));
   const fs::path marker = fs::path(dir) / kSimulationMarker;
   if (fs::exists(marker) && read_text(marker) == fingerprint) {
     spdlog::debug("reusing the simulated dataset {}", dir);
     return dir;
   }
   if (fs::exists(dir))
-    spdlog::info("{}: incomplete or made with another configuration, simulating again", dir);
+    spdlog::info("{}: incomplete, or made with another configuration or simulator revision: simulating again",
+                 dir);
   fs::remove_all(dir);
   {
     sim::Simulator simulator(config);

@@ -36,9 +36,9 @@ PerceptionCounters replay(std::unique_ptr<RecordingReader> reader, const Calibra
 /// The dataset folder of simulator preset `preset` at `seed` under `cache_dir`
 /// (CACHE/PRESET_seedSEED), simulated (sim::make_preset + sim::DatasetSink, as `fdv simulate`)
 /// only when the folder is missing or incomplete. Complete = the marker file kSimulationMarker,
-/// written last, holds the preset's full configuration as it is now; a folder from an interrupted
-/// run or from a since-changed preset is simulated again. (A change to the simulator's code that
-/// leaves the configuration alone is not detected: clear the cache then.) Not safe against two
+/// written last, holds the preset's full configuration as it is now and sim::kSimulatorRevision; a
+/// folder from an interrupted run, a since-changed preset or another simulator revision is
+/// simulated again. Not safe against two
 /// processes filling the same folder at once. Throws ConfigError for an unknown preset.
 std::string ensure_simulated(const std::string& preset, std::uint64_t seed,
                              const std::string& cache_dir);

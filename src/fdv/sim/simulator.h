@@ -27,6 +27,11 @@
 
 namespace fdv::sim {
 
+/// Revision of what the simulator writes for a given configuration. Bump it with any code change
+/// that alters its output (events, depth, IMU, odometry, truth), so that cached datasets
+/// (fdv::ensure_simulated) are simulated again instead of silently reused.
+inline constexpr int kSimulatorRevision = 1;
+
 /// Receives the simulated streams. Every callback has an empty default.
 class SimulationSink {
  public:
