@@ -43,6 +43,25 @@ void expect_truth(const TrajectoryEstimate& e, const BallisticTrajectory& truth,
   EXPECT_LT((e.trajectory.v0_W - t.v0_W).norm(), tol) << e.brief_report();
 }
 
+// Hand-computed: the ball 5 m ahead of a camera at the origin looking along +z, position σ 0.1 m
+// per axis: J = I/5 on (x, y), so S = (0.1/5)² + σ_n² = 4e-4 + 4e-4 per axis with σ_n = 0.02, and a
+// residual of 0.02 on x gives χ² = 0.02² / 8e-4 = 0.5.
+TEST(TrajectoryEstimate, ObservationMahalanobis2HandComputed) {
+  TrajectoryEstimate est;
+  est.trajectory = {0, Eigen::Vector3d(0, 0, 5), Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};
+  const Eigen::Isometry3d camera = Eigen::Isometry3d::Identity();
+  EXPECT_FALSE(est.observation_mahalanobis2(0, camera, {0.02, 0}, 0.02)) << "no covariance, no statistic";
+  Eigen::Matrix<double, 6, 6> cov = Eigen::Matrix<double, 6, 6>::Zero();
+  cov.topLeftCorner<3, 3>() = 0.01 * Eigen::Matrix3d::Identity();
+  est.covariance = cov;
+  EXPECT_NEAR(*est.observation_mahalanobis2(0, camera, {0.02, 0}, 0.02), 0.5, 1e-12);
+  EXPECT_NEAR(*est.observation_mahalanobis2(0, camera, {0, 0}, 0.02), 0.0, 1e-12);
+  // The camera turned around (180° about y): the ball is behind it.
+  Eigen::Isometry3d turned = Eigen::Isometry3d::Identity();
+  turned.linear() = Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  EXPECT_FALSE(est.observation_mahalanobis2(0, turned, {0, 0}, 0.02));
+}
+
 TEST(TrajectoryEstimator, RejectsInvalidOptions) {
   EstimatorOptions o;  // event_focal_px left at 0
   EXPECT_THROW(TrajectoryEstimator{o}, ConfigError);

@@ -153,5 +153,50 @@ TEST(Tracker, BoxSizeIsSmoothed) {
   EXPECT_NEAR(tracker.tracks()[0].predict(3 * kWindow).box_size_px.x(), 30.0, 1e-12);
 }
 
+// A confirmed track moving steadily; then a detection 30 px off its image-plane prediction (the
+// filter's gate rejects it: ~10σ). Without help it starts a new track; vouched for by an external
+// gate (a 3D estimate) within gate_chi2 it continues the track; an external statistic above
+// gate_chi2, or one for another track, changes nothing.
+TEST(Tracker, ExternalGateContinuesATrackTheFilterGateRejects) {
+  auto run = [](std::span<const ExternalGate> external) {
+    Tracker tracker;
+    for (int k = 0; k < 8; ++k)
+      tracker.update(k * kWindow, std::vector<TrackerDetection>{det(k * kWindow, 100 + 10.0 * k, 200)});
+    EXPECT_EQ(tracker.tracks().size(), 1u);
+    EXPECT_TRUE(tracker.tracks()[0].confirmed());
+    const int id = tracker.tracks()[0].id();
+    const std::vector<TrackerDetection> off{det(8 * kWindow, 180, 230)};  // predicted (180, 200)
+    const TrackerStep step = tracker.update(8 * kWindow, off, external);
+    return std::make_pair(id, step.assignments.at(0));
+  };
+  const auto [id, alone] = run({});
+  EXPECT_EQ(alone.outcome, Outcome::kNewTrack);
+  EXPECT_NE(alone.track_id, id);
+
+  const std::vector<ExternalGate> vouched{{id, 0, 2.0}};
+  const auto [id2, aided] = run(vouched);
+  EXPECT_EQ(aided.outcome, Outcome::kUpdated);
+  EXPECT_EQ(aided.track_id, id2);
+  EXPECT_TRUE(aided.by_external_gate);
+  EXPECT_DOUBLE_EQ(aided.mahalanobis2, 2.0);
+
+  const std::vector<ExternalGate> too_far{{id, 0, TrackerOptions{}.gate_chi2 + 1}};
+  EXPECT_EQ(run(too_far).second.outcome, Outcome::kNewTrack);
+  const std::vector<ExternalGate> other_track{{id + 100, 0, 1.0}};
+  EXPECT_EQ(run(other_track).second.outcome, Outcome::kNewTrack);
+}
+
+// An external gate does not lift the hard radius cap (gate_max_distance_px).
+TEST(Tracker, ExternalGateKeepsTheHardRadiusCap) {
+  Tracker tracker;
+  for (int k = 0; k < 8; ++k)
+    tracker.update(k * kWindow, std::vector<TrackerDetection>{det(k * kWindow, 100 + 10.0 * k, 200)});
+  const int id = tracker.tracks()[0].id();
+  const std::vector<ExternalGate> vouched{{id, 0, 1.0}};
+  const TrackerStep step =
+      tracker.update(8 * kWindow, std::vector<TrackerDetection>{det(8 * kWindow, 180, 320)}, vouched);
+  EXPECT_EQ(step.assignments.at(0).outcome, Outcome::kNewTrack);  // 120 px > 100 px cap
+}
+
 }  // namespace
 }  // namespace fdv

@@ -138,6 +138,24 @@ std::optional<Eigen::Matrix3d> TrajectoryEstimate::position_covariance(TimeNs t)
   return J * *covariance * J.transpose();
 }
 
+std::optional<double> TrajectoryEstimate::observation_mahalanobis2(TimeNs t, const Eigen::Isometry3d& T_W_E,
+                                                                  const Eigen::Vector2d& xn, double sigma_n) const {
+  const auto cov_W = position_covariance(t);
+  if (!cov_W) return std::nullopt;
+  const Eigen::Vector3d p = T_W_E.inverse() * trajectory.position(t);
+  if (!(p.z() > 0)) return std::nullopt;
+  const double iz = 1.0 / p.z();
+  Eigen::Matrix<double, 2, 3> J;
+  J << iz, 0, -p.x() * iz * iz, 0, iz, -p.y() * iz * iz;
+  const Eigen::Matrix3d R_EW = T_W_E.linear().transpose();
+  const Eigen::Matrix2d S =
+      J * R_EW * *cov_W * R_EW.transpose() * J.transpose() + sigma_n * sigma_n * Eigen::Matrix2d::Identity();
+  const Eigen::Vector2d r = xn - p.head<2>() * iz;
+  const double m2 = r.dot(S.ldlt().solve(r));
+  if (!std::isfinite(m2)) return std::nullopt;
+  return m2;
+}
+
 std::string TrajectoryEstimate::brief_report() const {
   std::string s = usable ? "usable" : "NOT usable";
   s += std::string(", ") + to_string(method);

@@ -132,6 +132,12 @@ struct TrajectoryEstimate {
 
   /// Covariance of the position at t (propagated from the (p0, v0) covariance), if any.
   std::optional<Eigen::Matrix3d> position_covariance(TimeNs t) const;
+  /// χ²₂ statistic of an event observation (normalised centre `xn` seen at time t by the camera
+  /// at pose T_W_E) against this trajectory: r = xn − π(T_W_E⁻¹ p(t)) as eq. 13, covariance
+  /// J Σ_E Jᵀ + σ_n² I with Σ_E the position covariance in the camera and J = ∂π/∂p_E. Nothing
+  /// without a covariance or when p(t) is not in front of the camera.
+  std::optional<double> observation_mahalanobis2(TimeNs t, const Eigen::Isometry3d& T_W_E, const Eigen::Vector2d& xn,
+                                                 double sigma_n) const;
   /// One line: usable, method, counts, cost, iterations, p0, v0, sigma, message.
   std::string brief_report() const;
 };

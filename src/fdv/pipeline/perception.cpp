@@ -254,7 +254,17 @@ void Perception::process_window(PendingWindow& w) {
     inputs.push_back({d.t_ns, d.center_raw, d.center_normalized,
                       Eigen::Vector2d(d.box_raw.width(), d.box_raw.height()), d.events});
   }
-  const TrackerStep step = tracker_.update(w.t_end, inputs);
+  // Estimate-aided association: the 3D trajectory of a track vouches for the detections it predicts.
+  vouched_.clear();
+  if (options_.estimate_aided_association)
+    for (std::size_t i = 0; i < inputs.size(); ++i)
+      for (const Track& track : tracker_.tracks()) {
+        const auto it = estimators_.find(track.id());
+        if (!track.confirmed() || it == estimators_.end()) continue;
+        if (const auto m2 = trajectory_mahalanobis2(it->second.fusion.latest(), inputs[i]))
+          vouched_.push_back({track.id(), i, *m2});
+      }
+  const TrackerStep step = tracker_.update(w.t_end, inputs, vouched_);
   result.timings.tracking_ms = ms_since(tracking_start);
   for (int id : step.deleted) estimators_.erase(id);
   std::vector<int> to_solve = step.confirmed;
@@ -300,6 +310,15 @@ Perception::TrackEstimators& Perception::estimators_for(int track_id) {
     it = estimators_.emplace(track_id, std::move(e)).first;
   }
   return it->second;
+}
+
+std::optional<double> Perception::trajectory_mahalanobis2(const TrajectoryEstimate& est,
+                                                         const TrackerDetection& d) const {
+  if (!est.converged || !est.usable || est.method != EstimateMethod::kFusion) return std::nullopt;
+  const auto T_W_E = camera_pose(d.t);
+  if (!T_W_E) return std::nullopt;
+  return est.observation_mahalanobis2(d.t, *T_W_E, d.centre_normalized,
+                                      options_.estimation.event_sigma_px / options_.estimation.event_focal_px);
 }
 
 void Perception::process_depth(const RegisteredDepth& depth) {

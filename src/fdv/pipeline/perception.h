@@ -58,6 +58,11 @@ struct PerceptionOptions {
   /// event_focal_px is filled from the calibration when left 0.
   EstimatorOptions estimation;
   bool monocular_baseline = true;  ///< run Su & Shen's events-only estimator beside the fusion
+  /// A confirmed track whose fusion estimate is usable keeps a detection its 3D trajectory predicts
+  /// (χ²₂ ≤ tracking.gate_chi2 on the normalised-plane residual, the estimate's position
+  /// covariance propagated) even when the image-plane filter's gate rejects it, so that the track
+  /// and its 3D history go on instead of a new track starting from nothing (Tracker, ExternalGate).
+  bool estimate_aided_association = true;
   PredictionOptions prediction;
   /// How long (stream time) a completed window may wait for IMU and odometry to catch up [ns].
   TimeNs max_lateness_ns = 50 * kNsPerMs;
@@ -169,6 +174,10 @@ class Perception {
   std::optional<Eigen::Isometry3d> camera_pose(TimeNs t) const;
   std::optional<OdometrySample> vehicle_state(TimeNs t) const;
   TrackEstimators& estimators_for(int track_id);
+  /// χ²₂ of detection `d` against the trajectory of `est` at d's time (normalised image plane,
+  /// covariance of the predicted position ⊕ the event noise); nothing when `est` is not a usable
+  /// fusion estimate, the pose is unknown or the prediction is behind the camera.
+  std::optional<double> trajectory_mahalanobis2(const TrajectoryEstimate& est, const TrackerDetection& d) const;
   void warn_once(const std::string& key, const std::string& message);
 
   Calibration calibration_;
@@ -186,6 +195,7 @@ class Perception {
   std::deque<PendingWindow> pending_windows_;
   std::vector<std::vector<Event>> free_buffers_;
   std::vector<DetectionPrior> priors_;  ///< per window, reused
+  std::vector<ExternalGate> vouched_;   ///< per window, reused (estimate_aided_association)
   std::map<int, TrackEstimators> estimators_;
   TimeNs stream_time_ = std::numeric_limits<TimeNs>::min();
   TimeNs processed_until_ = std::numeric_limits<TimeNs>::min();  ///< t_end of the last window done

@@ -15,6 +15,7 @@ struct Candidate {
   double d2;
   std::size_t track;
   std::size_t detection;
+  bool external = false;
 };
 
 }  // namespace
@@ -53,7 +54,8 @@ const Track* Tracker::find(int id) const {
   return nullptr;
 }
 
-TrackerStep Tracker::update(TimeNs t, std::span<const TrackerDetection> detections) {
+TrackerStep Tracker::update(TimeNs t, std::span<const TrackerDetection> detections,
+                            std::span<const ExternalGate> external) {
   TrackerStep step;
   step.assignments.resize(detections.size());
   for (std::size_t i = 0; i < detections.size(); ++i) step.assignments[i].detection = i;
@@ -90,7 +92,15 @@ TrackerStep Tracker::update(TimeNs t, std::span<const TrackerDetection> detectio
       const ImagePrediction p = tr.filter().predict(d.t);
       if ((d.centre_px - p.position()).norm() > options_.gate_max_distance_px) continue;
       const double d2 = p.mahalanobis2(d.centre_px);
-      if (d2 <= options_.gate_chi2) candidates.push_back({d2, k, i});
+      if (d2 <= options_.gate_chi2) {
+        candidates.push_back({d2, k, i});
+        continue;
+      }
+      for (const ExternalGate& g : external)
+        if (g.track_id == tr.id() && g.detection == i && g.mahalanobis2 <= options_.gate_chi2) {
+          candidates.push_back({g.mahalanobis2, k, i, true});
+          break;
+        }
     }
   }
   // Global nearest neighbour, greedy: smallest d² first; ties go to the older (confirmed) track.
@@ -117,6 +127,7 @@ TrackerStep Tracker::update(TimeNs t, std::span<const TrackerDetection> detectio
     out.outcome = TrackAssignment::Outcome::kUpdated;
     out.track_id = tr.id();
     out.mahalanobis2 = c.d2;
+    out.by_external_gate = c.external;
   }
   for (std::size_t k = 0; k < track_taken.size(); ++k)
     if (!track_taken[k]) ++tracks_[k].misses_;

@@ -14,7 +14,8 @@
 /// Association: every (track, detection) pair must pass (1) the time gate: the detection is not
 /// older than the track's last update and at most `max_gap_ns` newer; (2) the Mahalanobis gate
 /// d² = y^T S^-1 y <= gate_chi2 with S the filter's innovation covariance at the detection's time;
-/// (3) a hard radius cap |y| <= gate_max_distance_px. Gated pairs are assigned greedily in order
+/// (3) a hard radius cap |y| <= gate_max_distance_px. A pair that fails (2) may still pass on an
+/// ExternalGate given by the caller (fdv::Perception: the track's 3D estimate). Gated pairs are assigned greedily in order
 /// of increasing d² (global nearest neighbour, one detection per track and per window). A
 /// detection left over starts a new tentative track. Coordinates are raw (distorted) pixels of the
 /// event camera, the grid in which detections, boxes and registered depth frames live.
@@ -109,7 +110,19 @@ struct TrackAssignment {
   Outcome outcome = Outcome::kRejected;
   int track_id = -1;        ///< the track it now belongs to; -1 when rejected
   double mahalanobis2 = 0;  ///< gate statistic for kUpdated
+  bool by_external_gate = false;  ///< kUpdated through an ExternalGate, the image gate having failed
   std::string reason;       ///< why it was rejected
+};
+
+/// A (track, detection) pairing vouched for by something outside the image-plane filter, e.g. the
+/// track's 3D trajectory estimate projected to the detection's time: `mahalanobis2` is that
+/// prediction's χ²₂ statistic for the detection. Used when the filter's own gate rejects the pair
+/// (the image-plane model is only locally valid: a head-on ball's image motion bends and
+/// accelerates); the time gate and the hard radius cap still apply, and gate_chi2 is the bound.
+struct ExternalGate {
+  int track_id = -1;
+  std::size_t detection = 0;  ///< index in the update's input
+  double mahalanobis2 = 0;
 };
 
 struct TrackerStep {
@@ -127,7 +140,10 @@ class Tracker {
   /// updates, creates, confirms and deletes tracks. Call it for every window, with no
   /// detections too, so that missed windows are counted. A call with t older than the previous
   /// call's rejects all its detections (reason "out of order") and changes nothing.
-  TrackerStep update(TimeNs t, std::span<const TrackerDetection> detections);
+  /// `external` adds pairings vouched for from outside the filter (see ExternalGate); they compete
+  /// with the filter-gated pairs by their own statistic.
+  TrackerStep update(TimeNs t, std::span<const TrackerDetection> detections,
+                     std::span<const ExternalGate> external = {});
 
   const std::vector<Track>& tracks() const { return tracks_; }
   /// The track with this id, or nullptr (deleted or never existed).

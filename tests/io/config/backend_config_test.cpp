@@ -104,6 +104,7 @@ FieldComparison compare_top(const PerceptionOptions& a, const PerceptionOptions&
   FieldComparison r;
   FDV_COMPARE_FIELD(windows.window_ns);
   FDV_COMPARE_FIELD(monocular_baseline);
+  FDV_COMPARE_FIELD(estimate_aided_association);
   FDV_COMPARE_FIELD(max_lateness_ns);
   FDV_COMPARE_FIELD(odometry_max_extrapolation_ns);
   FDV_COMPARE_FIELD(compensation.method);
@@ -118,6 +119,7 @@ FieldComparison compare_top(const PerceptionOptions& a, const PerceptionOptions&
 constexpr const char* kFullConfig = R"(
 window_ms: 20
 monocular_baseline: false
+estimate_aided_association: false
 max_lateness_ms: 30
 odometry_max_extrapolation_ms: 15.5
 compensation: {method: rotation, max_imu_gap_ms: 12}
@@ -247,6 +249,7 @@ TEST(BackendConfig, FullFileRoundTripsEveryKey) {
   PerceptionOptions top;
   top.windows.window_ns = 20'000'000;
   top.monocular_baseline = false;
+  top.estimate_aided_association = false;
   top.max_lateness_ns = 30'000'000;
   top.odometry_max_extrapolation_ns = 15'500'000;
   top.compensation.method = "rotation";
@@ -330,8 +333,8 @@ TEST(BackendConfig, UnknownKeysNameTheKey) {
             "baseline beside it when monocular_baseline is true");
   EXPECT_EQ(error_of("estimator: {}"),
             "key estimator | unknown section (expected compensation, depth_registration, "
-            "depth_segmentation, detector, estimation, max_lateness_ms, monocular_baseline, "
-            "odometry_max_extrapolation_ms, prediction, tracking, window_ms)");
+            "depth_segmentation, detector, estimate_aided_association, estimation, max_lateness_ms, "
+            "monocular_baseline, odometry_max_extrapolation_ms, prediction, tracking, window_ms)");
   // Front-end sections go through the same function.
   EXPECT_EQ(error_of("detector: {threshold_d: 1}"), "key detector.threshold_d | unknown key");
 }

@@ -153,6 +153,7 @@ PerceptionOptions load_perception_options(const YAML::Node& root, const std::str
     if (o.windows.window_ns <= 0) throw InputError(file, "key " + k, "must be > 0");
   });
   s.bind("monocular_baseline", o.monocular_baseline);
+  s.bind("estimate_aided_association", o.estimate_aided_association);
   s.on("max_lateness_ms", [&](const YAML::Node& n, const std::string& k) {
     o.max_lateness_ns = s.millis(n, k);
     if (o.max_lateness_ns < 0) throw InputError(file, "key " + k, "must be >= 0");
