@@ -63,9 +63,10 @@ struct EstimatorOptions {
   EstimatorMode mode = EstimatorMode::kFusion;
   /// Gravity in W [m/s²] (paper: known to the drone). W's z axis up.
   Eigen::Vector3d gravity_W = Eigen::Vector3d(0, 0, -9.81);
-  /// Detection centre noise [px] (DESIGN.md: 1-2 px) and the event camera's focal length [px]
-  /// (required): σ_n = event_sigma_px / event_focal_px.
-  double event_sigma_px = 1.5;
+  /// Detection centre noise [px] and the event camera's focal length [px] (required):
+  /// σ_n = event_sigma_px / event_focal_px. 3 px = the measured RMS per axis of the detector's
+  /// centre error on training seeds (docs/ESTIMATION.md, section 3).
+  double event_sigma_px = 3.0;
   double event_focal_px = 0.0;
   /// Huber thresholds in sigmas of the whitened residual norm: sqrt of the χ² 95 % quantile for
   /// the block's dimension (2-dof event: 2.45; 1-dof depth: 1.96), so ~95 % of inlier residuals
