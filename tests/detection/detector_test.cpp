@@ -251,6 +251,36 @@ TEST_F(DetectorTest, NextCandidateIsTriedWhenTheStrongestPatternFailsTheEvidence
   EXPECT_NEAR(ungated.detection->center_undistorted.x(), 461.5, 3.0);
 }
 
+// A small dense blob with sparse late clutter 50-70 px around it (posters on a wall): from the
+// half-image initial ROI Algorithm 1 spreads over blob and clutter, and the box fails the density
+// gate; from a smaller initial ROI (refit_min_roi_px) it converges on the blob.
+TEST_F(DetectorTest, SmallerInitialRoiFindsASmallBlobInSparseClutter) {
+  test::BlobScene s;
+  s.start_uv = {300, 240};
+  std::vector<Event> ev = test::make_scene(lens(), s);
+  const Eigen::Vector2d mid = s.blob_at(s.t0 + s.duration / 2);
+  // Sparse clutter: 10x10 squares, one event per pixel, later than most of the background but not the latest (N ≈ 0.7).
+  const Eigen::Vector2d offsets[] = {{-70, 0}, {70, 0}, {0, -50}, {0, 50}, {-60, -45}, {60, 45}};
+  for (const Eigen::Vector2d& off : offsets)
+    for (int y = 0; y < 10; ++y)
+      for (int x = 0; x < 10; ++x) {
+        Event e{s.t0 + 17 * kNsPerMs + (x + 10 * y) * 10'000, 0, 0, true};
+        if (test::to_raw(lens(), mid + off + Eigen::Vector2d(x - 5, y - 5), e)) ev.push_back(e);
+      }
+  std::sort(ev.begin(), ev.end(), [](const Event& a, const Event& b) { return a.t < b.t; });
+  const CompensatedWindow& w = compensator_->compensate({.events = ev, .t_start_ns = s.t0, .t_end_ns = s.t0 + s.duration});
+  DetectorOptions o;
+  o.min_pixel_events = 1;  // the clutter's single-event pixels enter S
+  o.max_candidates = 1;
+  o.refit_min_roi_px = 0;  // the paper: one fit from half the image
+  const DetectionResult paper = Detector(o, lens()).detect(view_of(w));
+  EXPECT_FALSE(paper.detection) << "the half-image fit should spread over the clutter";
+  o.refit_min_roi_px = 16;
+  const DetectionResult refit = Detector(o, lens()).detect(view_of(w));
+  expect_on_blob(refit, s, 2.5);
+  EXPECT_LT(refit.detection->box_undistorted.width(), 40);
+}
+
 // A pattern under min_peak is taken only inside a confirmed track's gate, at prior_min_peak.
 TEST_F(DetectorTest, TrackPriorAdmitsAWeakerPatternOnlyInsideItsGate) {
   test::BlobScene s;
@@ -350,6 +380,8 @@ TEST_F(DetectorTest, InvalidOptionsAreRejected) {
       {"motion_cue_min_r2", [](DetectorOptions& x) { x.motion_cue_min_r2 = 1.5; }},
       {"refine_recentre_passes", [](DetectorOptions& x) { x.refine_recentre_passes = -1; }},
       {"motion_cue_min_pixels", [](DetectorOptions& x) { x.motion_cue_min_pixels = 2; }},
+      {"refit_min_roi_px", [](DetectorOptions& x) { x.refit_min_roi_px = 0.5; }},
+      {"refit_local_scale", [](DetectorOptions& x) { x.refit_local_scale = -1; }},
   };
   for (const auto& [name, make_bad] : cases) {
     DetectorOptions bad;

@@ -51,7 +51,7 @@ std::string DetectorOptions::validate() const {
   std::ostringstream why;
   auto odd_positive = [](int k) { return k >= 1 && k % 2 == 1 && k <= 31; };
   const double coeffs[] = {motion_cue_min_r2, motion_cue_min_span, threshold_a_s_per_rad, threshold_b_s_per_m, threshold_c, fit_delta_center_px,
-                           fit_delta_size_px, fit_min_size_px, roi_max_fraction, roi_max_aspect, max_segmented_fraction,
+                           fit_delta_size_px, fit_min_size_px, refit_min_roi_px, refit_local_scale, roi_max_fraction, roi_max_aspect, max_segmented_fraction,
                            refine_box_scale, min_peak, min_event_density, prior_min_peak, prior_gate_scale,
                            prior_min_gate_px};
   for (double v : coeffs)
@@ -62,6 +62,9 @@ std::string DetectorOptions::validate() const {
   else if (!(fit_delta_center_px > 0)) why << "fit_delta_center_px (δ_C) must be positive, got " << fit_delta_center_px;
   else if (!(fit_delta_size_px > 0)) why << "fit_delta_size_px (δ_L) must be positive, got " << fit_delta_size_px;
   else if (!(fit_min_size_px >= 1)) why << "fit_min_size_px must be at least 1, got " << fit_min_size_px;
+  else if (!(refit_min_roi_px == 0 || refit_min_roi_px >= 1))
+    why << "refit_min_roi_px must be 0 (off) or at least 1, got " << refit_min_roi_px;
+  else if (!(refit_local_scale >= 0)) why << "refit_local_scale must be >= 0, got " << refit_local_scale;
   else if (!(prior_min_peak >= 0 && prior_min_peak <= 1)) why << "prior_min_peak must be in [0, 1], got " << prior_min_peak;
   else if (!(prior_gate_scale > 0)) why << "prior_gate_scale must be positive, got " << prior_gate_scale;
   else if (!(prior_min_gate_px >= 0)) why << "prior_min_gate_px must be >= 0, got " << prior_min_gate_px;
@@ -273,22 +276,88 @@ std::optional<Detector::Candidate> Detector::evaluate_candidate(const Compensate
     c.source = DetectionSource::kRegionRetrieval;
   }
   blank = c.box;
-  c.events = events_in(c.box);
-  if (c.events < o.roi_min_events) {
-    why_not = DetectionStatus::kTooFewEventsInBox;
-    return std::nullopt;
+  // The evidence gates: events, the peak of P (score) and events per pixel in the box.
+  auto passes_gates = [&](Candidate& k) {
+    k.events = events_in(k.box);
+    if (k.events < o.roi_min_events) {
+      why_not = DetectionStatus::kTooFewEventsInBox;
+      return false;
+    }
+    const cv::Rect r = box_pixels(k.box, w, h);
+    double peak_in_box = 0;
+    cv::minMaxLoc(P(r), nullptr, &peak_in_box);
+    k.score = std::clamp(std::sqrt(peak_in_box), 0.0, 1.0);
+    k.event_density = static_cast<double>(k.events) / r.area();
+    if (k.score < min_peak || k.event_density < o.min_event_density) {
+      why_not = DetectionStatus::kWeakEvidence;
+      return false;
+    }
+    k.t_mean_s = cv::sum(ti_.sum_time_s(r))[0] / k.events;
+    return true;
+  };
+  if (passes_gates(c)) return c;
+  if (!(o.refit_min_roi_px > 0)) return std::nullopt;
+
+  // Smaller initial ROIs from the same seed (docs/DETECTION.md, "Smaller initial ROIs").
+  // Algorithm 1 is a mean shift whose result depends on its initial window: from half the image it
+  // merges a small object's pattern with the clutter patterns around it into a large, sparse box
+  // (or fails, and the retrieved component is the object plus touching clutter), which the
+  // density gate then rejects. A smaller window converges on the seed's own pattern. The ROI is
+  // halved while its shorter side is at least refit_min_roi_px; the first box that passes the
+  // plausibility gates, the evidence gates and the local test below is kept.
+  //
+  // Local test: a small box can sit on the texture of a region that the compensation left late
+  // as a whole (a wall at the image border in fast flight, texture far from the median depth);
+  // every blob of such a region exceeds θ and is dense. θ = mean(N) + margin asks a pattern to
+  // stand out against the whole image's mean; the box must stand out the same way against its
+  // surroundings: the mean of S over its segmented pixels at least the mean N of the event pixels
+  // within refit_local_scale × its longer side of its centre, plus θ − mean(N).
+  const double margin = res.theta - res.mean_normalized;
+  auto stands_out = [&](const Box2D& b) {
+    if (!(o.refit_local_scale > 0)) return true;
+    const cv::Rect r = box_pixels(b, w, h);
+    const Eigen::Vector2d bc = b.center();
+    const double half = o.refit_local_scale * std::max(b.width(), b.height());
+    const cv::Rect around = box_pixels({bc.x() - half, bc.y() - half, bc.x() + half, bc.y() + half}, w, h);
+    double s_sum = 0, n_sum = 0;
+    int s_px = 0, n_px = 0;
+    for (int y = around.y; y < around.y + around.height; ++y) {
+      const std::int32_t* count = ti_.count.ptr<std::int32_t>(y);
+      const float* n = ti_.normalized.ptr<float>(y);
+      const float* seg = S_.ptr<float>(y);
+      const bool row_in_box = y >= r.y && y < r.y + r.height;
+      for (int x = around.x; x < around.x + around.width; ++x) {
+        if (count[x] == 0) continue;
+        n_sum += n[x];
+        ++n_px;
+        if (row_in_box && x >= r.x && x < r.x + r.width && seg[x] > 0) {
+          s_sum += seg[x];
+          ++s_px;
+        }
+      }
+    }
+    return s_px > 0 && n_px > 0 && s_sum / s_px >= n_sum / n_px + margin;
+  };
+  const DetectionStatus why_first = why_not;
+  for (Eigen::Vector2d l = 0.5 * l0; l.minCoeff() >= o.refit_min_roi_px; l *= 0.5) {
+    t = Clock::now();
+    const GaussianFit f = iterative_gaussian_fit(P, c0, l, o);
+    res.timings.fit_ms += ms_since(t);
+    if (!f.converged || f.size.x() > o.roi_max_fraction * w || f.size.y() > o.roi_max_fraction * h ||
+        f.size.maxCoeff() > o.roi_max_aspect * f.size.minCoeff())
+      continue;
+    Candidate k;
+    k.box = f.roi();
+    k.center = f.center;
+    k.source = DetectionSource::kGaussianFit;
+    if (passes_gates(k) && stands_out(k.box)) {
+      res.fit = f;
+      res.fit_rejected = {};
+      return k;
+    }
   }
-  const cv::Rect r = box_pixels(c.box, w, h);
-  double peak_in_box = 0;
-  cv::minMaxLoc(P(r), nullptr, &peak_in_box);
-  c.score = std::clamp(std::sqrt(peak_in_box), 0.0, 1.0);
-  c.event_density = static_cast<double>(c.events) / r.area();
-  if (c.score < min_peak || c.event_density < o.min_event_density) {
-    why_not = DetectionStatus::kWeakEvidence;
-    return std::nullopt;
-  }
-  c.t_mean_s = cv::sum(ti_.sum_time_s(r))[0] / c.events;
-  return c;
+  why_not = why_first;  // the status of the paper's candidate
+  return std::nullopt;
 }
 
 std::optional<Detector::Candidate> Detector::dense_motion_candidate(double window_s, const cv::Rect& search,

@@ -61,6 +61,14 @@ struct DetectorOptions {
   /// iteration near its fixed point, so the stopped L is within ≈ 2.5·δ_L of it.
   double fit_delta_size_px = 0.5;
   double fit_min_size_px = 3.0;      ///< sides are floored here so a tiny blob cannot collapse the ROI
+  /// Smaller initial ROIs (docs/DETECTION.md): when the candidate from the half-image initial ROI
+  /// fails the plausibility or evidence gates, Algorithm 1 runs again from the same seed with the
+  /// initial ROI halved, while its shorter side is at least this [px]. 0 = off (the paper: one fit).
+  /// Tuned on training seeds 1-4 (8 and 32 were worse).
+  double refit_min_roi_px = 16.0;
+  /// Such a smaller-ROI box must stand out locally: mean S over its segmented pixels ≥ mean N of
+  /// the event pixels within this many × its longer side of its centre + (θ − mean(N)). 0 = no test.
+  double refit_local_scale = 3.0;
   // Plausibility of the converged ROI (else moving-region retrieval, §IV-B.3).
   double roi_max_fraction = 0.35;  ///< a side longer than this fraction of the image side is implausible
   double roi_max_aspect = 4.0;     ///< long side / short side above this is implausible (a streak or two objects)

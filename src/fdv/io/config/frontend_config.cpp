@@ -79,6 +79,8 @@ DetectorOptions load_detector_options(const YAML::Node& node, const std::string&
   num("fit_delta_center_px", o.fit_delta_center_px);
   num("fit_delta_size_px", o.fit_delta_size_px);
   num("fit_min_size_px", o.fit_min_size_px);
+  num("refit_min_roi_px", o.refit_min_roi_px);
+  num("refit_local_scale", o.refit_local_scale);
   num("roi_max_fraction", o.roi_max_fraction);
   num("roi_max_aspect", o.roi_max_aspect);
   integer("roi_min_events", o.roi_min_events);
