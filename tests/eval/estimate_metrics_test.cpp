@@ -98,6 +98,11 @@ TEST(BallEstimateTiming, FirstEstimateOfATrackFollowingTheBall) {
   EXPECT_NEAR(*t.latency_s(), 0.030, 1e-12);
   EXPECT_NEAR(*t.first_error_m, 0.1, 1e-12);
   EXPECT_NEAR(*t.final_error_m, 0.0, 1e-12);
+  // The first converged estimate, usable or not: the 75 ms one, 9 m off.
+  ASSERT_TRUE(t.first_converged);
+  EXPECT_EQ(t.first_converged->t, ms(75));
+  EXPECT_NEAR(*t.converged_latency_s(), 0.025, 1e-12);
+  EXPECT_NEAR(*t.first_converged_error_m, 9.0, 1e-12);
 
   // Monocular: only the 70 ms record.
   const BallEstimateTiming mono =

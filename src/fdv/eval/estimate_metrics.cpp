@@ -41,6 +41,11 @@ std::optional<double> BallEstimateTiming::latency_s() const {
   return to_seconds(first->t - *in_flight_from);
 }
 
+std::optional<double> BallEstimateTiming::converged_latency_s() const {
+  if (!first_converged || !in_flight_from) return std::nullopt;
+  return to_seconds(first_converged->t - *in_flight_from);
+}
+
 BallEstimateTiming ball_estimate_timing(const DatasetTruth& truth,
                                         const std::vector<WindowDetections>& windows,
                                         const std::vector<EstimateRecord>& records, int id,
@@ -50,14 +55,16 @@ BallEstimateTiming ball_estimate_timing(const DatasetTruth& truth,
   out.closest = true_closest_approach(truth, id);
   const std::vector<int> tracks = tracks_following(truth, windows, id);
   for (const EstimateRecord& e : records) {
-    if (!e.usable || e.mode != mode ||
-        std::find(tracks.begin(), tracks.end(), e.track) == tracks.end())
-      continue;
+    if (e.mode != mode || std::find(tracks.begin(), tracks.end(), e.track) == tracks.end()) continue;
+    if (!out.first_converged || e.t < out.first_converged->t) out.first_converged = e;
+    if (!e.usable) continue;
     if (!out.first || e.t < out.first->t) out.first = e;
     if (e.track == tracks.front()) out.final = e;
   }
   if (out.closest) {
     if (out.first) out.first_error_m = prediction_error(truth, *out.first, id, out.closest->t);
+    if (out.first_converged)
+      out.first_converged_error_m = prediction_error(truth, *out.first_converged, id, out.closest->t);
     if (out.final) out.final_error_m = prediction_error(truth, *out.final, id, out.closest->t);
   }
   return out;

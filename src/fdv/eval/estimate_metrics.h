@@ -51,17 +51,23 @@ std::vector<double> ape_samples(const DatasetTruth& truth, const EstimateRecord&
 std::optional<double> prediction_error(const DatasetTruth& truth, const EstimateRecord& e, int id,
                                        TimeNs t);
 
-/// How early a usable estimate of ball `id` came (records not usable are skipped) (paper §V-D: the ball must be estimated long
+/// How early a usable estimate of ball `id` came (and the first converged one, usable or not) (paper §V-D: the ball must be estimated long
 /// before it arrives) and how well the first and the final one predicted the closest approach.
 struct BallEstimateTiming {
   std::optional<TimeNs> in_flight_from;        ///< truth: first_in_flight_in_view()
   std::optional<TrueClosestApproach> closest;  ///< truth: true_closest_approach()
-  std::optional<EstimateRecord> first;  ///< earliest estimate of any track following the ball
+  std::optional<EstimateRecord> first;  ///< earliest usable estimate of any track following the ball
+  /// Earliest converged estimate of such a track, usable or not (the "first 3D estimate";
+  /// its covariance may still say it cannot be acted on).
+  std::optional<EstimateRecord> first_converged;
+  std::optional<double> first_converged_error_m;  ///< prediction_error(first_converged) there
   std::optional<EstimateRecord> final;  ///< last estimate of the main track following it
   std::optional<double> first_error_m;  ///< prediction_error(first) at the true closest approach
   std::optional<double> final_error_m;  ///< prediction_error(final) there
   /// first->t − in_flight_from [s], when both exist.
   std::optional<double> latency_s() const;
+  /// first_converged->t − in_flight_from [s], when both exist.
+  std::optional<double> converged_latency_s() const;
 };
 BallEstimateTiming ball_estimate_timing(const DatasetTruth& truth,
                                         const std::vector<WindowDetections>& windows,

@@ -359,10 +359,10 @@ std::string to_markdown(const Table2& table, const Provenance& provenance) {
       "0.717 m.\n";
   out +=
       "\n### First estimate on hover_headon (full pipeline, fusion)\n\n"
-      "| Seed | Ball in flight from [s] | First fusion estimate [s] | Latency [ms] | True closest "
-      "approach [s] "
-      "| Error there, first estimate [m] | Error there, final estimate [m] "
-      "|\n|---|---|---|---|---|---|---|\n";
+      "| Seed | Ball in flight from [s] | First converged estimate [s] (latency [ms]) | First usable "
+      "estimate [s] | Latency [ms] | True closest approach [s] "
+      "| Error there, first converged [m] | Error there, first usable [m] | Error there, final "
+      "estimate [m] |\n|---|---|---|---|---|---|---|---|---|\n";
   auto seconds = [](const std::optional<TimeNs>& t) {
     return t ? fmt::format("{:.3f}", to_seconds(*t)) : "–";
   };
@@ -370,13 +370,16 @@ std::string to_markdown(const Table2& table, const Provenance& provenance) {
   for (const HeadOnRun& h : table.head_on) {
     const BallEstimateTiming& t = h.timing;
     const auto latency = t.latency_s();
-    out += fmt::format("| {} | {} | {} | {} | {} | {} | {} |\n", h.seed, seconds(t.in_flight_from),
+    const auto converged_latency = t.converged_latency_s();
+    out += fmt::format("| {} | {} | {}{} | {} | {} | {} | {} | {} | {} |\n", h.seed, seconds(t.in_flight_from),
+                       seconds(t.first_converged ? std::optional<TimeNs>(t.first_converged->t) : std::nullopt),
+                       converged_latency ? fmt::format(" ({:.0f})", 1e3 * *converged_latency) : "",
                        seconds(t.first ? std::optional<TimeNs>(t.first->t) : std::nullopt),
                        latency ? fmt::format("{:.0f}", 1e3 * *latency) : "–",
                        t.closest ? fmt::format("{:.3f} ({:.2f} m away)", to_seconds(t.closest->t),
                                                t.closest->distance_m)
                                  : "–",
-                       metres(t.first_error_m), metres(t.final_error_m));
+                       metres(t.first_converged_error_m), metres(t.first_error_m), metres(t.final_error_m));
   }
   out += "\n### Targets\n\n" + targets_markdown(table2_targets(table));
   out +=
@@ -395,7 +398,9 @@ std::string to_markdown(const Table2& table, const Provenance& provenance) {
       "the depth "
       "frame that triggered it, stream time) − the first instant the ball is in flight (≥ 1 m/s) "
       "and ≥ 80 % in "
-      "view (its release: the ball is in view while held); the errors are those estimates' "
+      "view (its release: the ball is in view while held); the first converged estimate (usable or "
+      "not: the target's \"first 3D estimate\" read literally) is given beside it with its own "
+      "latency; the errors are those estimates' "
       "predicted position at "
       "the true closest approach to the vehicle minus the true position there.\n";
   return out;
