@@ -64,7 +64,7 @@ void demo(const DemoArgs& args) {
     if (timing.first) {
       const auto latency = timing.latency_s();
       std::cout << fmt::format(
-          "  first 3D estimate of the ball at  t = {:.3f} s ({})\n", to_seconds(timing.first->t),
+          "  first usable 3D estimate at      t = {:.3f} s ({})\n", to_seconds(timing.first->t),
           latency ? fmt::format("{:.0f} ms after it was in flight and in view", 1e3 * *latency)
                   : std::string("ball never fully in view"));
     } else {
@@ -75,8 +75,8 @@ void demo(const DemoArgs& args) {
                                timing.closest->distance_m, to_seconds(timing.closest->t));
       if (timing.first_error_m && timing.final_error_m)
         std::cout << fmt::format(
-            "  position error there: {:.3f} m from the first estimate, {:.3f} m from the final "
-            "one\n",
+            "  position error there: {:.3f} m from the first usable estimate, {:.3f} m from the "
+            "final one\n",
             *timing.first_error_m, *timing.final_error_m);
     }
   }
