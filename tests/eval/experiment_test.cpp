@@ -67,7 +67,8 @@ TEST(EnsureSimulated, SimulatesOnceThenReusesUntilIncompleteOrChanged) {
   text.replace(at, now.size(), fmt::format("revision {}\n", sim::kSimulatorRevision - 1));
   std::ofstream(marker, std::ios::trunc) << text;
   ensure_simulated(other, dir);
-  EXPECT_FALSE(fs::exists(sentinel)) << "a dataset from another simulator revision must be simulated again";
+  EXPECT_FALSE(fs::exists(sentinel))
+      << "a dataset from another simulator revision must be simulated again";
 }
 
 TEST(EnsureSimulated, PresetFolderNameAndUnknownPreset) {
@@ -81,19 +82,36 @@ TEST(WindowRelativeContrast, BallInFlightOnlyAfterTheSharedDenoising) {
   cv::Mat T(480, 640, CV_32F, cv::Scalar(0));
   T(cv::Rect(318, 238, 5, 5)).setTo(0.020f);  // the ball's late events: max over M
   T(cv::Rect(100, 100, 5, 5)).setTo(0.005f);  // the background's pattern: max over B
-  T.at<float>(400, 600) = 0.025f;             // an isolated noise event: removed by the shared denoising
+  T.at<float>(400, 600) = 0.025f;  // an isolated noise event: removed by the shared denoising
   const TimeNs t0 = 10 * kNsPerMs, t1 = 20 * kNsPerMs;
 
-  const auto in_flight = window_relative_contrast(test::straight_flight(p, {2, 0, 0}), T, t0, t1, {});
+  const auto in_flight = window_relative_contrast(test::straight_flight(p, {2, 0, 0}), T, t0, t1,
+                                                  CompensationMethod::kRotationTranslation, {});
   ASSERT_EQ(in_flight.size(), 1u);
   EXPECT_NEAR(in_flight[0], (0.020 - 0.005) / 0.020, 1e-6);  // η = (max_M − max_B) / max_M
 
   // The same ball held still: η is not defined (no moving object).
-  EXPECT_TRUE(window_relative_contrast(test::straight_flight(p, Eigen::Vector3d::Zero()), T, t0, t1, {})
+  EXPECT_TRUE(window_relative_contrast(test::straight_flight(p, Eigen::Vector3d::Zero()), T, t0, t1,
+                                       CompensationMethod::kRotationTranslation, {})
                   .empty());
   // Behind the camera: no box in the image.
-  EXPECT_TRUE(
-      window_relative_contrast(test::straight_flight({0, 0, -5}, {2, 0, 0}), T, t0, t1, {}).empty());
+  EXPECT_TRUE(window_relative_contrast(test::straight_flight({0, 0, -5}, {2, 0, 0}), T, t0, t1,
+                                       CompensationMethod::kRotationTranslation, {})
+                  .empty());
+}
+
+TEST(CompensatedImageFrame, EachMethodHoldsWhatItsWarpUndoes) {
+  const TimeNs t0 = 7 * kNsPerMs;
+  const auto none = compensated_image_frame(CompensationMethod::kNone, t0);
+  EXPECT_FALSE(none.rotation_time || none.position_time);
+  const auto rotation = compensated_image_frame(CompensationMethod::kRotation, t0);
+  EXPECT_EQ(rotation.rotation_time, t0);
+  EXPECT_FALSE(rotation.position_time);
+  for (auto m : {CompensationMethod::kRotationTranslation, CompensationMethod::kContrastMax}) {
+    const auto full = compensated_image_frame(m, t0);
+    EXPECT_EQ(full.rotation_time, t0);
+    EXPECT_EQ(full.position_time, t0);
+  }
 }
 
 TEST(ParseSeedList, RangesAndLists) {

@@ -99,6 +99,38 @@ TEST(GroundTruthBox, VehicleMotionAndExtrinsicsAreApplied) {
   EXPECT_GT(box.width(), 30.0);
 }
 
+TEST(GroundTruthBox, CameraHeldAtAFixedTimeLikeACompensatedImage) {
+  // A ball at rest 5 m ahead; over 100 ms the vehicle moves 0.1 m along x and yaws 0.1 rad about
+  // y. Seen by the moving camera the ball sweeps ~60 px; from the camera held at t = 0 (an exact
+  // compensation to t0) it stays one silhouette; with only the rotation held (rotation-only
+  // compensation) it sweeps the translation's parallax, f·0.1/5 = 10 px, by hand below.
+  std::vector<OdometrySample> body(2);
+  body[0].t = 0;
+  body[1].t = 100 * kNsPerMs;
+  body[1].p_W_B = {0.1, 0.0, 0.0};
+  body[1].q_W_B = Eigen::Quaterniond(Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitY()));
+  for (auto& b : body) b.v_W = {1.0, 0.0, 0.0}, b.omega_B = {0.0, 1.0, 0.0};
+  const double r = 0.1;
+  const auto states = ball_at({0, 0, 5});
+  const auto at_start = ground_truth_box(states, 1, r, body, camera(), 0, 0);
+  const auto moving = ground_truth_box(states, 1, r, body, camera(), 0, 100 * kNsPerMs);
+  GroundTruthBoxOptions held;
+  held.rotation_time = held.position_time = 0;
+  const auto held_box = ground_truth_box(states, 1, r, body, camera(), 0, 100 * kNsPerMs, held);
+  GroundTruthBoxOptions rotation_held;
+  rotation_held.rotation_time = 0;
+  const auto parallax =
+      ground_truth_box(states, 1, r, body, camera(), 0, 100 * kNsPerMs, rotation_held);
+
+  EXPECT_LT(moving.u_min, at_start.u_min - 50.0);
+  EXPECT_NEAR(held_box.u_min, at_start.u_min, 1e-9);
+  EXPECT_NEAR(held_box.u_max, at_start.u_max, 1e-9);
+  EXPECT_NEAR(held_box.v_min, at_start.v_min, 1e-9);
+  const double theta = std::atan2(0.1, 5.0), alpha = std::asin(r / std::hypot(0.1, 5.0));
+  EXPECT_NEAR(parallax.u_min, kCx + kF * std::tan(-theta - alpha), 0.02);
+  EXPECT_NEAR(parallax.u_max, at_start.u_max, 0.02);
+}
+
 TEST(GroundTruthBox, PartlyOutOfViewIsClippedAndCounted) {
   // Centre exactly on the left image border's ray: about half the disc is in view.
   const double z = 4.0, x = (-0.5 - kCx) / kF * z;

@@ -65,11 +65,12 @@ DatasetTruth load_dataset_truth(const std::string& dir) {
   return truth;
 }
 
-cv::Rect undistorted_truth_rect(const DatasetTruth& truth, int id, TimeNs t0, TimeNs t1) {
+cv::Rect undistorted_truth_rect(const DatasetTruth& truth, int id, TimeNs t0, TimeNs t1,
+                                const GroundTruthBoxOptions& options) {
   Calibration ideal = truth.calibration;
   ideal.event_camera.distortion = {};
-  const GroundTruthBox b =
-      ground_truth_box(truth.objects, id, truth.radius_m.at(id), truth.body, ideal, t0, t1);
+  const GroundTruthBox b = ground_truth_box(truth.objects, id, truth.radius_m.at(id), truth.body,
+                                            ideal, t0, t1, options);
   if (!b.visible) return {};
   const cv::Point lo(static_cast<int>(std::lround(b.u_min)),
                      static_cast<int>(std::lround(b.v_min)));

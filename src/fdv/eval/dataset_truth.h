@@ -18,6 +18,7 @@
 
 #include "fdv/core/calibration.h"
 #include "fdv/core/sensor_data.h"
+#include "fdv/eval/ground_truth_box.h"
 
 namespace fdv {
 
@@ -47,7 +48,9 @@ DatasetTruth load_dataset_truth(const std::string& dir);
 
 /// The ball's true box over [t0, t1] on the undistorted grid K·xn where the time images live
 /// (projection without distortion), as an integer pixel rectangle; empty when not visible.
-cv::Rect undistorted_truth_rect(const DatasetTruth& truth, int id, TimeNs t0, TimeNs t1);
+/// `options` may hold the camera fixed at a time (a compensated image, see GroundTruthBoxOptions).
+cv::Rect undistorted_truth_rect(const DatasetTruth& truth, int id, TimeNs t0, TimeNs t1,
+                                const GroundTruthBoxOptions& options = {});
 
 /// First instant (1 ms steps over the vehicle truth) at which ball `id` is in flight with at least
 /// `min_fraction_in_view` of its silhouette in the image: the release of a ball thrown in view, or

@@ -67,8 +67,10 @@ std::string ensure_simulated(const sim::ScenarioConfig& config, const std::strin
     return dir;
   }
   if (fs::exists(dir))
-    spdlog::info("{}: incomplete, or made with another configuration or simulator revision: simulating again",
-                 dir);
+    spdlog::info(
+        "{}: incomplete, or made with another configuration or simulator revision: simulating "
+        "again",
+        dir);
   fs::remove_all(dir);
   {
     sim::Simulator simulator(config);
@@ -95,15 +97,34 @@ std::string ensure_simulated(const std::string& preset, std::uint64_t seed,
                           (fs::path(cache_dir) / fmt::format("{}_seed{}", preset, seed)).string());
 }
 
+GroundTruthBoxOptions compensated_image_frame(CompensationMethod used, TimeNs t_start) {
+  GroundTruthBoxOptions frame;
+  switch (used) {
+    case CompensationMethod::kNone:
+      break;  // the raw image: the camera at each event's time
+    case CompensationMethod::kRotation:
+      frame.rotation_time = t_start;  // rotation undone, translation not
+      break;
+    case CompensationMethod::kRotationTranslation:
+    case CompensationMethod::kContrastMax:
+      frame.rotation_time = frame.position_time = t_start;
+      break;
+  }
+  return frame;
+}
+
 std::vector<double> window_relative_contrast(const DatasetTruth& truth, const cv::Mat& mean_time_s,
-                                             TimeNs t_start, TimeNs t_end, const DetectorOptions& detector) {
+                                             TimeNs t_start, TimeNs t_end, CompensationMethod used,
+                                             const DetectorOptions& detector) {
   std::vector<double> etas;
   cv::Mat clean;  // denoised once per window, only if some ball needs it
+  const GroundTruthBoxOptions frame = compensated_image_frame(used, t_start);
   for (const auto& [id, r] : truth.radius_m) {
     if (!truth.in_flight(id, (t_start + t_end) / 2)) continue;
-    const cv::Rect M = undistorted_truth_rect(truth, id, t_start, t_end - 1);
+    const cv::Rect M = undistorted_truth_rect(truth, id, t_start, t_end - 1, frame);
     if (M.area() == 0) continue;
-    if (clean.empty()) clean = denoise_for_contrast(mean_time_s, detector.mean_filter_px, detector.opening_px);
+    if (clean.empty())
+      clean = denoise_for_contrast(mean_time_s, detector.mean_filter_px, detector.opening_px);
     if (const auto eta = relative_contrast(clean, M)) etas.push_back(*eta);
   }
   return etas;
@@ -120,8 +141,9 @@ ExperimentRun run_experiment(const DatasetTruth& truth, const ExperimentOptions&
     run.compensation_ms.push_back(w.timings.compensation_ms);
     run.front_end_ms.push_back(w.timings.compensation_ms + w.timings.detection.total_ms);
     if (options.relative_contrast && w.detector) {
-      const auto etas = window_relative_contrast(truth, w.detector->time_images().mean_time_s,
-                                                 w.t_start, w.t_end, options.perception.detection);
+      const auto etas =
+          window_relative_contrast(truth, w.detector->time_images().mean_time_s, w.t_start, w.t_end,
+                                   w.compensation.used, options.perception.detection);
       run.relative_contrast.insert(run.relative_contrast.end(), etas.begin(), etas.end());
     }
   };

@@ -1,7 +1,8 @@
 #pragma once
 /// Running the pipeline for an experiment: replaying a recording through fdv::Perception, a cache
 /// of simulated datasets, and one run over a simulated dataset that keeps what the evaluation
-/// needs (detections, per-window timings, relative contrast, converged estimates, usable flagged) in memory.
+/// needs (detections, per-window timings, relative contrast, converged estimates, usable flagged)
+/// in memory.
 ///
 ///   const std::string dir = ensure_simulated("scene2_ball", 101, "out/cache");   // simulates once
 ///   const DatasetTruth truth = load_dataset_truth(dir);
@@ -46,13 +47,22 @@ std::string ensure_simulated(const std::string& preset, std::uint64_t seed,
 std::string ensure_simulated(const sim::ScenarioConfig& config, const std::string& dir);
 inline constexpr const char* kSimulationMarker = "simulation_complete.yaml";
 
+/// The camera a window's compensated image shows the ball from, for the method that was used:
+/// none = the camera at each instant; rotation = its orientation held at t_start (rotation undone,
+/// translation not); rotation_translation and contrast_max = its whole pose at t_start (the
+/// events warped to t0, paper §III-A). The object's box in that image is where an exact warp of
+/// that kind puts the ball's events.
+GroundTruthBoxOptions compensated_image_frame(CompensationMethod used, TimeNs t_start);
+
 /// Relative contrast η (paper §V-B) of one compensated window: the mean-time image after the
-/// shared denoising (denoise_for_contrast with the detector's filter sizes), M = the true box over the window on the undistorted
-/// grid of each ball in flight at the window's middle (true speed >= 1 m/s) whose box is non-empty
-/// in the image. A held or lying ball, or a window without a ball, gives nothing: η is undefined
-/// without a moving object (the paper computes it on scene 2 only).
+/// shared denoising (denoise_for_contrast with the detector's filter sizes), M = the true box over
+/// the window on the undistorted grid, in compensated_image_frame(used, t_start), of each ball in
+/// flight at the window's middle (true speed >= 1 m/s) whose box is non-empty in the image. A held
+/// or lying ball, or a window without a ball, gives nothing: η is undefined without a moving
+/// object (the paper computes it on scene 2 only).
 std::vector<double> window_relative_contrast(const DatasetTruth& truth, const cv::Mat& mean_time_s,
-                                             TimeNs t_start, TimeNs t_end, const DetectorOptions& detector);
+                                             TimeNs t_start, TimeNs t_end, CompensationMethod used,
+                                             const DetectorOptions& detector);
 
 struct ExperimentOptions {
   PerceptionOptions perception;
@@ -65,7 +75,8 @@ struct ExperimentRun {
       compensation_ms;               ///< per window: ego-motion compensation (paper Table I's time)
   std::vector<double> front_end_ms;  ///< per window: compensation + detection
   std::vector<double> relative_contrast;  ///< η of every window and ball where it is defined
-  std::vector<EstimateRecord> estimates;  ///< every converged estimate (usable flagged), in order made
+  std::vector<EstimateRecord>
+      estimates;  ///< every converged estimate (usable flagged), in order made
   PerceptionCounters counters;
 };
 

@@ -182,7 +182,9 @@ GroundTruthBox ground_truth_box(std::span<const ObjectState> objects, int id, do
   const Lens lens(calib.event_camera);
   const Eigen::Isometry3d T_B_E = calib.T_B_E;
   auto centre_in_camera = [&](TimeNs t) {
-    const Eigen::Isometry3d T_W_E = body_at(body, t).T_W_B() * T_B_E;
+    Eigen::Isometry3d T_W_E = body_at(body, options.rotation_time.value_or(t)).T_W_B() * T_B_E;
+    T_W_E.translation() =
+        (body_at(body, options.position_time.value_or(t)).T_W_B() * T_B_E).translation();
     return Eigen::Vector3d(T_W_E.inverse() * ball_at(states, t));
   };
 

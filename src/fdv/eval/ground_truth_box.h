@@ -17,6 +17,7 @@
 /// samples. Ball positions between truth samples by cubic Hermite interpolation of (p, v)
 /// (exact for ballistic flight); vehicle poses by fdv::interpolate_odometry.
 /// Visibility is geometric (no occlusion by the scene). Thread-safe.
+#include <optional>
 #include <span>
 
 #include "fdv/core/calibration.h"
@@ -47,6 +48,12 @@ struct GroundTruthBoxOptions {
   double max_step_px = 0.25;   ///< most silhouette motion between evaluated instants [px]
   double max_error_px = 0.01;  ///< polygon error of the projected silhouette boundary [px]
   int view_samples = 1024;     ///< rays over the silhouette disc for the in-view fraction
+  /// Camera the ball is seen from. Unset: the camera at each instant (a raw image). Set: the
+  /// camera's orientation (rotation_time) and/or position (position_time) held at that fixed
+  /// time for every instant: where an exact rotational (and translational) compensation to that
+  /// time puts the ball's events (paper §III-A: events warped to t0).
+  std::optional<TimeNs> rotation_time;
+  std::optional<TimeNs> position_time;
 };
 
 /// `objects` may hold several ids (only `id` is used) and must be time-sorted; `body` is the
