@@ -35,8 +35,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <ctime>
 #include <cstdio>
+#include <ctime>
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -69,7 +69,9 @@ struct SimStream : sim::SimulationSink {
   std::vector<OdometrySample> odometry;
   std::vector<DepthFrame> depth;
   TimeNs duration = 0;
-  double rate_meps() const { return static_cast<double>(events.size()) / to_seconds(duration) * 1e-6; }
+  double rate_meps() const {
+    return static_cast<double>(events.size()) / to_seconds(duration) * 1e-6;
+  }
   void on_events(std::span<const Event> e, std::span<const std::int16_t>) override {
     events.insert(events.end(), e.begin(), e.end());
   }
@@ -78,7 +80,8 @@ struct SimStream : sim::SimulationSink {
   void on_odometry(const OdometrySample& s) override { odometry.push_back(s); }
 };
 
-SimStream simulate(const std::string& preset, std::uint64_t seed, double seconds, double threshold_scale) {
+SimStream simulate(const std::string& preset, std::uint64_t seed, double seconds,
+                   double threshold_scale) {
   sim::ScenarioConfig c = sim::make_preset(preset, seed);
   if (seconds > 0) c.duration_s = seconds;
   c.event_camera.contrast_threshold_mean *= threshold_scale;
@@ -96,16 +99,19 @@ SimStream simulate(const std::string& preset, std::uint64_t seed, double seconds
 /// first step assumes rate ∝ 1/threshold, the next ones interpolate log(rate) against
 /// log(scale) between the last two simulations (the relation is steeper than 1/x at high
 /// thresholds, where faint edges stop firing at all).
-SimStream simulate_at_rate(const std::string& preset, std::uint64_t seed, double seconds, double target_meps,
-                           double& scale) {
+SimStream simulate_at_rate(const std::string& preset, std::uint64_t seed, double seconds,
+                           double target_meps, double& scale) {
   scale = 1.0;
   SimStream s = simulate(preset, seed, seconds, scale);
-  std::printf("# %s natural rate %.2f M ev/s (contrast threshold x1)\n", preset.c_str(), s.rate_meps());
+  std::printf("# %s natural rate %.2f M ev/s (contrast threshold x1)\n", preset.c_str(),
+              s.rate_meps());
   double prev_scale = 0, prev_rate = 0;
-  for (int i = 0; i < 6 && target_meps > 0 && std::abs(s.rate_meps() / target_meps - 1) > 0.1; ++i) {
+  for (int i = 0; i < 6 && target_meps > 0 && std::abs(s.rate_meps() / target_meps - 1) > 0.1;
+       ++i) {
     double next = scale * s.rate_meps() / target_meps;
     if (prev_scale > 0 && prev_rate > 0 && prev_rate != s.rate_meps()) {
-      const double slope = std::log(s.rate_meps() / prev_rate) / std::log(scale / prev_scale);  // d log r / d log c
+      const double slope =
+          std::log(s.rate_meps() / prev_rate) / std::log(scale / prev_scale);  // d log r / d log c
       if (slope < -0.2) next = scale * std::exp(std::log(target_meps / s.rate_meps()) / slope);
     }
     prev_scale = scale;
@@ -122,12 +128,15 @@ struct Distribution {
   double quantile(double q) const {
     if (v.empty()) return 0;
     std::vector<double> s = v;
-    const auto k = static_cast<std::size_t>(std::min<double>(static_cast<double>(s.size() - 1), q * static_cast<double>(s.size())));
+    const auto k = static_cast<std::size_t>(
+        std::min<double>(static_cast<double>(s.size() - 1), q * static_cast<double>(s.size())));
     std::nth_element(s.begin(), s.begin() + static_cast<std::ptrdiff_t>(k), s.end());
     return s[k];
   }
   double max() const { return v.empty() ? 0 : *std::max_element(v.begin(), v.end()); }
-  nlohmann::json json() const { return {{"median", quantile(0.5)}, {"p99", quantile(0.99)}, {"max", max()}, {"n", v.size()}}; }
+  nlohmann::json json() const {
+    return {{"median", quantile(0.5)}, {"p99", quantile(0.99)}, {"max", max()}, {"n", v.size()}};
+  }
 };
 
 long status_kb(const char* key) {  // VmRSS / VmHWM from /proc/self/status, -1 when unavailable
@@ -157,23 +166,27 @@ struct Args {
 int run(const Args& a) {
   cv::setNumThreads(a.threads);
   double scale = a.contrast_scale;
-  const SimStream s = scale > 0 ? simulate(a.preset, a.seed, a.sim_seconds, scale)
-                                : simulate_at_rate(a.preset, a.seed, a.sim_seconds, a.rate_meps, scale);
+  const SimStream s = scale > 0
+                          ? simulate(a.preset, a.seed, a.sim_seconds, scale)
+                          : simulate_at_rate(a.preset, a.seed, a.sim_seconds, a.rate_meps, scale);
   const TimeNs period = s.duration;
   const TimeNs total = a.seconds > 0 ? from_seconds(a.seconds) : period;
   // Peak memory from here on: the kernel's high-water mark is reset (Linux ≥ 4.0), so the peak
   // covers the streaming (the simulated input stays resident and is included: see input_mb).
   const long rss_before_kb = status_kb("VmRSS");
   if (std::ofstream clear("/proc/self/clear_refs"); clear) clear << "5";
-  const double input_mb = static_cast<double>(s.events.size() * sizeof(Event) +
-                                              s.depth.size() * (s.depth.empty() ? 0 : s.depth[0].depth_m.size() * 4)) / 1e6;
+  const double input_mb =
+      static_cast<double>(s.events.size() * sizeof(Event) +
+                          s.depth.size() * (s.depth.empty() ? 0 : s.depth[0].depth_m.size() * 4)) /
+      1e6;
 
   PerceptionOptions opt;
   opt.compensation.method = a.method;
   opt.compensation.threads = a.threads;
   std::map<std::string, Distribution> stage;
   Distribution work, work_cpu, depth_ms, estimate_ms;
-  std::uint64_t windows = 0, decimated = 0, dropped_burst = 0, detections = 0, max_window_events = 0;
+  std::uint64_t windows = 0, decimated = 0, dropped_burst = 0, detections = 0,
+                max_window_events = 0;
   std::map<std::string, int> used;
   // Pipeline wall clock: time spent inside push calls so far (feeding the data is not counted).
   double in_pipeline_ms = 0, in_pipeline_cpu_ms = 0, push_start_cpu = 0;
@@ -203,6 +216,12 @@ int run(const Args& a) {
     stage["segmentation+preprocess"].v.push_back(d.segmentation_ms + d.preprocess_ms);
     stage["fit+retrieval"].v.push_back(d.fit_ms + d.retrieval_ms);
     stage["refine"].v.push_back(d.refine_ms);
+    stage["motion cue"].v.push_back(d.motion_cue_ms);
+    // What no stage timer covers: candidate search (maxima, blanking), gates, the detection's
+    // mapping to raw pixels.
+    stage["detection, other"].v.push_back(d.total_ms - d.time_images_ms - d.segmentation_ms -
+                                          d.preprocess_ms - d.fit_ms - d.retrieval_ms -
+                                          d.refine_ms - d.motion_cue_ms);
     stage["detection (all)"].v.push_back(d.total_ms);
     stage["front end (comp+detection)"].v.push_back(w.timings.compensation_ms + d.total_ms);
     stage["tracking"].v.push_back(w.timings.tracking_ms);
@@ -227,7 +246,8 @@ int run(const Args& a) {
   };
   const auto wall0 = Clock::now();
   for (TimeNs t = 0; t < total; t += kNsPerMs) {
-    const TimeNs loop = t / period, offset = loop * period, t_in = t - offset;  // time within the simulation
+    const TimeNs loop = t / period, offset = loop * period,
+                 t_in = t - offset;  // time within the simulation
     if (t_in == 0) ie = ii = io = id = 0;
     const TimeNs end = std::min(t_in + kNsPerMs, period);
     for (; ii < s.imu.size() && s.imu[ii].t < end; ++ii) {
@@ -251,19 +271,23 @@ int run(const Args& a) {
       e.t += offset;
       slice.push_back(e);
     }
-    const bool in_burst = a.burst_rate_meps > 0 &&
-                          std::fmod(to_seconds(t), a.burst_every_s) * 1e3 >= a.burst_every_s * 1e3 - a.burst_ms;
+    const bool in_burst =
+        a.burst_rate_meps > 0 &&
+        std::fmod(to_seconds(t), a.burst_every_s) * 1e3 >= a.burst_every_s * 1e3 - a.burst_ms;
     if (in_burst) {  // extra uniformly random events up to the burst rate, merged in time order
-      const auto extra = static_cast<std::size_t>(std::max(0.0, a.burst_rate_meps * 1e3 - static_cast<double>(slice.size())));
+      const auto extra = static_cast<std::size_t>(
+          std::max(0.0, a.burst_rate_meps * 1e3 - static_cast<double>(slice.size())));
       const std::size_t n0 = slice.size();
-      std::uniform_int_distribution<int> x(0, s.calib.event_camera.width - 1), y(0, s.calib.event_camera.height - 1);
+      std::uniform_int_distribution<int> x(0, s.calib.event_camera.width - 1),
+          y(0, s.calib.event_camera.height - 1);
       std::uniform_int_distribution<TimeNs> dt(0, kNsPerMs - 1);
       for (std::size_t k = 0; k < extra; ++k)
-        slice.push_back({t + dt(rng), static_cast<std::uint16_t>(x(rng)), static_cast<std::uint16_t>(y(rng)), true});
+        slice.push_back({t + dt(rng), static_cast<std::uint16_t>(x(rng)),
+                         static_cast<std::uint16_t>(y(rng)), true});
       std::sort(slice.begin() + static_cast<std::ptrdiff_t>(n0), slice.end(),
                 [](const Event& p, const Event& q) { return p.t < q.t; });
-      std::inplace_merge(slice.begin(), slice.begin() + static_cast<std::ptrdiff_t>(n0), slice.end(),
-                         [](const Event& p, const Event& q) { return p.t < q.t; });
+      std::inplace_merge(slice.begin(), slice.begin() + static_cast<std::ptrdiff_t>(n0),
+                         slice.end(), [](const Event& p, const Event& q) { return p.t < q.t; });
       burst_events += extra;
     }
     events_pushed += slice.size();
@@ -276,44 +300,55 @@ int run(const Args& a) {
   const long hwm_kb = status_kb("VmHWM");
 
   const double stream_s = to_seconds(total);
-  std::printf("# preset %s seed %llu, %.2f s stream (simulation %.2f s looped), contrast threshold x%.3f\n",
-              a.preset.c_str(), static_cast<unsigned long long>(a.seed), stream_s, to_seconds(period), scale);
-  std::printf("# threads %d (cv::getNumThreads %d), method %s, used:", a.threads, cv::getNumThreads(),
-              a.method.c_str());
+  std::printf(
+      "# preset %s seed %llu, %.2f s stream (simulation %.2f s looped), contrast threshold x%.3f\n",
+      a.preset.c_str(), static_cast<unsigned long long>(a.seed), stream_s, to_seconds(period),
+      scale);
+  std::printf("# threads %d (cv::getNumThreads %d), method %s, used:", a.threads,
+              cv::getNumThreads(), a.method.c_str());
   for (const auto& [m, n] : used) std::printf(" %s %d", m.c_str(), n);
-  std::printf("\n# events %.2f M (%.2f M ev/s stream rate; %.2f M burst events), windows %llu (%d warm-up excluded), "
-              "detections %llu\n",
-              static_cast<double>(events_pushed) * 1e-6, static_cast<double>(events_pushed) / stream_s * 1e-6,
-              static_cast<double>(burst_events) * 1e-6, static_cast<unsigned long long>(windows), a.warmup_windows,
-              static_cast<unsigned long long>(detections));
+  std::printf(
+      "\n# events %.2f M (%.2f M ev/s stream rate; %.2f M burst events), windows %llu (%d warm-up "
+      "excluded), "
+      "detections %llu\n",
+      static_cast<double>(events_pushed) * 1e-6,
+      static_cast<double>(events_pushed) / stream_s * 1e-6,
+      static_cast<double>(burst_events) * 1e-6, static_cast<unsigned long long>(windows),
+      a.warmup_windows, static_cast<unsigned long long>(detections));
   std::printf("%-30s %10s %10s %10s\n", "per window [ms]", "median", "p99", "max");
-  for (const char* k : {"compensation", "time_images", "compensation+time_images", "segmentation+preprocess",
-                        "fit+retrieval", "refine", "detection (all)", "front end (comp+detection)", "tracking",
-                        "window total"}) {
+  for (const char* k :
+       {"compensation", "time_images", "compensation+time_images", "segmentation+preprocess",
+        "fit+retrieval", "refine", "motion cue", "detection, other", "detection (all)",
+        "front end (comp+detection)", "tracking", "window total"}) {
     const Distribution& d = stage[k];
     std::printf("%-30s %10.3f %10.3f %10.3f\n", k, d.quantile(0.5), d.quantile(0.99), d.max());
   }
-  std::printf("%-30s %10.3f %10.3f %10.3f\n", "work per window (all stages)", work.quantile(0.5), work.quantile(0.99),
-              work.max());
-  std::printf("%-30s %10.3f %10.3f %10.3f\n", "  the same in thread CPU time", work_cpu.quantile(0.5),
-              work_cpu.quantile(0.99), work_cpu.max());
-  std::printf("%-30s %10.3f %10.3f %10.3f  (%zu)\n", "depth segmentation per frame", depth_ms.quantile(0.5),
-              depth_ms.quantile(0.99), depth_ms.max(), depth_ms.v.size());
+  std::printf("%-30s %10.3f %10.3f %10.3f\n", "work per window (all stages)", work.quantile(0.5),
+              work.quantile(0.99), work.max());
+  std::printf("%-30s %10.3f %10.3f %10.3f\n", "  the same in thread CPU time",
+              work_cpu.quantile(0.5), work_cpu.quantile(0.99), work_cpu.max());
+  std::printf("%-30s %10.3f %10.3f %10.3f  (%zu)\n", "depth segmentation per frame",
+              depth_ms.quantile(0.5), depth_ms.quantile(0.99), depth_ms.max(), depth_ms.v.size());
   std::printf("%-30s %10.3f %10.3f %10.3f  (%zu)\n", "estimator solve", estimate_ms.quantile(0.5),
               estimate_ms.quantile(0.99), estimate_ms.max(), estimate_ms.v.size());
   const double throughput = static_cast<double>(events_pushed) / (in_pipeline_ms / 1e3) * 1e-6;
-  std::printf("throughput: %.1f M ev/s sustained (%.3f s in the pipeline, %.3f s wall incl. feeding), "
-              "%.1fx real time; %.1f M ev/s per CPU second of the calling thread (%.3f s)\n",
-              throughput, in_pipeline_ms / 1e3, wall_s, stream_s / (in_pipeline_ms / 1e3),
-              static_cast<double>(events_pushed) / (in_pipeline_cpu_ms / 1e3) * 1e-6, in_pipeline_cpu_ms / 1e3);
+  std::printf(
+      "throughput: %.1f M ev/s sustained (%.3f s in the pipeline, %.3f s wall incl. feeding), "
+      "%.1fx real time; %.1f M ev/s per CPU second of the calling thread (%.3f s)\n",
+      throughput, in_pipeline_ms / 1e3, wall_s, stream_s / (in_pipeline_ms / 1e3),
+      static_cast<double>(events_pushed) / (in_pipeline_cpu_ms / 1e3) * 1e-6,
+      in_pipeline_cpu_ms / 1e3);
   std::printf("real-time lag: max %.2f ms (bounded = keeps up with a live stream)\n", max_lag);
-  std::printf("overload: windower decimated %llu events, compensation burst guard %llu; largest window %llu events\n",
-              static_cast<unsigned long long>(decimated), static_cast<unsigned long long>(dropped_burst),
-              static_cast<unsigned long long>(max_window_events));
-  std::printf("memory: peak RSS while streaming %.1f MB (VmHWM; ru_maxrss %.1f MB over the whole run incl. "
-              "simulation), RSS before streaming %.1f MB, in-memory input %.1f MB\n",
-              static_cast<double>(hwm_kb) / 1024, static_cast<double>(ru.ru_maxrss) / 1024,
-              static_cast<double>(rss_before_kb) / 1024, input_mb);
+  std::printf(
+      "overload: windower decimated %llu events, compensation burst guard %llu; largest window "
+      "%llu events\n",
+      static_cast<unsigned long long>(decimated), static_cast<unsigned long long>(dropped_burst),
+      static_cast<unsigned long long>(max_window_events));
+  std::printf(
+      "memory: peak RSS while streaming %.1f MB (VmHWM; ru_maxrss %.1f MB over the whole run incl. "
+      "simulation), RSS before streaming %.1f MB, in-memory input %.1f MB\n",
+      static_cast<double>(hwm_kb) / 1024, static_cast<double>(ru.ru_maxrss) / 1024,
+      static_cast<double>(rss_before_kb) / 1024, input_mb);
   if (!a.json.empty()) {
     nlohmann::json j;
     j["preset"] = a.preset;
@@ -346,18 +381,26 @@ int main(int argc, char** argv) {
   CLI::App app{"End-to-end pipeline benchmark on simulated data (docs/BENCHMARKS.md)"};
   app.add_option("--preset", a.preset, "simulator preset (fast_forward, scene2_ball, ...)");
   app.add_option("--seed", a.seed, "preset seed");
-  app.add_option("--rate", a.rate_meps, "event rate [M events/s]; 0 = the preset's natural rate")->check(CLI::Range(0.0, 200.0));
+  app.add_option("--rate", a.rate_meps, "event rate [M events/s]; 0 = the preset's natural rate")
+      ->check(CLI::Range(0.0, 200.0));
   app.add_option("--contrast-scale", a.contrast_scale,
-                 "use this contrast threshold scale instead of searching for --rate (printed by an earlier run)")
+                 "use this contrast threshold scale instead of searching for --rate (printed by an "
+                 "earlier run)")
       ->check(CLI::Range(0.0, 20.0));
-  app.add_option("--sim-seconds", a.sim_seconds, "seconds to simulate (0 = the preset's duration)")->check(CLI::Range(0.0, 10.0));
-  app.add_option("--seconds", a.seconds, "stream length [s] (loops the simulation; 0 = one pass)")->check(CLI::Range(0.0, 3600.0));
+  app.add_option("--sim-seconds", a.sim_seconds, "seconds to simulate (0 = the preset's duration)")
+      ->check(CLI::Range(0.0, 10.0));
+  app.add_option("--seconds", a.seconds, "stream length [s] (loops the simulation; 0 = one pass)")
+      ->check(CLI::Range(0.0, 3600.0));
   app.add_option("--threads", a.threads, "front-end and OpenCV threads")->check(CLI::Range(1, 64));
   app.add_option("--method", a.method, "compensation method");
-  app.add_option("--burst-rate", a.burst_rate_meps, "overload bursts at this rate [M events/s]; 0 = none")->check(CLI::Range(0.0, 500.0));
+  app.add_option("--burst-rate", a.burst_rate_meps,
+                 "overload bursts at this rate [M events/s]; 0 = none")
+      ->check(CLI::Range(0.0, 500.0));
   app.add_option("--burst-ms", a.burst_ms, "burst length [ms]")->check(CLI::Range(1.0, 10000.0));
-  app.add_option("--burst-every-s", a.burst_every_s, "one burst per this many seconds")->check(CLI::Range(0.01, 3600.0));
-  app.add_option("--warmup", a.warmup_windows, "windows excluded from the statistics")->check(CLI::Range(0, 1000));
+  app.add_option("--burst-every-s", a.burst_every_s, "one burst per this many seconds")
+      ->check(CLI::Range(0.01, 3600.0));
+  app.add_option("--warmup", a.warmup_windows, "windows excluded from the statistics")
+      ->check(CLI::Range(0, 1000));
   app.add_option("--json", a.json, "also write the figures to this JSON file");
   CLI11_PARSE(app, argc, argv);
   return fdv::run(a);
