@@ -27,7 +27,8 @@ ScenarioConfig facing_wall(double wall_x) {
 }
 
 TEST(SimDepth, PlaneAtKnownDistanceWithinTheNoiseModel) {
-  const ScenarioConfig c = facing_wall(3.0);
+  ScenarioConfig c = facing_wall(3.0);
+  c.depth_camera.noise_correlation_px = 1;  // independent: the sample statistics below are sharp
   Simulator sim(c);
   MemorySink sink;
   sim.run(sink);
@@ -56,6 +57,49 @@ TEST(SimDepth, PlaneAtKnownDistanceWithinTheNoiseModel) {
   EXPECT_NEAR(sd, 1.0, 0.02);
   // Holes: binomial, rate 5 %, 134400 pixels -> σ = 0.0006. No edges, no range cut here.
   EXPECT_NEAR(holes / total, 0.05, 0.004);
+}
+
+TEST(SimDepth, CorrelatedNoiseKeepsItsSigmaAndCorrelatesNeighbours) {
+  // Box-correlated over c x c pixels: per-pixel σ unchanged, and pixels du apart along a row
+  // correlate (c − du)/c (shared samples of the two boxes), by hand: 0.8 and 0.4 for c = 5.
+  ScenarioConfig c = facing_wall(3.0);
+  c.depth_camera.noise_correlation_px = 5;
+  c.depth_camera.hole_fraction = 0;
+  Simulator sim(c);
+  MemorySink sink;
+  sim.run(sink);
+  const double z = 3.0 - c.depth_camera.position_B_m.x();
+  const double sigma =
+      z * z * c.depth_camera.subpixel_px / (c.depth_camera.fx * c.depth_camera.baseline_m);
+  double s2 = 0, n = 0, lag1 = 0, lag3 = 0, n1 = 0, n3 = 0;
+  for (const auto& f : sink.depth) {
+    // Interior only: the border's reflected samples change the statistics there.
+    for (int v = 2; v < f.height - 2; ++v) {
+      for (int u = 2; u < f.width - 2; ++u) {
+        const float* row = f.depth_m.data() + static_cast<std::size_t>(v) * f.width;
+        ASSERT_GT(row[u], 0.0f);
+        const double r = (row[u] - z) / sigma;
+        s2 += r * r, ++n;
+        if (u + 1 < f.width - 2) lag1 += r * (row[u + 1] - z) / sigma, ++n1;
+        if (u + 3 < f.width - 2) lag3 += r * (row[u + 3] - z) / sigma, ++n3;
+      }
+    }
+  }
+  EXPECT_NEAR(std::sqrt(s2 / n), 1.0, 0.05);  // 7 frames x ~18k pixels, ~700 independent boxes each
+  EXPECT_NEAR(lag1 / n1, 0.8, 0.05);
+  EXPECT_NEAR(lag3 / n3, 0.4, 0.05);
+}
+
+TEST(SimDepth, NoiseCorrelationMustBeOddAndBounded) {
+  ScenarioConfig c = facing_wall(3.0);
+  for (int bad : {0, 4, 33}) {
+    c.depth_camera.noise_correlation_px = bad;
+    EXPECT_NE(c.validate().find("depth_camera.noise_correlation_px: must be odd"),
+              std::string::npos)
+        << bad << ": " << c.validate();
+  }
+  c.depth_camera.noise_correlation_px = 7;
+  EXPECT_EQ(c.validate(), "");
 }
 
 TEST(SimDepth, OutOfRangeIsInvalid) {

@@ -268,6 +268,7 @@ void describe(V& v, DepthCameraConfig& c) {
   v("hole_fraction", c.hole_fraction);
   v("edge_hole_probability", c.edge_hole_probability);
   v("edge_jump_fraction", c.edge_jump_fraction);
+  v("noise_correlation_px", c.noise_correlation_px);
 }
 
 template <class V>

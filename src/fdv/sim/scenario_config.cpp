@@ -122,6 +122,9 @@ Problem ScenarioConfig::find_problem() const {
     c.in_range(d.hole_fraction, 0, 1, dk + "hole_fraction");
     c.in_range(d.edge_hole_probability, 0, 1, dk + "edge_hole_probability");
     c.positive(d.edge_jump_fraction, dk + "edge_jump_fraction");
+    c.need(d.noise_correlation_px >= 1 && d.noise_correlation_px <= 31 &&
+               d.noise_correlation_px % 2 == 1,
+           dk + "noise_correlation_px", "must be odd, in [1, 31]");
   }
 
   const std::string ik = "imu.";

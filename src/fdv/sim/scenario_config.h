@@ -90,6 +90,9 @@ struct DepthCameraConfig {
   double hole_fraction = 0.02;         ///< random invalid pixels ("a few %", DESIGN)
   double edge_hole_probability = 0.5;  ///< chance a depth-edge pixel is invalid (chosen)
   double edge_jump_fraction = 0.05;    ///< a 4-neighbour this much nearer/farther marks an edge
+  /// Side c of the square over which the depth noise is correlated [px], odd; 1 = independent
+  /// per pixel. Chosen: stereo matching aggregates over a window (docs/SIMULATOR.md).
+  int noise_correlation_px = 5;
 };
 
 /// The IMU (flight-controller MEMS unit).

@@ -1,6 +1,7 @@
 #include "fdv/sim/sensor_models.h"
 
 #include <cmath>
+#include <opencv2/imgproc.hpp>
 
 #include "fdv/sim/geometry.h"
 
@@ -129,10 +130,15 @@ DepthFrame DepthModel::render(TimeNs t, const BodyState& body, const std::vector
   });
 
   const double k = config_.subpixel_px / (camera_.fx * config_.baseline_m);
+  // Per pixel: holes, and a standard normal draw (same random streams and order as without
+  // correlation, so noise_correlation_px = 1 reproduces independent noise exactly).
+  std::vector<std::uint8_t> hole(clean.size(), 0);
+  cv::Mat noise(H, W, CV_64F);
   pool_.parallel_for(static_cast<std::size_t>(H), [&](std::size_t row) {
     const int v = static_cast<int>(row);
     Rng rng =
         Rng::stream(seed_, RngStream::kDepth, frame_index * 65536 + static_cast<std::uint64_t>(v));
+    double* g = noise.ptr<double>(v);
     for (int u = 0; u < W; ++u) {
       const std::size_t p = static_cast<std::size_t>(v) * W + u;
       const float z = clean[p];
@@ -143,13 +149,30 @@ DepthFrame DepthModel::render(TimeNs t, const BodyState& body, const std::vector
         const float zn = clean[static_cast<std::size_t>(nv[q]) * W + nu[q]];
         if (std::abs(zn - z) > config_.edge_jump_fraction * std::min(z, zn)) edge = true;
       }
-      const double u_edge = rng.uniform(), u_hole = rng.uniform(), g = rng.normal();
-      if ((edge && u_edge < config_.edge_hole_probability) || u_hole < config_.hole_fraction)
-        continue;
+      const double u_edge = rng.uniform(), u_hole = rng.uniform();
+      g[u] = rng.normal();
+      hole[p] = (edge && u_edge < config_.edge_hole_probability) || u_hole < config_.hole_fraction;
+    }
+  });
+  // Stereo matching aggregates costs over a window, so its errors are correlated over a few
+  // pixels: the mean of the white field over c x c pixels, times c, has unit variance again and a
+  // correlation (c − |du|)(c − |dv|)/c² between pixels (du, dv) apart.
+  const int c = config_.noise_correlation_px;
+  if (c > 1) {
+    cv::blur(noise, noise, cv::Size(c, c), cv::Point(-1, -1), cv::BORDER_REFLECT_101);
+    noise *= c;
+  }
+  pool_.parallel_for(static_cast<std::size_t>(H), [&](std::size_t row) {
+    const int v = static_cast<int>(row);
+    const double* g = noise.ptr<double>(v);
+    for (int u = 0; u < W; ++u) {
+      const std::size_t p = static_cast<std::size_t>(v) * W + u;
+      const float z = clean[p];
+      if (hole[p]) continue;
       // Outside the operating range the camera reports nothing; inside, a noisy value that
       // leaves the range is not reported either.
       if (z < config_.min_range_m || z > config_.max_range_m) continue;
-      const double noisy = z + k * z * z * g;
+      const double noisy = z + k * z * z * g[u];
       if (noisy < config_.min_range_m || noisy > config_.max_range_m) continue;
       frame.depth_m[p] = static_cast<float>(noisy);
     }

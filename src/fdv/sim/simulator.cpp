@@ -214,6 +214,7 @@ std::string Simulator::manifest_yaml() const {
   kv("max_range_m", d.max_range_m);
   kv("hole_fraction", d.hole_fraction);
   kv("edge_hole_probability", d.edge_hole_probability);
+  kv("noise_correlation_px", d.noise_correlation_px);
   out << YAML::EndMap;
   out << YAML::Key << "imu" << YAML::Value << YAML::BeginMap;
   kv("gyro_noise_density", c.imu.gyro_noise_density);
