@@ -257,13 +257,13 @@ void Perception::process_window(PendingWindow& w) {
   // Estimate-aided association: the 3D trajectory of a track vouches for the detections it predicts.
   vouched_.clear();
   if (options_.estimate_aided_association)
-    for (std::size_t i = 0; i < inputs.size(); ++i)
-      for (const Track& track : tracker_.tracks()) {
-        const auto it = estimators_.find(track.id());
-        if (!track.confirmed() || it == estimators_.end()) continue;
+    for (const Track& track : tracker_.tracks()) {
+      const auto it = estimators_.find(track.id());
+      if (!track.confirmed() || it == estimators_.end()) continue;
+      for (std::size_t i = 0; i < inputs.size(); ++i)
         if (const auto m2 = trajectory_mahalanobis2(it->second.fusion.latest(), inputs[i]))
           vouched_.push_back({track.id(), i, *m2});
-      }
+    }
   const TrackerStep step = tracker_.update(w.t_end, inputs, vouched_);
   result.timings.tracking_ms = ms_since(tracking_start);
   for (int id : step.deleted) estimators_.erase(id);
