@@ -1,6 +1,7 @@
 // The detector's allocation-free passes (segment, Preprocessor, the Gaussian fit's marginals,
 // label_components / retrieve_region) against the OpenCV calls they replaced, on random images:
 // the same results to the bit, except the mean filter (within a stated tolerance).
+#include <array>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -209,6 +210,35 @@ GaussianFit reduce_fit(const cv::Mat& P, const Eigen::Vector2d& c0, const Eigen:
   return fit;
 }
 
+TEST(OpenCvEquivalence, FirstMaximumMatchesMinMaxLoc) {
+  std::mt19937 rng(21);
+  for (int trial = 0; trial < 200; ++trial) {
+    const int w = 1 + static_cast<int>(rng() % 200), h = 1 + static_cast<int>(rng() % 150);
+    cv::Mat m = random_sparse(w, h, rng, trial % 2 ? 0.01 : 0.3);
+    // Ties: a few pixels set to the image's maximum, so that the first in raster order must win.
+    if (trial % 4 == 0) {
+      double mx = 0;
+      cv::minMaxLoc(m, nullptr, &mx);
+      for (int k = 0; k < 3; ++k) m.at<float>(static_cast<int>(rng() % h), static_cast<int>(rng() % w)) = static_cast<float>(mx);
+    }
+    std::uniform_int_distribution<int> x(-10, w + 10), y(-10, h + 10);
+    const int x0 = x(rng), y0 = y(rng);
+    const cv::Rect r(x0, y0, 1 + static_cast<int>(rng() % (w + 20)), 1 + static_cast<int>(rng() % (h + 20)));
+    const cv::Rect c = r & cv::Rect(0, 0, w, h);
+    if (c.area() == 0) continue;
+    double mx = 0;
+    cv::Point at;
+    cv::minMaxLoc(m(c), nullptr, &mx, nullptr, &at);
+    const MaxLocation ours = first_maximum(m, r);
+    SCOPED_TRACE(trial);
+    EXPECT_EQ(ours.value, static_cast<float>(mx));
+    EXPECT_EQ(ours.at, at + c.tl());
+  }
+  const cv::Mat zeros = cv::Mat::zeros(4, 4, CV_32F);
+  EXPECT_EQ(first_maximum(zeros, {1, 2, 2, 2}).at, cv::Point(1, 2));  // all equal: the first pixel
+  EXPECT_EQ(first_maximum(zeros, {10, 10, 2, 2}).value, 0.0f);         // outside: nothing, 0
+}
+
 TEST(OpenCvEquivalence, GaussianFitMatchesTheReduceVersionToTheBit) {
   std::mt19937 rng(3);
   DetectorOptions o;
@@ -232,9 +262,7 @@ TEST(OpenCvEquivalence, GaussianFitMatchesTheReduceVersionToTheBit) {
 
 TEST(OpenCvEquivalence, LabelsAndStatsMatchConnectedComponentsWithStats) {
   std::mt19937 rng(5);
-  cv::Mat labels;  // reused, as in the detector (larger than some images: top-left corner)
-  std::vector<ComponentStats> stats;
-  std::vector<std::int32_t> stack;
+  RegionScratch scratch;  // reused, as in the detector (labels larger than some images: top-left corner)
   for (int trial = 0; trial < 40; ++trial) {
     const int w = 1 + static_cast<int>(rng() % 120), h = 1 + static_cast<int>(rng() % 90);
     // Densities from sparse to nearly full, so that components merge in every direction.
@@ -248,7 +276,9 @@ TEST(OpenCvEquivalence, LabelsAndStatsMatchConnectedComponentsWithStats) {
     cv::compare(image, 0.0, mask, cv::CMP_GT);
     const int n_cv =
         cv::connectedComponentsWithStats(mask, cv_labels, cv_stats, centroids, 8, CV_32S);
-    const int n = label_components(image, labels, stats, stack);
+    const int n = label_components(image, scratch);
+    const cv::Mat& labels = scratch.labels;
+    const std::vector<ComponentStats>& stats = scratch.stats;
     SCOPED_TRACE(::testing::Message() << trial << ": " << w << "x" << h << " density " << density);
     ASSERT_EQ(n, n_cv);
     EXPECT_EQ(cv::norm(labels(cv::Rect(0, 0, w, h)), cv_labels, cv::NORM_INF), 0.0);
@@ -341,6 +371,40 @@ TEST(OpenCvEquivalence, RetrievalMatchesTheConnectedComponentsVersion) {
     EXPECT_EQ(a->area_px, b->area_px);
   }
   EXPECT_GE(found, 20);  // the comparison was exercised
+}
+
+// Several ROIs on one labelling (the detector's "the failed fit's ROI, else the search area"):
+// the same region as the reference called for each ROI in turn until one yields a region.
+TEST(OpenCvEquivalence, RetrievalWithSeveralRoisMatchesOneCallPerRoi) {
+  std::mt19937 rng(13);
+  DetectorOptions o;
+  RegionScratch scratch;
+  scratch.reserve(320, 240);
+  int second_used = 0;
+  for (int trial = 0; trial < 100; ++trial) {
+    const int w = 40 + static_cast<int>(rng() % 280), h = 30 + static_cast<int>(rng() % 210);
+    const cv::Mat P = random_sparse(w, h, rng, 0.01);
+    std::uniform_int_distribution<int> x(0, w - 1), y(0, h - 1);
+    const double cx = x(rng), cy = y(rng);
+    const std::array<Box2D, 2> rois{Box2D{cx - 4.0, cy - 4.0, cx + 4.0, cy + 4.0},
+                                    Box2D{cx - w / 4.0, cy - h / 4.0, cx + w / 4.0, cy + h / 4.0}};
+    const cv::Rect search = box_pixels(rois[1], w, h);
+    const auto a = retrieve_region(P, rois, search, o, scratch);
+    auto b = opencv_retrieve(P, rois[0], search, o);
+    if (!b) {
+      b = opencv_retrieve(P, rois[1], search, o);
+      second_used += b.has_value();
+    }
+    SCOPED_TRACE(trial);
+    ASSERT_EQ(a.has_value(), b.has_value());
+    if (!a) continue;
+    EXPECT_EQ(a->box.x0, b->box.x0);
+    EXPECT_EQ(a->box.y0, b->box.y0);
+    EXPECT_EQ(a->center, b->center);
+    EXPECT_EQ(a->mass, b->mass);
+    EXPECT_EQ(a->area_px, b->area_px);
+  }
+  EXPECT_GE(second_used, 10);  // the fallback to the second ROI was exercised
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 #include "fdv/detection/detector.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <Eigen/Cholesky>
 #include <cmath>
@@ -262,9 +263,9 @@ std::optional<Detector::Candidate> Detector::evaluate_candidate(const Compensate
     // the heaviest one overlapping the failed ROI, else the heaviest overall.
     t = Clock::now();
     const cv::Rect search = box_pixels(initial, w, h);
-    std::optional<Region> region;
-    if (!fit.empty_roi) region = retrieve_region(P, fit.roi(), search, o, region_);
-    if (!region) region = retrieve_region(P, initial, search, o, region_);
+    const std::array<Box2D, 2> rois{fit.roi(), initial};
+    const std::optional<Region> region =
+        retrieve_region(P, std::span<const Box2D>(rois).subspan(fit.empty_roi ? 1 : 0), search, o, region_);
     res.timings.retrieval_ms += ms_since(t);
     if (!region || region->box.width() > o.roi_max_fraction * w || region->box.height() > o.roi_max_fraction * h) {
       why_not = DetectionStatus::kNoRegion;
@@ -284,8 +285,7 @@ std::optional<Detector::Candidate> Detector::evaluate_candidate(const Compensate
       return false;
     }
     const cv::Rect r = box_pixels(k.box, w, h);
-    double peak_in_box = 0;
-    cv::minMaxLoc(P(r), nullptr, &peak_in_box);
+    const double peak_in_box = first_maximum(P, r).value;
     k.score = std::clamp(std::sqrt(peak_in_box), 0.0, 1.0);
     k.event_density = static_cast<double>(k.events) / r.area();
     if (k.score < min_peak || k.event_density < o.min_event_density) {
@@ -498,10 +498,9 @@ DetectionResult Detector::detect(const CompensatedEventsView& window, std::span<
   DetectionStatus why_not =
       res.segmented_pixels == 0 ? DetectionStatus::kNothingSegmented : DetectionStatus::kRemovedAsNoise;
   for (int attempt = 0; attempt < o.max_candidates && support.area() > 0; ++attempt) {
-    double p_max = 0;
-    cv::Point arg_max;
-    cv::minMaxLoc((*image)(support), nullptr, &p_max, nullptr, &arg_max);
-    arg_max += support.tl();
+    const MaxLocation peak = first_maximum(*image, support);
+    const double p_max = peak.value;
+    const cv::Point arg_max = peak.at;
     if (!(p_max > 0) || p_max < o.min_peak * o.min_peak) break;  // no pattern left can pass
     ++res.candidates;
     Box2D blank;
@@ -527,13 +526,12 @@ DetectionResult Detector::detect(const CompensatedEventsView& window, std::span<
     if (!gate) continue;
     const cv::Rect g = box_pixels(*gate, w, h);
     if (g.area() == 0) continue;
-    double p_max = 0;
-    cv::Point arg_max;
-    cv::minMaxLoc(P(g), nullptr, &p_max, nullptr, &arg_max);
+    const MaxLocation peak = first_maximum(P, g);
+    const double p_max = peak.value;
     if (!(p_max > 0) || p_max < o.prior_min_peak * o.prior_min_peak) continue;
     ++res.candidates;
     Box2D blank;
-    found = evaluate_candidate(window, P, arg_max + g.tl(), o.prior_min_peak, res, why_not, blank);
+    found = evaluate_candidate(window, P, peak.at, o.prior_min_peak, res, why_not, blank);
     if (found && !gate->contains(found->center)) found.reset();
     res.track_aided = found.has_value();
   }

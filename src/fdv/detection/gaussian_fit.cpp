@@ -56,6 +56,28 @@ float row_sum(const float* p, int width) {
   return a0 + a1;
 }
 
+/// row_sum of four rows at once: eight independent accumulator chains instead of two, so the adds
+/// overlap (one row's sum is a chain of dependent adds). Each row's result is row_sum's, to the bit.
+void row_sums4(const float* const p[4], int width, float out[4]) {
+  if (width == 1) {
+    for (int r = 0; r < 4; ++r) out[r] = p[r][0];
+    return;
+  }
+  float a0[4], a1[4];
+  for (int r = 0; r < 4; ++r) a0[r] = p[r][0], a1[r] = p[r][1];
+  int i = 2;
+  for (; i <= width - 4; i += 4)
+    for (int r = 0; r < 4; ++r) {
+      a0[r] += p[r][i];
+      a1[r] += p[r][i + 1];
+      a0[r] += p[r][i + 2];
+      a1[r] += p[r][i + 3];
+    }
+  for (; i < width; ++i)
+    for (int r = 0; r < 4; ++r) a0[r] += p[r][i];
+  for (int r = 0; r < 4; ++r) out[r] = a0[r] + a1[r];
+}
+
 }  // namespace
 
 GaussianFit iterative_gaussian_fit(const cv::Mat& P, const Eigen::Vector2d& c0, const Eigen::Vector2d& l0,
@@ -72,11 +94,20 @@ GaussianFit iterative_gaussian_fit(const cv::Mat& P, const Eigen::Vector2d& c0, 
     double sw = 0, sx = 0, sy = 0, sxx = 0, syy = 0;
     if (r.area() > 0) {
       column_moments(P, r, sw, sx, sxx);
-      for (int j = 0; j < r.height; ++j) {
-        const double p = row_sum(P.ptr<float>(r.y + j) + r.x, r.width), y = r.y + j;
+      auto add_row = [&](double p, int j) {
+        const double y = r.y + j;
         sy += p * y;
         syy += p * y * y;
+      };
+      int j = 0;
+      for (; j + 4 <= r.height; j += 4) {
+        const float* rows[4] = {P.ptr<float>(r.y + j) + r.x, P.ptr<float>(r.y + j + 1) + r.x,
+                                P.ptr<float>(r.y + j + 2) + r.x, P.ptr<float>(r.y + j + 3) + r.x};
+        float sums[4];
+        row_sums4(rows, r.width, sums);
+        for (int q = 0; q < 4; ++q) add_row(sums[q], j + q);
       }
+      for (; j < r.height; ++j) add_row(row_sum(P.ptr<float>(r.y + j) + r.x, r.width), j);
     }
   if (!(sw > 0)) {
       fit.empty_roi = true;
@@ -106,103 +137,183 @@ GaussianFit iterative_gaussian_fit(const cv::Mat& P, const Eigen::Vector2d& c0, 
   return fit;
 }
 
-int label_components(const cv::Mat& image, cv::Mat& labels, std::vector<ComponentStats>& stats,
-                     std::vector<std::int32_t>& stack) {
+namespace {
+
+using vf = float __attribute__((vector_size(16)));
+using vf_u = float __attribute__((vector_size(16), aligned(4)));
+using vi = std::int32_t __attribute__((vector_size(16)));
+
+/// First x in [x, w) with p[x] > 0, else w. P is mostly background: 16 pixels per test.
+int next_foreground(const float* p, int x, int w) {
+  const vf zero{};
+  for (; x + 16 <= w; x += 16) {
+    const auto* q = reinterpret_cast<const vf_u*>(p + x);
+    const vi any = (q[0] > zero) | (q[1] > zero) | (q[2] > zero) | (q[3] > zero);
+    if (any[0] | any[1] | any[2] | any[3]) break;
+  }
+  while (x < w && !(p[x] > 0)) ++x;
+  return x;
+}
+
+std::int32_t find_root(std::vector<std::int32_t>& parent, std::int32_t i) {
+  while (parent[i] != i) {
+    parent[i] = parent[parent[i]];  // path halving
+    i = parent[i];
+  }
+  return i;
+}
+
+}  // namespace
+
+int label_runs(const cv::Mat& image, RegionScratch& s) {
   CV_Assert(image.type() == CV_32F);
   const int w = image.cols, h = image.rows;
-  if (labels.type() != CV_32S || labels.cols < w || labels.rows < h) labels.create(image.size(), CV_32S);
-  cv::Mat lab = labels(cv::Rect(0, 0, w, h));
-  for (int y = 0; y < h; ++y) std::fill(lab.ptr<std::int32_t>(y), lab.ptr<std::int32_t>(y) + w, 0);  // (setTo allocates)
-  stats.clear();
-  stats.push_back({});  // label 0: background (not filled)
-  auto fg = [&](int x, int y) { return image.ptr<float>(y)[x] > 0; };
-  // Flood fill (explicit stack of pixel indices y·w + x) from the first unlabelled foreground
-  // pixel of each 2x2 block, blocks in raster order: every foreground pixel of a block is
-  // 8-adjacent to the others, so a component's first block is the one OpenCV's block-based scan
-  // opens its label at, and the labels come out in OpenCV's order.
-  for (int by = 0; by < h; by += 2)
-    for (int bx = 0; bx < w; bx += 2)
-      for (int q = 0; q < 4; ++q) {
-        const int sx = bx + (q & 1), sy = by + (q >> 1);
-        if (sx >= w || sy >= h || !fg(sx, sy) || lab.ptr<std::int32_t>(sy)[sx] != 0) continue;
-        const auto label = static_cast<std::int32_t>(stats.size());
-        int x_lo = sx, x_hi = sx, y_lo = sy, y_hi = sy, area = 0;
-        lab.ptr<std::int32_t>(sy)[sx] = label;
-        stack.clear();
-        stack.push_back(sy * w + sx);
-        while (!stack.empty()) {
-          const std::int32_t i = stack.back();
-          stack.pop_back();
-          const int y = i / w, x = i - y * w;
-          ++area;
-          x_lo = std::min(x_lo, x);
-          x_hi = std::max(x_hi, x);
-          y_lo = std::min(y_lo, y);
-          y_hi = std::max(y_hi, y);
-          for (int ny = std::max(0, y - 1); ny <= std::min(h - 1, y + 1); ++ny) {
-            std::int32_t* l = lab.ptr<std::int32_t>(ny);
-            for (int nx = std::max(0, x - 1); nx <= std::min(w - 1, x + 1); ++nx) {
-              if (l[nx] != 0 || !fg(nx, ny)) continue;
-              l[nx] = label;
-              stack.push_back(ny * w + nx);
-            }
-          }
-        }
-        stats.push_back({x_lo, y_lo, x_hi - x_lo + 1, y_hi - y_lo + 1, area});
+  s.runs.clear();
+  s.parent.clear();
+  // Runs row by row; each is joined with the runs of the row above that touch it (8-connected:
+  // columns overlap or meet diagonally). Both rows' runs are sorted by x: one merge-like sweep.
+  std::size_t above_begin = 0, above_end = 0;
+  for (int y = 0; y < h; ++y) {
+    const float* p = image.ptr<float>(y);
+    const std::size_t row_begin = s.runs.size();
+    std::size_t j = above_begin;
+    for (int x = 0; x < w;) {
+      x = next_foreground(p, x, w);
+      if (x == w) break;
+      const int x0 = x;
+      while (x < w && p[x] > 0) ++x;
+      const auto self = static_cast<std::int32_t>(s.runs.size());
+      s.runs.push_back({y, x0, x - 1, 0});
+      s.parent.push_back(self);
+      while (j < above_end && s.runs[j].x1 < x0 - 1) ++j;
+      for (std::size_t k = j; k < above_end && s.runs[k].x0 <= x; ++k) {
+        const std::int32_t a = find_root(s.parent, self), b = find_root(s.parent, static_cast<std::int32_t>(k));
+        if (a != b) s.parent[std::max(a, b)] = std::min(a, b);  // the earlier run stays the root
       }
-  return static_cast<int>(stats.size());
+    }
+    above_begin = row_begin;
+    above_end = s.runs.size();
+  }
+  // Components: bounds, area and first 2x2 block (the key of OpenCV's numbering), per root run.
+  const auto n_runs = static_cast<std::int32_t>(s.runs.size());
+  const std::int32_t blocks_per_row = (w + 1) / 2;
+  s.roots.clear();
+  s.key.resize(s.runs.size());
+  s.root_stats.resize(s.runs.size());
+  for (std::int32_t i = 0; i < n_runs; ++i) {
+    const std::int32_t r = find_root(s.parent, i);
+    s.parent[i] = r;
+    const PixelRun& run = s.runs[i];
+    const std::int32_t key = (run.y / 2) * blocks_per_row + run.x0 / 2;
+    ComponentStats& st = s.root_stats[r];  // (x_lo, y_lo, x_hi, y_hi, area) while collecting
+    if (r == i) {  // a root is its component's first run in raster order
+      s.roots.push_back(r);
+      s.key[r] = key;
+      st = {run.x0, run.y, run.x1, run.y, 0};
+    }
+    s.key[r] = std::min(s.key[r], key);
+    st.left = std::min(st.left, run.x0);
+    st.width = std::max(st.width, run.x1);
+    st.height = run.y;  // runs come in raster order
+    st.area += run.x1 - run.x0 + 1;
+  }
+  std::sort(s.roots.begin(), s.roots.end(), [&](std::int32_t a, std::int32_t b) { return s.key[a] < s.key[b]; });
+  s.stats.resize(s.roots.size() + 1);
+  s.stats[0] = {};
+  for (std::size_t i = 0; i < s.roots.size(); ++i) {
+    const std::int32_t r = s.roots[i];
+    const ComponentStats& c = s.root_stats[r];
+    s.stats[i + 1] = {c.left, c.top, c.width - c.left + 1, c.height - c.top + 1, c.area};
+    s.key[r] = static_cast<std::int32_t>(i + 1);  // root → label
+  }
+  for (std::int32_t i = 0; i < n_runs; ++i) s.runs[i].label = s.key[s.parent[i]];
+  return static_cast<int>(s.stats.size());
+}
+
+int label_components(const cv::Mat& image, RegionScratch& s) {
+  const int n = label_runs(image, s);
+  const int w = image.cols, h = image.rows;
+  if (s.labels.type() != CV_32S || s.labels.cols < w || s.labels.rows < h) s.labels.create(image.size(), CV_32S);
+  for (int y = 0; y < h; ++y) std::fill_n(s.labels.ptr<std::int32_t>(y), w, 0);  // (setTo allocates)
+  for (const PixelRun& r : s.runs) std::fill(s.labels.ptr<std::int32_t>(r.y) + r.x0, s.labels.ptr<std::int32_t>(r.y) + r.x1 + 1, r.label);
+  return n;
 }
 
 void RegionScratch::reserve(int width, int height) {
   if (labels.type() != CV_32S || labels.cols < width || labels.rows < height) labels.create(height, width, CV_32S);
-  stats.reserve(static_cast<std::size_t>((width + 1) / 2) * static_cast<std::size_t>((height + 1) / 2) + 1);
-  stack.reserve(static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
+  // At most one run per two pixels of a row, one component per 2x2 block.
+  const std::size_t max_runs = static_cast<std::size_t>((width + 1) / 2) * static_cast<std::size_t>(height);
+  const std::size_t max_components = static_cast<std::size_t>((width + 1) / 2) * static_cast<std::size_t>((height + 1) / 2);
+  runs.reserve(max_runs);
+  parent.reserve(max_runs);
+  key.reserve(max_runs);
+  root_stats.reserve(max_runs);
+  roots.reserve(max_components);
+  stats.reserve(max_components + 1);
+  mass.reserve(3 * (max_components + 1));
 }
 
 std::optional<Region> retrieve_region(const cv::Mat& P, const Box2D& roi, const cv::Rect& search,
                                       const DetectorOptions& o, RegionScratch& scratch) {
+  return retrieve_region(P, std::span<const Box2D>(&roi, 1), search, o, scratch);
+}
+
+std::optional<Region> retrieve_region(const cv::Mat& P, std::span<const Box2D> rois, const cv::Rect& search,
+                                      const DetectorOptions& o, RegionScratch& scratch) {
   const cv::Rect area = search & cv::Rect(0, 0, P.cols, P.rows);
   if (area.area() == 0) return std::nullopt;
   const cv::Mat Ps = P(area);
-  const int n = label_components(Ps, scratch.labels, scratch.stats, scratch.stack);
+  const int n = label_runs(Ps, scratch);
   if (n <= 1) return std::nullopt;
-  cv::Rect roi_px = box_pixels(roi, P.cols, P.rows);
-  roi_px.x -= area.x;
-  roi_px.y -= area.y;
-  // Candidates: large enough and overlapping the ROI; mass and weighted centroid summed over each
-  // candidate's bounding box only (search-area coordinates).
-  int best = -1;
-  double best_m[3] = {0, 0, 0};
-  for (int i = 1; i < n; ++i) {
-    const ComponentStats& st = scratch.stats[static_cast<std::size_t>(i)];
-    if (st.area < o.region_min_area_px) continue;
-    const cv::Rect comp(st.left, st.top, st.width, st.height);
-    if ((comp & roi_px).area() == 0) continue;
-    double m[3] = {0, 0, 0};
-    for (int y = comp.y; y < comp.y + comp.height; ++y) {
-      const float* p = Ps.ptr<float>(y);
-      const std::int32_t* lab = scratch.labels.ptr<std::int32_t>(y);
-      for (int x = comp.x; x < comp.x + comp.width; ++x) {
-        if (lab[x] != i) continue;
-        m[0] += p[x];
-        m[1] += static_cast<double>(p[x]) * x;
-        m[2] += static_cast<double>(p[x]) * y;
+  // The ROIs in search-area pixels; a component is a candidate for an ROI when it is large enough
+  // and its bounding box overlaps the ROI.
+  auto roi_px = [&](const Box2D& roi) {
+    cv::Rect r = box_pixels(roi, P.cols, P.rows);
+    r.x -= area.x;
+    r.y -= area.y;
+    return r;
+  };
+  auto candidate = [&](int label, const cv::Rect& r) {
+    const ComponentStats& st = scratch.stats[static_cast<std::size_t>(label)];
+    return st.area >= o.region_min_area_px && (cv::Rect(st.left, st.top, st.width, st.height) & r).area() > 0;
+  };
+  // Mass and weighted centroid (search-area coordinates) of every component that is a candidate
+  // for some ROI, summed pixel by pixel in raster order (runs come in raster order).
+  std::vector<double>& mass = scratch.mass;
+  mass.assign(3 * static_cast<std::size_t>(n), -1.0);  // −1: not needed
+  for (int i = 1; i < n; ++i)
+    for (const Box2D& roi : rois)
+      if (candidate(i, roi_px(roi))) {
+        std::fill_n(mass.begin() + 3 * i, 3, 0.0);
+        break;
       }
-    }
-    if (best < 0 || m[0] > best_m[0]) {
-      best = i;
-      std::copy(m, m + 3, best_m);
+  for (const PixelRun& run : scratch.runs) {
+    double* m = mass.data() + 3 * static_cast<std::size_t>(run.label);
+    if (m[0] < 0) continue;
+    const float* p = Ps.ptr<float>(run.y);
+    for (int x = run.x0; x <= run.x1; ++x) {
+      m[0] += p[x];
+      m[1] += static_cast<double>(p[x]) * x;
+      m[2] += static_cast<double>(p[x]) * run.y;
     }
   }
-  if (best < 0 || !(best_m[0] > 0)) return std::nullopt;
-  const ComponentStats& st = scratch.stats[static_cast<std::size_t>(best)];
-  const double left = area.x + st.left, top = area.y + st.top;
-  Region r;
-  r.box = {left - 0.5, top - 0.5, left + st.width - 0.5, top + st.height - 0.5};
-  r.center = {area.x + best_m[1] / best_m[0], area.y + best_m[2] / best_m[0]};
-  r.mass = best_m[0];
-  r.area_px = st.area;
-  return r;
+  for (const Box2D& roi : rois) {
+    const cv::Rect r = roi_px(roi);
+    int best = -1;
+    for (int i = 1; i < n; ++i)  // the heaviest; on a tie, the lower label
+      if (candidate(i, r) && (best < 0 || mass[3 * i] > mass[3 * best])) best = i;
+    if (best < 0 || !(mass[3 * best] > 0)) continue;
+    const ComponentStats& st = scratch.stats[static_cast<std::size_t>(best)];
+    const double* m = mass.data() + 3 * best;
+    const double left = area.x + st.left, top = area.y + st.top;
+    Region region;
+    region.box = {left - 0.5, top - 0.5, left + st.width - 0.5, top + st.height - 0.5};
+    region.center = {area.x + m[1] / m[0], area.y + m[2] / m[0]};
+    region.mass = m[0];
+    region.area_px = st.area;
+    return region;
+  }
+  return std::nullopt;
 }
 
 }  // namespace fdv

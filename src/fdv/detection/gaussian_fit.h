@@ -16,6 +16,7 @@
 #include <opencv2/core.hpp>
 #include <cstdint>
 #include <optional>
+#include <span>
 #include <vector>
 
 #include "fdv/detection/detection2d.h"
@@ -57,31 +58,50 @@ struct ComponentStats {
   int left = 0, top = 0, width = 0, height = 0, area = 0;
 };
 
-/// 8-connected components of the pixels of `image` (CV_32F) greater than 0, labelled 1, 2, ... in
-/// the order cv::connectedComponentsWithStats gives them (its scan is by 2x2 blocks: a component's
-/// number follows the first block, in raster order of blocks, that holds one of its pixels);
-/// 0 = background. `labels` (CV_32S) receives the labels in its top-left image.size() corner (it is
-/// reallocated only when smaller than the image); `stats[i]` is label i's (stats[0] unused);
-/// `stack` is scratch. Returns the number of labels including the background, as OpenCV does.
-/// Allocation-free when `labels` is large enough and the vectors' capacities suffice (at most
-/// ⌈w/2⌉·⌈h/2⌉ + 1 components and w·h stack entries).
-int label_components(const cv::Mat& image, cv::Mat& labels, std::vector<ComponentStats>& stats,
-                     std::vector<std::int32_t>& stack);
+/// One horizontal run of foreground pixels [x0, x1] in row y (inclusive), and its component.
+struct PixelRun {
+  std::int32_t y = 0, x0 = 0, x1 = 0;
+  std::int32_t label = 0;  ///< after labelling: the component's label (1, 2, ...)
+};
 
-/// Scratch of retrieve_region, kept between calls: reserve(width, height) once and no call on an
-/// image of at most that size allocates.
+/// Scratch of label_components and retrieve_region, kept between calls: reserve(width, height) once
+/// and no call on an image of at most that size allocates.
 struct RegionScratch {
-  cv::Mat labels;  ///< CV_32S
-  std::vector<ComponentStats> stats;
-  std::vector<std::int32_t> stack;
+  cv::Mat labels;                     ///< CV_32S, written by label_components only
+  std::vector<ComponentStats> stats;  ///< stats[label] (stats[0] unused)
+  std::vector<PixelRun> runs;         ///< foreground runs in raster order
+  std::vector<std::int32_t> parent;   ///< union-find over runs
+  std::vector<std::int32_t> roots;    ///< one run per component, then sorted into label order
+  std::vector<std::int32_t> key;      ///< per root run: the component's first 2x2 block, then its label
+  std::vector<ComponentStats> root_stats;  ///< per root run, while collecting
+  std::vector<double> mass;           ///< retrieve_region: Σ P, Σ P·x, Σ P·y per label
   void reserve(int width, int height);
 };
+
+/// 8-connected components of the pixels of `image` (CV_32F) greater than 0, as runs of pixels
+/// (`scratch.runs`, each with its label) and per-label stats (`scratch.stats[i]`, stats[0]
+/// unused), labelled 1, 2, ... in the order cv::connectedComponentsWithStats gives them (its scan
+/// is by 2x2 blocks: a component's number follows the first block, in raster order of blocks,
+/// that holds one of its pixels; every foreground pixel of a block is 8-adjacent to the others,
+/// so that block belongs to one component). Returns the number of labels including the
+/// background, as OpenCV does. Runs joined by union-find: one pass over the image, then work per
+/// run, not per pixel.
+int label_runs(const cv::Mat& image, RegionScratch& scratch);
+
+/// label_runs, plus the label image (CV_32S, 0 = background) written into the top-left
+/// image.size() corner of `scratch.labels` (reallocated only when smaller than the image).
+int label_components(const cv::Mat& image, RegionScratch& scratch);
 
 /// Moving-region retrieval: connected components (8-connected) of P > 0 computed inside `search`
 /// (components are cut at its border); of those with at least region_min_area_px pixels that
 /// overlap `roi`, the one with the largest mass Σ P (on a tie, the lower label). Nothing when none
 /// qualifies.
 std::optional<Region> retrieve_region(const cv::Mat& P, const Box2D& roi, const cv::Rect& search,
+                                      const DetectorOptions& o, RegionScratch& scratch);
+
+/// The same for several ROIs tried in order on one labelling of the search area: the region of the
+/// first ROI that yields one (the detector's "overlapping the failed fit's ROI, else any").
+std::optional<Region> retrieve_region(const cv::Mat& P, std::span<const Box2D> rois, const cv::Rect& search,
                                       const DetectorOptions& o, RegionScratch& scratch);
 
 }  // namespace fdv

@@ -1,3 +1,4 @@
+#include <bit>
 #include "fdv/detection/segmentation.h"
 
 #include <algorithm>
@@ -134,6 +135,45 @@ void zero_rect(cv::Mat& m, const cv::Rect& r) {
   const cv::Rect c = r & cv::Rect(0, 0, m.cols, m.rows);
   for (int y = c.y; y < c.y + c.height; ++y)
     std::memset(m.ptr<std::uint8_t>(y) + 4 * static_cast<std::size_t>(c.x), 0, 4 * static_cast<std::size_t>(c.width));
+}
+
+MaxLocation first_maximum(const cv::Mat& m, const cv::Rect& r) {
+  CV_Assert(m.type() == CV_32F);
+  const cv::Rect c = r & cv::Rect(0, 0, m.cols, m.rows);
+  MaxLocation best{0, c.tl()};
+  if (c.area() == 0) return best;
+  using vf = float __attribute__((vector_size(16)));
+  using vf_u = float __attribute__((vector_size(16), aligned(4)));
+  using vi = std::int32_t __attribute__((vector_size(16)));
+  auto row_max = [&](const float* p) {
+    int x = 0;
+    float mx = p[0];
+    if (c.width >= 4) {
+      vf v = *reinterpret_cast<const vf_u*>(p);
+      for (x = 4; x + 4 <= c.width; x += 4) {
+        const vf q = *reinterpret_cast<const vf_u*>(p + x);
+        const vi gt = q > v;
+        v = std::bit_cast<vf>((std::bit_cast<vi>(q) & gt) | (std::bit_cast<vi>(v) & ~gt));
+      }
+      mx = std::max(std::max(v[0], v[1]), std::max(v[2], v[3]));
+    }
+    for (; x < c.width; ++x) mx = std::max(mx, p[x]);
+    return mx;
+  };
+  int best_y = c.y;
+  best.value = m.ptr<float>(c.y)[c.x];
+  for (int y = c.y; y < c.y + c.height; ++y) {
+    const float v = row_max(m.ptr<float>(y) + c.x);
+    if (v > best.value) {
+      best.value = v;
+      best_y = y;
+    }
+  }
+  const float* p = m.ptr<float>(best_y) + c.x;
+  int x = 0;
+  while (p[x] != best.value) ++x;
+  best.at = {c.x + x, best_y};
+  return best;
 }
 
 double adaptive_threshold(double mean_normalized, double omega_rad_s, double speed_m_s, const DetectorOptions& o) {

@@ -22,6 +22,16 @@ namespace fdv {
 /// block buffer at each call.
 void zero_rect(cv::Mat& m, const cv::Rect& r);
 
+struct MaxLocation {
+  float value = 0;
+  cv::Point at;  ///< image coordinates
+};
+/// The maximum of a CV_32F image (no NaN) inside r (clipped to the image) and its first location in
+/// raster order, as cv::minMaxLoc reports them; r empty: value 0 at r's corner. Row maxima four
+/// lanes at a time: several times faster than cv::minMaxLoc on large areas, where it also showed
+/// occasional 3 ms calls in the pipeline.
+MaxLocation first_maximum(const cv::Mat& m, const cv::Rect& r);
+
 /// θ(ω, v) = mean_N + a·‖ω‖ + b·‖v‖ + c, mean_N = mean of N over pixels with events.
 double adaptive_threshold(double mean_normalized, double omega_rad_s, double speed_m_s, const DetectorOptions& o);
 
