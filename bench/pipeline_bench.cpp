@@ -7,6 +7,7 @@
 //   build-perf/bench/pipeline_bench --preset scene2_ball --rate 20 --threads 2
 //   build-perf/bench/pipeline_bench --rate 5 --seconds 60 --sim-seconds 0.4     # memory
 //   build-perf/bench/pipeline_bench --rate 5 --burst-rate 50                       # overload
+//   build-perf/bench/pipeline_bench ... --windows-csv w.csv   # every window's stage times
 //
 // How the event rate is reached (docs/BENCHMARKS.md): the preset is simulated once at its own
 // contrast threshold to measure its natural rate, then again with the contrast threshold (mean,
@@ -35,6 +36,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <memory>
 #include <cstdio>
 #include <ctime>
 #include <fstream>
@@ -161,6 +163,7 @@ struct Args {
   double burst_every_s = 1.0;
   int warmup_windows = 8;
   std::string json;
+  std::string windows_csv;
 };
 
 int run(const Args& a) {
@@ -196,6 +199,17 @@ int run(const Args& a) {
   double last_window_clock = 0, last_window_cpu = 0, lag = 0, max_lag = 0;
   const double window_ms = to_seconds(opt.windows.window_ns) * 1e3;
   PerceptionCallbacks cb;
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> windows_csv(nullptr, &std::fclose);
+  if (!a.windows_csv.empty()) {
+    windows_csv.reset(std::fopen(a.windows_csv.c_str(), "w"));
+    if (!windows_csv) {
+      std::fprintf(stderr, "cannot write %s\n", a.windows_csv.c_str());
+      return 2;
+    }
+    std::fputs("window,events,status,detected,compensation,time_images,segmentation,preprocess,fit,retrieval,refine,"
+               "motion_cue,detection,front_end\n",
+               windows_csv.get());
+  }
   cb.on_window = [&](const WindowResult& w) {
     const double now = pipeline_clock(), now_cpu = pipeline_cpu();
     const double work_ms = now - last_window_clock, cpu_ms = now_cpu - last_window_cpu;
@@ -228,6 +242,12 @@ int run(const Args& a) {
     stage["window total"].v.push_back(w.timings.total_ms);
     work.v.push_back(work_ms);
     work_cpu.v.push_back(cpu_ms);
+    if (windows_csv)
+      std::fprintf(windows_csv.get(), "%llu,%zu,%s,%d,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n",
+                   static_cast<unsigned long long>(w.index), w.events, std::string(to_string(w.status)).c_str(),
+                   w.detection.has_value() ? 1 : 0, w.timings.compensation_ms, d.time_images_ms, d.segmentation_ms,
+                   d.preprocess_ms, d.fit_ms, d.retrieval_ms, d.refine_ms, d.motion_cue_ms, d.total_ms,
+                   w.timings.compensation_ms + d.total_ms);
   };
   cb.on_depth = [&](const DepthResult& r) { depth_ms.v.push_back(r.ms); };
   cb.on_estimate = [&](const EstimateResult& r) { estimate_ms.v.push_back(r.ms); };
@@ -402,6 +422,9 @@ int main(int argc, char** argv) {
   app.add_option("--warmup", a.warmup_windows, "windows excluded from the statistics")
       ->check(CLI::Range(0, 1000));
   app.add_option("--json", a.json, "also write the figures to this JSON file");
+  app.add_option("--windows-csv", a.windows_csv,
+                 "also write every window's stage times [ms], status and event count to this CSV file (to find what "
+                 "makes the slow windows slow)");
   CLI11_PARSE(app, argc, argv);
   return fdv::run(a);
 }
