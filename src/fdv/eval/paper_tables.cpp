@@ -123,6 +123,8 @@ Table1 compute_table1(const PaperTableOptions& options) {
   Table1 table;
   table.seeds = options.seeds;
   table.window_ns = options.perception.windows.window_ns;
+  table.denoise_mean_filter_px = options.perception.detection.mean_filter_px;
+  table.denoise_opening_px = options.perception.detection.opening_px;
   for (const std::string& scene : table1_detection_scenes())
     for (const std::string& method : table1_methods())
       table.rows.push_back({scene, method, {}, {}, {}, {}});
@@ -230,13 +232,13 @@ std::string to_markdown(const Table1& table, const Provenance& provenance) {
   out += fmt::format(
       "\nNotes. Every figure pools all windows of all seeds (one simulated dataset per scene and "
       "seed, "
-      "640x480, Δt = {:.0f} ms windows). Times are wall-clock per window on this machine (2 cores "
+      "640x480, Δt = {0:.0f} ms windows). Times are wall-clock per window on this machine (2 cores "
       "shared "
       "with other work: treat them as indicative); the paper's time column is the compensation "
       "alone; "
       "real-time = every window under Δt. η (paper §V-B) = (max over M − max over B) / max over M "
       "of the "
-      "mean-time image after one shared denoising (the paper's own, §IV-B.2: the detector's 3x3 mean filter and 3x3 opening), M = the ball's exact ground-truth box "
+      "mean-time image after one shared denoising (the paper's own, §IV-B.2: the detector's {1}x{1} mean filter and {2}x{2} opening), M = the ball's exact ground-truth box "
       "over the "
       "window on the undistorted grid, seen from the camera the method's image is in (rotation: "
       "its orientation held at the window's start; rotation_translation and contrast_max: its "
@@ -252,7 +254,7 @@ std::string to_markdown(const Table1& table, const Provenance& provenance) {
       "in its true box (+2 px). Centre error: |detected − true projected centre| of those "
       "detections. "
       "False detection: a detection in no ball's box, counted in every window.\n",
-      dt_ms);
+      dt_ms, table.denoise_mean_filter_px, table.denoise_opening_px);
   return out;
 }
 

@@ -54,6 +54,8 @@ struct CompensationRow {
 struct Table1 {
   std::vector<std::uint64_t> seeds;
   TimeNs window_ns = 0;               ///< Δt, the real-time bound
+  int denoise_mean_filter_px = 0;     ///< η's shared denoising: the detector's mean filter side
+  int denoise_opening_px = 0;         ///< and its opening's side
   std::vector<CompensationRow> rows;  ///< scenes × methods, in display order
   const CompensationRow* row(const std::string& scene, const std::string& method) const;
 };
