@@ -24,15 +24,6 @@ std::string PinholeCamera::validate() const {
   return why.str();
 }
 
-Eigen::Vector2d PinholeCamera::distort(const Eigen::Vector2d& xn) const {
-  const auto& d = distortion;
-  const double x = xn.x(), y = xn.y();
-  const double r2 = x * x + y * y;
-  const double radial = 1 + r2 * (d.k1 + r2 * (d.k2 + r2 * d.k3));
-  return {x * radial + 2 * d.p1 * x * y + d.p2 * (r2 + 2 * x * x),
-          y * radial + d.p1 * (r2 + 2 * y * y) + 2 * d.p2 * x * y};
-}
-
 Eigen::Vector2d PinholeCamera::undistort(const Eigen::Vector2d& xd) const {
   if (distortion.is_zero()) return xd;
   const auto& d = distortion;
@@ -79,11 +70,6 @@ Eigen::Vector2d PinholeCamera::project(const Eigen::Vector3d& X) const {
 
 Eigen::Vector2d PinholeCamera::pixel_to_normalized(const Eigen::Vector2d& px) const {
   return undistort({(px.x() - cx) / fx, (px.y() - cy) / fy});
-}
-
-Eigen::Vector2d PinholeCamera::normalized_to_pixel(const Eigen::Vector2d& xn) const {
-  const Eigen::Vector2d xd = distort(xn);
-  return {fx * xd.x() + cx, fy * xd.y() + cy};
 }
 
 Eigen::Vector2d PinholeCamera::undistort_pixel(const Eigen::Vector2d& px) const {

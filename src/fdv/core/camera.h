@@ -32,7 +32,15 @@ struct PinholeCamera {
   std::string validate() const;
 
   /// Normalised undistorted coordinates (x/z, y/z) -> normalised distorted coordinates.
-  Eigen::Vector2d distort(const Eigen::Vector2d& xn) const;
+  /// (Defined here, as normalized_to_pixel: per-pixel loops such as depth registration inline them.)
+  Eigen::Vector2d distort(const Eigen::Vector2d& xn) const {
+    const auto& d = distortion;
+    const double x = xn.x(), y = xn.y();
+    const double r2 = x * x + y * y;
+    const double radial = 1 + r2 * (d.k1 + r2 * (d.k2 + r2 * d.k3));
+    return {x * radial + 2 * d.p1 * x * y + d.p2 * (r2 + 2 * x * x),
+            y * radial + d.p1 * (r2 + 2 * y * y) + 2 * d.p2 * x * y};
+  }
   /// Inverse of distort(); NaN where the lens map has no inverse.
   Eigen::Vector2d undistort(const Eigen::Vector2d& xd) const;
 
@@ -41,7 +49,10 @@ struct PinholeCamera {
   /// Raw pixel -> normalised undistorted coordinates (x/z, y/z).
   Eigen::Vector2d pixel_to_normalized(const Eigen::Vector2d& px) const;
   /// Normalised undistorted coordinates -> raw pixel.
-  Eigen::Vector2d normalized_to_pixel(const Eigen::Vector2d& xn) const;
+  Eigen::Vector2d normalized_to_pixel(const Eigen::Vector2d& xn) const {
+    const Eigen::Vector2d xd = distort(xn);
+    return {fx * xd.x() + cx, fy * xd.y() + cy};
+  }
   /// Raw pixel -> undistorted pixel K·xn.
   Eigen::Vector2d undistort_pixel(const Eigen::Vector2d& px) const;
   /// Raw pixel and z-depth -> point in the camera frame.
