@@ -81,29 +81,28 @@ DepthRegistrationResult DepthRegistrar::register_frame(const DepthFrame& frame) 
   // z-buffer in place: "no depth yet" is +inf while splatting, 0 afterwards.
   std::fill(out.depth_m.begin(), out.depth_m.end(), inf);
   const double lo = options_.min_depth_m, hi = options_.max_depth_m;
+  // Every pixel is carried through the whole projection and classified at the end, without a
+  // branch per check: holes and rejects are scattered over a frame, and the mispredicted branches
+  // cost more than the arithmetic saved (same operations as one check at a time: same results).
+  const float* depth = frame.depth_m.data();
+  const float* rays = rays_.data();
+  std::uint64_t invalid = 0, no_inverse = 0, behind = 0, outside = 0;
   for (std::size_t i = 0; i < n; ++i) {
-    const float z_d = frame.depth_m[i];
-    if (!(z_d >= lo && z_d <= hi)) {  // also rejects NaN
-      ++out.invalid_input;
-      continue;
-    }
-    const float xn = rays_[2 * i], yn = rays_[2 * i + 1];
-    if (std::isnan(xn)) {
-      ++out.no_inverse;
-      continue;
-    }
+    const float z_d = depth[i];
+    const float xn = rays[2 * i], yn = rays[2 * i + 1];
+    const bool valid = z_d >= lo && z_d <= hi;  // also rejects NaN
+    const bool has_ray = valid && !std::isnan(xn);
     const Eigen::Vector3d X_D(xn * static_cast<double>(z_d), yn * static_cast<double>(z_d), z_d);
     const Eigen::Vector3d X_E = R_E_D_ * X_D + t_E_D_;
-    if (X_E.z() <= 0) {
-      ++out.behind_camera;
-      continue;
-    }
+    const bool front = has_ray && X_E.z() > 0;
     const Eigen::Vector2d xn_e = X_E.head<2>() / X_E.z();
     const Eigen::Vector2d px = event_camera_.normalized_to_pixel(xn_e);
-    if (xn_e.squaredNorm() > max_radius2_event_ || !event_camera_.in_image(px)) {
-      ++out.outside_image;
-      continue;
-    }
+    const bool inside = front && !(xn_e.squaredNorm() > max_radius2_event_) && event_camera_.in_image(px);
+    invalid += !valid;
+    no_inverse += valid && !has_ray;
+    behind += has_ray && !front;
+    outside += front && !inside;
+    if (!inside) continue;
     // Nearest pixel (in_image guarantees px + 0.5 >= 0, so truncation is floor).
     const int x = static_cast<int>(px.x() + 0.5), y = static_cast<int>(px.y() + 0.5);
     float& cell = out.depth_m[static_cast<std::size_t>(y) * out.width + x];
@@ -116,6 +115,10 @@ DepthRegistrationResult DepthRegistrar::register_frame(const DepthFrame& frame) 
       ++out.occluded;
     }
   }
+  out.invalid_input += invalid;
+  out.no_inverse += no_inverse;
+  out.behind_camera += behind;
+  out.outside_image += outside;
   for (float& z : out.depth_m)
     if (z == inf) z = 0.0f;
   return result;
