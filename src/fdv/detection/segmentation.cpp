@@ -80,7 +80,9 @@ constexpr int kStripRows = 32;
 /// with the rows above and below it needs (h1 + 2·h2 each side, recomputed), so that the
 /// intermediate images stay in the cache: `a`, `b` are strip buffers of at least
 /// kStripRows + 2·(h1 + 2·h2) rows of S's width. Returns r1.
-cv::Rect open_mean_square(const cv::Mat& S, const cv::Rect& s_bounds, int h1, int h2, cv::Mat& P, cv::Mat& a,
+// AVX2 clone (chosen at run time): the plain loops below vectorise 8 lanes wide instead of 4. Lane-wise
+// adds, products, minima and maxima, no FMA: the same results as the baseline build, to the bit.
+__attribute__((target_clones("avx2", "default"), flatten)) cv::Rect open_mean_square(const cv::Mat& S, const cv::Rect& s_bounds, int h1, int h2, cv::Mat& P, cv::Mat& a,
                           cv::Mat& b, std::vector<float>& line) {
   const cv::Rect image(0, 0, S.cols, S.rows);
   const cv::Rect r = s_bounds & image;
@@ -180,7 +182,7 @@ double adaptive_threshold(double mean_normalized, double omega_rad_s, double spe
   return mean_normalized + o.threshold_a_s_per_rad * omega_rad_s + o.threshold_b_s_per_m * speed_m_s + o.threshold_c;
 }
 
-SegmentResult segment(const TimeImages& ti, double theta, int min_pixel_events, cv::Mat& S) {
+__attribute__((target_clones("avx2", "default"))) SegmentResult segment(const TimeImages& ti, double theta, int min_pixel_events, cv::Mat& S) {
   CV_Assert(ti.normalized.type() == CV_32F && ti.count.type() == CV_32S && ti.normalized.size() == ti.count.size());
   S.create(ti.normalized.size(), CV_32F);
   // S = N where N ≥ θ (the float comparison N > the float just below θ, as cv::THRESH_TOZERO did)
