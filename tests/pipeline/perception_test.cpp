@@ -61,27 +61,6 @@ PerceptionCallbacks collect(Collected& c) {
   return cb;
 }
 
-/// Every stream in time order (no lateness) through a Perception with the given options.
-Collected run_in_order(const SimulatedThrow& s, const PerceptionOptions& options) {
-  Collected out;
-  Perception p(s.calib, options, collect(out));
-  std::size_t imu = 0, odo = 0, depth = 0;
-  auto release_until = [&](TimeNs t) {
-    while (imu < s.data.imu.size() && s.data.imu[imu].t <= t) p.push_imu(s.data.imu[imu++]);
-    while (odo < s.data.odometry.size() && s.data.odometry[odo].t <= t) p.push_odometry(s.data.odometry[odo++]);
-    while (depth < s.data.depth.size() && s.data.depth[depth].t <= t) p.push_depth(s.data.depth[depth++]);
-  };
-  const auto& ev = s.data.events;
-  for (std::size_t i = 0; i < ev.size(); i += 5000) {
-    const std::size_t n = std::min<std::size_t>(5000, ev.size() - i);
-    release_until(ev[i + n - 1].t);
-    p.push_events(std::span(ev).subspan(i, n));
-  }
-  release_until(std::numeric_limits<TimeNs>::max());
-  p.finish();
-  return out;
-}
-
 /// Track id of every detection that lies in the ball's true box (+2 px), in window order.
 std::vector<int> ball_detection_tracks(const SimulatedThrow& s, const Collected& c) {
   std::vector<int> ids;
@@ -96,10 +75,9 @@ std::vector<int> ball_detection_tracks(const SimulatedThrow& s, const Collected&
 /// Pushes every stream; `lag_ns` delays IMU and odometry relative to the events (a live system
 /// whose slower sensors arrive late), by handing them over only once the events are that far past
 /// them. Depth frames are handed over in time order with the events.
-Collected run(TimeNs lag_ns) {
-  const SimulatedThrow& s = simulated_throw();
+Collected run(TimeNs lag_ns, const SimulatedThrow& s = simulated_throw(), const PerceptionOptions& options = {}) {
   Collected out;
-  Perception p(s.calib, PerceptionOptions{}, collect(out));
+  Perception p(s.calib, options, collect(out));
   std::size_t imu = 0, odo = 0, depth = 0;
   auto release_until = [&](TimeNs t, TimeNs t_depth) {
     while (imu < s.data.imu.size() && s.data.imu[imu].t <= t) p.push_imu(s.data.imu[imu++]);
@@ -174,8 +152,8 @@ TEST(Perception, TheTrajectoryEstimateKeepsAHeadOnBallInOneTrack) {
   s.calib = simulator.calibration();
   PerceptionOptions aided, image_only;
   image_only.estimate_aided_association = false;
-  const std::vector<int> with = ball_detection_tracks(s, run_in_order(s, aided));
-  const std::vector<int> without = ball_detection_tracks(s, run_in_order(s, image_only));
+  const std::vector<int> with = ball_detection_tracks(s, run(0, s, aided));
+  const std::vector<int> without = ball_detection_tracks(s, run(0, s, image_only));
   auto longest = [](const std::vector<int>& ids) {
     std::map<int, int> n;
     for (int id : ids) ++n[id];
