@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "fdv/core/lanes.h"
+
 namespace fdv {
 
 cv::Rect box_pixels(const Box2D& box, int width, int height) {
@@ -141,18 +143,14 @@ iterative_gaussian_fit(const cv::Mat& P, const Eigen::Vector2d& c0, const Eigen:
 
 namespace {
 
-using vf = float __attribute__((vector_size(16)));
-using vf_u = float __attribute__((vector_size(16), aligned(4)));
-using vi = std::int32_t __attribute__((vector_size(16)));
-
 /// First x in [x, w) with p[x] > 0, else w. P is mostly background: 16 pixels per test.
 int next_foreground(const float* p, int x, int w) {
-  const vf zero{};
-  for (; x + 16 <= w; x += 16) {
-    const auto* q = reinterpret_cast<const vf_u*>(p + x);
-    const vi any = (q[0] > zero) | (q[1] > zero) | (q[2] > zero) | (q[3] > zero);
-    if (any[0] | any[1] | any[2] | any[3]) break;
-  }
+  using lanes::load;
+  const lanes::vf zero{};
+  for (; x + 16 <= w; x += 16)
+    if (lanes::any((load(p + x) > zero) | (load(p + x + 4) > zero) | (load(p + x + 8) > zero) |
+                   (load(p + x + 12) > zero)))
+      break;
   while (x < w && !(p[x] > 0)) ++x;
   return x;
 }
@@ -242,7 +240,7 @@ int label_components(const cv::Mat& image, RegionScratch& s) {
 }
 
 void RegionScratch::reserve(int width, int height) {
-  if (labels.type() != CV_32S || labels.cols < width || labels.rows < height) labels.create(height, width, CV_32S);
+  // (`labels` is not reserved: only label_components writes it, and retrieval does not need it.)
   // At most one run per two pixels of a row, one component per 2x2 block.
   const std::size_t max_runs = static_cast<std::size_t>((width + 1) / 2) * static_cast<std::size_t>(height);
   const std::size_t max_components = static_cast<std::size_t>((width + 1) / 2) * static_cast<std::size_t>((height + 1) / 2);
@@ -283,12 +281,11 @@ std::optional<Region> retrieve_region(const cv::Mat& P, std::span<const Box2D> r
   // for some ROI, summed pixel by pixel in raster order (runs come in raster order).
   std::vector<double>& mass = scratch.mass;
   mass.assign(3 * static_cast<std::size_t>(n), -1.0);  // −1: not needed
-  for (int i = 1; i < n; ++i)
-    for (const Box2D& roi : rois)
-      if (candidate(i, roi_px(roi))) {
-        std::fill_n(mass.begin() + 3 * i, 3, 0.0);
-        break;
-      }
+  for (const Box2D& roi : rois) {
+    const cv::Rect r = roi_px(roi);
+    for (int i = 1; i < n; ++i)
+      if (mass[3 * i] < 0 && candidate(i, r)) std::fill_n(mass.begin() + 3 * i, 3, 0.0);
+  }
   for (const PixelRun& run : scratch.runs) {
     double* m = mass.data() + 3 * static_cast<std::size_t>(run.label);
     if (m[0] < 0) continue;

@@ -67,7 +67,7 @@ struct PixelRun {
 /// Scratch of label_components and retrieve_region, kept between calls: reserve(width, height) once
 /// and no call on an image of at most that size allocates.
 struct RegionScratch {
-  cv::Mat labels;                     ///< CV_32S, written by label_components only
+  cv::Mat labels;                     ///< CV_32S, created and written by label_components only
   std::vector<ComponentStats> stats;  ///< stats[label] (stats[0] unused)
   std::vector<PixelRun> runs;         ///< foreground runs in raster order
   std::vector<std::int32_t> parent;   ///< union-find over runs

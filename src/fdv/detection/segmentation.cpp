@@ -1,10 +1,11 @@
-#include <bit>
 #include "fdv/detection/segmentation.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
+
+#include "fdv/core/lanes.h"
 
 namespace fdv {
 namespace {
@@ -82,8 +83,9 @@ constexpr int kStripRows = 32;
 /// kStripRows + 2·(h1 + 2·h2) rows of S's width. Returns r1.
 // AVX2 clone (chosen at run time): the plain loops below vectorise 8 lanes wide instead of 4. Lane-wise
 // adds, products, minima and maxima, no FMA: the same results as the baseline build, to the bit.
-__attribute__((target_clones("avx2", "default"), flatten)) cv::Rect open_mean_square(const cv::Mat& S, const cv::Rect& s_bounds, int h1, int h2, cv::Mat& P, cv::Mat& a,
-                          cv::Mat& b, std::vector<float>& line) {
+__attribute__((target_clones("avx2", "default"), flatten)) cv::Rect
+open_mean_square(const cv::Mat& S, const cv::Rect& s_bounds, int h1, int h2, cv::Mat& P, cv::Mat& a, cv::Mat& b,
+                 std::vector<float>& line) {
   const cv::Rect image(0, 0, S.cols, S.rows);
   const cv::Rect r = s_bounds & image;
   if (r.area() == 0) return {};
@@ -144,18 +146,14 @@ MaxLocation first_maximum(const cv::Mat& m, const cv::Rect& r) {
   const cv::Rect c = r & cv::Rect(0, 0, m.cols, m.rows);
   MaxLocation best{0, c.tl()};
   if (c.area() == 0) return best;
-  using vf = float __attribute__((vector_size(16)));
-  using vf_u = float __attribute__((vector_size(16), aligned(4)));
-  using vi = std::int32_t __attribute__((vector_size(16)));
   auto row_max = [&](const float* p) {
     int x = 0;
     float mx = p[0];
     if (c.width >= 4) {
-      vf v = *reinterpret_cast<const vf_u*>(p);
+      lanes::vf v = lanes::load(p);
       for (x = 4; x + 4 <= c.width; x += 4) {
-        const vf q = *reinterpret_cast<const vf_u*>(p + x);
-        const vi gt = q > v;
-        v = std::bit_cast<vf>((std::bit_cast<vi>(q) & gt) | (std::bit_cast<vi>(v) & ~gt));
+        const lanes::vf q = lanes::load(p + x);
+        v = lanes::select(q > v, q, v);
       }
       mx = std::max(std::max(v[0], v[1]), std::max(v[2], v[3]));
     }
@@ -182,7 +180,9 @@ double adaptive_threshold(double mean_normalized, double omega_rad_s, double spe
   return mean_normalized + o.threshold_a_s_per_rad * omega_rad_s + o.threshold_b_s_per_m * speed_m_s + o.threshold_c;
 }
 
-__attribute__((target_clones("avx2", "default"))) SegmentResult segment(const TimeImages& ti, double theta, int min_pixel_events, cv::Mat& S) {
+// AVX2 clone, as open_mean_square.
+__attribute__((target_clones("avx2", "default"))) SegmentResult
+segment(const TimeImages& ti, double theta, int min_pixel_events, cv::Mat& S) {
   CV_Assert(ti.normalized.type() == CV_32F && ti.count.type() == CV_32S && ti.normalized.size() == ti.count.size());
   S.create(ti.normalized.size(), CV_32F);
   // S = N where N ≥ θ (the float comparison N > the float just below θ, as cv::THRESH_TOZERO did)

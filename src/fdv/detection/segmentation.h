@@ -27,7 +27,7 @@ struct MaxLocation {
   cv::Point at;  ///< image coordinates
 };
 /// The maximum of a CV_32F image (no NaN) inside r (clipped to the image) and its first location in
-/// raster order, as cv::minMaxLoc reports them; r empty: value 0 at r's corner. Row maxima four
+/// raster order, as cv::minMaxLoc reports them; r ∩ image empty: value 0. Row maxima four
 /// lanes at a time: several times faster than cv::minMaxLoc on large areas, where it also showed
 /// occasional 3 ms calls in the pipeline.
 MaxLocation first_maximum(const cv::Mat& m, const cv::Rect& r);

@@ -2,10 +2,10 @@
 
 #include <algorithm>
 #include <array>
-#include <bit>
 #include <cstring>
 #include <limits>
 
+#include "fdv/core/lanes.h"
 #include "fdv/core/parallel_parts.h"
 
 namespace fdv {
@@ -17,9 +17,9 @@ namespace {
 // the blocks it touches, and only those (plus the ones to blank from the previous window) are
 // visited, twice: pass 1 writes I, Σt, T and finds min/max T; pass 2 writes N. The lanes are GCC
 // vector extensions (baseline SSE2, no FMA: the same IEEE results as the scalar reference).
-using vf = float __attribute__((vector_size(16)));
-using vi = std::int32_t __attribute__((vector_size(16)));
-using vd = double __attribute__((vector_size(16)));
+using lanes::vd;
+using lanes::vf;
+using lanes::vi;
 
 constexpr std::size_t kBlock = 16;
 /// Σ T is summed per chunk of this many blocks, then the chunks in order: a fixed order, so the
@@ -27,17 +27,9 @@ constexpr std::size_t kBlock = 16;
 constexpr std::size_t kChunkBlocks = 256;
 constexpr std::uint8_t kNow = 1, kBefore = 2;
 
-// Unaligned vector accesses typed as their element (not memcpy: a memcpy store may alias
-// anything, and GCC then reloaded every pointer and spilled the sums after each store).
-using vf_u = float __attribute__((vector_size(16), aligned(4)));
-using vi_u = std::int32_t __attribute__((vector_size(16), aligned(4)));
-vf load_f(const float* p) { return *reinterpret_cast<const vf_u*>(p); }
-vi load_i(const std::int32_t* p) { return *reinterpret_cast<const vi_u*>(p); }
-void store(float* p, vf v) { *reinterpret_cast<vf_u*>(p) = v; }
-void store(std::int32_t* p, vi v) { *reinterpret_cast<vi_u*>(p) = v; }
-vf select(vi m, vf a, vf b) {
-  return std::bit_cast<vf>((std::bit_cast<vi>(a) & m) | (std::bit_cast<vi>(b) & ~m));
-}
+using lanes::load;
+using lanes::select;
+using lanes::store;
 
 struct Images {
   float* acc;
@@ -102,7 +94,7 @@ Extremes pass1(const Images& im, std::uint8_t* blocks, std::size_t b0, std::size
       }
       for (int q = 0; q < 4; ++q) {
         const std::size_t i = i0 + 4 * static_cast<std::size_t>(q);
-        const vf a = load_f(im.acc + 2 * i), b2 = load_f(im.acc + 2 * i + 4);
+        const vf a = load(im.acc + 2 * i), b2 = load(im.acc + 2 * i + 4);
         const vf c = __builtin_shufflevector(a, b2, 0, 2, 4, 6);
         const vf s = __builtin_shufflevector(a, b2, 1, 3, 5, 7);
         const vi has = c > 0;
@@ -147,8 +139,8 @@ void pass2(const Images& im, std::uint8_t* blocks, std::size_t b0, std::size_t b
       continue;
     }
     for (std::size_t i = i0; i < i0 + kBlock; i += 4) {
-      const vi has = load_i(im.count + i) > 0;
-      store(im.norm + i, select(has, (load_f(im.mean + i) - vmin) * vscale, vf{}));
+      const vi has = load(im.count + i) > 0;
+      store(im.norm + i, select(has, (load(im.mean + i) - vmin) * vscale, vf{}));
     }
   }
 }
