@@ -117,11 +117,8 @@ TEST(Perception, FindsTheThrownBallAndEstimatesItsTrajectoryAgainstGroundTruth) 
   // The ball's track, identified by ground truth as an evaluator would: the track whose
   // detections fall inside the ball's true image box most often.
   std::map<int, int> hits;
-  for (const WindowResult& w : c.results) {
-    if (!w.detection || w.track_id < 0) continue;
-    const GroundTruthBox box = ground_truth_box(s.data.objects, 1, 0.105, s.data.body, s.calib, w.t_start, w.t_end - 1);
-    hits[w.track_id] += box.contains(w.detection->center_raw.x(), w.detection->center_raw.y(), 2.0);
-  }
+  for (int id : ball_detection_tracks(s, c))
+    if (id >= 0) ++hits[id];
   ASSERT_FALSE(hits.empty());
   const int ball_track = std::max_element(hits.begin(), hits.end(), [](auto& a, auto& b) {
                            return a.second < b.second;
