@@ -4,6 +4,8 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <cstring>
+#include <random>
 
 #include "fdv/core/error.h"
 #include "fdv/depth/depth_registration.h"
@@ -149,6 +151,52 @@ TEST(DepthRegistration, WrongSizeIsRejectedWithAReason) {
   r = reg.register_frame(f);
   EXPECT_FALSE(r.ok());
   EXPECT_NE(r.rejected.find("307199"), std::string::npos) << r.rejected;
+}
+
+TEST(DepthRegistration, LanesGiveThePlainLoopsFrameToTheBit) {
+  // register_frame() (four pixels per step) against register_frame_plain() (one pixel at a time,
+  // a branch per check) on random scenes that exercise every path: invalid values (0, NaN,
+  // beyond range), depth pixels without a lens inverse (strong barrel distortion of the depth
+  // camera folds its corners), points behind the event camera (it sits 0.3 m in front and turned),
+  // outside its image, beyond the trusted radius of its lens, occlusions, and a width that leaves a
+  // tail of 3 pixels (not a multiple of 4).
+  Calibration c;
+  c.event_camera = {331, 251, 210.0, 212.0, 160.0, 130.0, {-0.28, 0.09, 0.002, -0.001, -0.01}};
+  c.depth_camera = PinholeCamera{203, 151, 120.0, 121.0, 100.0, 76.0, {-0.6, 0.0, 0.0, 0.0, 0.0}};
+  c.T_B_D = Eigen::Isometry3d::Identity();
+  c.T_B_E = Eigen::Isometry3d::Identity();
+  c.T_B_E.linear() = (Eigen::AngleAxisd(0.5, Eigen::Vector3d::UnitY()) * Eigen::AngleAxisd(-0.2, Eigen::Vector3d::UnitX()))
+                         .toRotationMatrix();
+  c.T_B_E.translation() = Eigen::Vector3d(0.08, -0.03, 0.3);
+  const DepthRegistrar reg(c);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> z(0.2f, 6.0f), u(0.0f, 1.0f);
+  std::uint64_t behind = 0, outside = 0, no_inverse = 0, occluded = 0;
+  for (int frame = 0; frame < 20; ++frame) {
+    DepthFrame f = constant_frame(*c.depth_camera, 0.0f, frame);
+    for (float& d : f.depth_m) {
+      const float r = u(rng);
+      d = r < 0.05f ? 0.0f : r < 0.08f ? std::nanf("") : r < 0.1f ? 40.0f : z(rng);
+    }
+    const DepthRegistrationResult fast = reg.register_frame(f), plain = reg.register_frame_plain(f);
+    ASSERT_TRUE(fast.ok() && plain.ok());
+    const RegisteredDepth &a = fast.depth, &b = plain.depth;
+    ASSERT_EQ(a.depth_m.size(), b.depth_m.size());
+    EXPECT_EQ(std::memcmp(a.depth_m.data(), b.depth_m.data(), a.depth_m.size() * sizeof(float)), 0) << frame;
+    EXPECT_EQ(a.registered, b.registered);
+    EXPECT_EQ(a.occluded, b.occluded);
+    EXPECT_EQ(a.invalid_input, b.invalid_input);
+    EXPECT_EQ(a.no_inverse, b.no_inverse);
+    EXPECT_EQ(a.behind_camera, b.behind_camera);
+    EXPECT_EQ(a.outside_image, b.outside_image);
+    EXPECT_EQ(a.registered + a.invalid_input + a.no_inverse + a.behind_camera + a.outside_image, f.depth_m.size());
+    behind += a.behind_camera, outside += a.outside_image, no_inverse += a.no_inverse, occluded += a.occluded;
+  }
+  // Every path was taken.
+  EXPECT_GT(behind, 0u);
+  EXPECT_GT(outside, 0u);
+  EXPECT_GT(no_inverse, 0u);
+  EXPECT_GT(occluded, 0u);
 }
 
 TEST(DepthRegistration, NeedsADepthCamera) {

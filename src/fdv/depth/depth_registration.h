@@ -60,8 +60,14 @@ class DepthRegistrar {
   /// whose buffer does not hold width·height values, is rejected with a reason; the caller
   /// counts rejections (the streaming pipeline reports them per reason).
   DepthRegistrationResult register_frame(const DepthFrame& frame) const;
+  /// The plain reference of register_frame(): one pixel at a time with Eigen, a branch per check.
+  /// For tests and benchmarks (register_frame() must give the same frame, to the bit).
+  DepthRegistrationResult register_frame_plain(const DepthFrame& frame) const;
 
  private:
+  /// Empty when the frame fits the depth camera's calibration, else why not.
+  std::string check_frame(const DepthFrame& frame) const;
+
   DepthRegistrationOptions options_;
   PinholeCamera depth_camera_;
   PinholeCamera event_camera_;
