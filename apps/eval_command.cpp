@@ -49,7 +49,13 @@ nlohmann::json evaluate(const std::string& results, const std::string& dataset) 
   metrics["results"] = results;
   metrics["truth"] = dataset;
   metrics["scenario"] = truth.scenario;
-  metrics["detection"] = detection_metrics(truth, read_detections(results)).to_json();
+  const DetectionMetrics detection = detection_metrics(truth, read_detections(results));
+  metrics["detection"] = detection.to_json();
+  {
+    std::ofstream csv(results + "/detection_windows.csv");
+    write_window_outcomes_csv(csv, detection.per_window);
+    if (!csv) throw InputError(results + "/detection_windows.csv", "", "cannot write");
+  }
   metrics["relative_contrast"] =
       relative_contrast_of(truth, summary.value("method", "rotation_translation"));
 

@@ -4,6 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
+#include <sstream>
+
 #include "eval/handmade_truth.h"
 #include "fdv/core/error.h"
 
@@ -42,6 +45,37 @@ TEST(DetectionMetrics, CountsFoundMissedAndFalseAgainstTheTruthBox) {
   ASSERT_EQ(m.center_errors_px.size(), 2u);
   EXPECT_NEAR(m.center_errors_px[0], 0.0, 1e-9);
   EXPECT_NEAR(m.center_errors_px[1], 1.5, 1e-9);
+
+  // The same outcomes window by window, and as the CSV `fdv eval` writes.
+  ASSERT_EQ(m.per_window.size(), 4u);
+  const std::vector<std::array<int, 4>> expected{{1, 1, 1, 0}, {1, 1, 1, 0}, {1, 0, 1, 1}, {1, 0, 0, 0}};
+  for (std::size_t i = 0; i < 4; ++i) {
+    const WindowOutcome& o = m.per_window[i];
+    EXPECT_EQ(o.t_start, ms(10 + 10 * static_cast<int>(i)));
+    EXPECT_EQ((std::array<int, 4>{o.eligible, o.found, o.detections, o.false_detections}), expected[i]) << i;
+    EXPECT_EQ(o.ball, 1) << i;
+    EXPECT_DOUBLE_EQ(o.fraction_in_view_min, 1.0);
+    EXPECT_NEAR(o.span_px_min, 2 * test::kF * 0.25 / 5, 2.0);  // 2 f r / Z = 50 px
+  }
+  EXPECT_NEAR(m.per_window[1].center_error_px, 1.5, 1e-9);
+  EXPECT_EQ(m.per_window[3].center_error_px, -1);
+  std::ostringstream csv;
+  write_window_outcomes_csv(csv, m.per_window);
+  std::istringstream lines(csv.str());
+  std::string header, row;
+  std::getline(lines, header);
+  EXPECT_EQ(header,
+            "t_start_s,t_end_s,eligible,found,detections,false_detections,center_error_px,ball,"
+            "fraction_in_view_min,span_px_min");
+  std::getline(lines, row);
+  std::getline(lines, row);
+  const auto starts_with = [](const std::string& text, const std::string& prefix) {
+    return text.substr(0, prefix.size()) == prefix;
+  };
+  EXPECT_TRUE(starts_with(row, "0.020000,0.030000,1,1,1,0,1.500,1,1.000,")) << row;
+  std::getline(lines, row);
+  std::getline(lines, row);
+  EXPECT_TRUE(starts_with(row, "0.040000,0.050000,1,0,0,0,,1,1.000,")) << row;
 }
 
 TEST(DetectionMetrics, AHeldBallIsNotEligibleAndADetectionOnItIsNotFalse) {

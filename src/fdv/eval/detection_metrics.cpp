@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <map>
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
@@ -30,6 +31,18 @@ void DetectionMetrics::merge(const DetectionMetrics& other) {
   false_detections += other.false_detections;
   center_errors_px.insert(center_errors_px.end(), other.center_errors_px.begin(),
                           other.center_errors_px.end());
+  per_window.insert(per_window.end(), other.per_window.begin(), other.per_window.end());
+}
+
+void write_window_outcomes_csv(std::ostream& out, const std::vector<WindowOutcome>& windows) {
+  out << "t_start_s,t_end_s,eligible,found,detections,false_detections,center_error_px,ball,"
+         "fraction_in_view_min,span_px_min\n";
+  for (const WindowOutcome& w : windows) {
+    out << fmt::format("{:.6f},{:.6f},{},{},{},{},", to_seconds(w.t_start), to_seconds(w.t_end),
+                       w.eligible ? 1 : 0, w.found ? 1 : 0, w.detections, w.false_detections);
+    if (w.center_error_px >= 0) out << fmt::format("{:.3f}", w.center_error_px);
+    out << fmt::format(",{},{:.3f},{:.2f}\n", w.ball, w.fraction_in_view_min, w.span_px_min);
+  }
 }
 
 nlohmann::json DetectionMetrics::to_json() const {
@@ -82,24 +95,38 @@ DetectionMetrics detection_metrics(const DatasetTruth& truth,
           b.span_px_min >= options.min_span_px)
         eligible.insert(id);
     m.eligible += !eligible.empty();
-    bool found = false;
+    WindowOutcome o;
+    o.t_start = w.t_start;
+    o.t_end = w.t_end;
+    o.eligible = !eligible.empty();
+    o.detections = static_cast<int>(w.detections.size());
+    for (const auto& [id, b] : boxes) {
+      if (!b.visible || !truth.in_flight(id, (w.t_start + w.t_end) / 2)) continue;
+      const auto rank = [&](int ball, double fraction) { return std::pair(eligible.count(ball), fraction); };
+      const bool better = o.ball < 0 || rank(id, b.fraction_in_view_min) > rank(o.ball, o.fraction_in_view_min);
+      if (better) o.ball = id, o.fraction_in_view_min = b.fraction_in_view_min, o.span_px_min = b.span_px_min;
+    }
     for (const auto& d : w.detections) {
       const int ball = matched_ball(boxes, d, options.margin_px);
       if (ball < 0) {
         ++m.false_detections;
+        ++o.false_detections;
         continue;
       }
       if (!eligible.count(ball)) continue;
-      found = true;
+      o.found = true;
       if (const auto s = truth.object_at(ball, d.t)) {
         const Eigen::Isometry3d T_W_E = truth.body_at(d.t).T_W_B() * truth.calibration.T_B_E;
         const Eigen::Vector3d p_E = T_W_E.inverse() * s->p_W;
-        if (p_E.z() > 0)
-          m.center_errors_px.push_back(
-              (truth.calibration.event_camera.project(p_E) - d.center_raw).norm());
+        if (p_E.z() > 0) {
+          const double error = (truth.calibration.event_camera.project(p_E) - d.center_raw).norm();
+          m.center_errors_px.push_back(error);
+          if (o.center_error_px < 0) o.center_error_px = error;
+        }
       }
     }
-    m.found += found;
+    m.found += o.found;
+    m.per_window.push_back(o);
   }
   return m;
 }

@@ -10,6 +10,7 @@
 /// The windows come from a run in memory (run_experiment) or from a results folder
 /// (read_detections in fdv/eval/run_results.h).
 #include <nlohmann/json_fwd.hpp>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -45,9 +46,23 @@ struct DetectionMetricsOptions {
 /// Centre errors: |detected centre − the true centre projected at the detection's time| for each
 /// detection that found an eligible ball (a partly hidden ball's visible centroid is not its
 /// centre).
+/// One window's outcome (the rows of `fdv eval`'s detection_windows.csv): what to look at when a
+/// recall or a false-detection count needs explaining.
+struct WindowOutcome {
+  TimeNs t_start = 0, t_end = 0;
+  bool eligible = false, found = false;
+  int detections = 0, false_detections = 0;
+  double center_error_px = -1;  ///< of the first detection that found the ball; -1 none
+  /// The ball nearest to eligibility (eligible if any, else the most in view): its id (-1 no ball
+  /// in flight and visible), its least in-view fraction and smallest span over the window.
+  int ball = -1;
+  double fraction_in_view_min = 0, span_px_min = 0;
+};
+
 struct DetectionMetrics {
   std::size_t windows = 0, eligible = 0, found = 0, false_detections = 0;
   std::vector<double> center_errors_px;
+  std::vector<WindowOutcome> per_window;  ///< in window order (runs appended by merge)
   double recall() const {
     return eligible ? static_cast<double>(found) / static_cast<double>(eligible) : 0;
   }
@@ -58,6 +73,10 @@ struct DetectionMetrics {
   void merge(const DetectionMetrics& other);
   nlohmann::json to_json() const;
 };
+
+/// CSV of the per-window outcomes, header first: t_start_s, t_end_s, eligible, found, detections,
+/// false_detections, center_error_px (empty: none), ball, fraction_in_view_min, span_px_min.
+void write_window_outcomes_csv(std::ostream& out, const std::vector<WindowOutcome>& windows);
 
 /// Throws ConfigError for invalid options.
 DetectionMetrics detection_metrics(const DatasetTruth& truth,
