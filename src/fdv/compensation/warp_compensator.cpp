@@ -3,12 +3,12 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
-#include <bit>
 #include <cmath>
 #include <cstring>
 #include <limits>
 #include <opencv2/imgproc.hpp>
 
+#include "fdv/core/lanes.h"
 #include "fdv/core/parallel_parts.h"
 
 namespace fdv::internal {
@@ -23,21 +23,16 @@ namespace {
 //    out-of-order events takes the scalar path, each event with its own slot;
 //  - dropping is branch-free: every lane is written at the output position and the position
 //    advances only for kept events.
-using vf = float __attribute__((vector_size(16)));
-using vi = std::int32_t __attribute__((vector_size(16)));
+using lanes::bits;
+using lanes::from_bits;
+using lanes::load;
+using lanes::select;
+using lanes::store;
+using lanes::vf;
+using lanes::vi;
 
-vi bits(vf v) { return std::bit_cast<vi>(v); }
-vf from_bits(vi v) { return std::bit_cast<vf>(v); }
-// Unaligned vector accesses typed as their element (not memcpy: a memcpy store may alias
-// anything, and GCC then reloaded the window's parameters after every output store).
-using vf_u = float __attribute__((vector_size(16), aligned(4)));
-using vi_u = std::int32_t __attribute__((vector_size(16), aligned(4)));
-vf load4(const float* p) { return *reinterpret_cast<const vf_u*>(p); }
-void store4(float* p, vf v) { *reinterpret_cast<vf_u*>(p) = v; }
-void store4(std::int32_t* p, vi v) { *reinterpret_cast<vi_u*>(p) = v; }
-vf select4(vi m, vf a, vf b) { return from_bits((bits(a) & m) | (bits(b) & ~m)); }
 /// Lane-wise `a > b ? a : b`, as the scalar code writes it.
-vf vmax(vf a, vf b) { return select4(a > b, a, b); }
+vf vmax(vf a, vf b) { return select(a > b, a, b); }
 
 enum class Model { kNone, kRotation, kRotationTranslation };
 constexpr int kMaxParts = 64;  // CompensationOptions::threads ≤ 64
@@ -250,10 +245,10 @@ WarpCounts warp_range(const WarpParams& p, std::size_t begin, std::size_t end, T
     const vi px = __builtin_convertvector(from_bits(bits(v + half) & keep), vi) * width +
                   __builtin_convertvector(from_bits(bits(u + half) & keep), vi);
     if (all_set(keep)) {  // the common case: four vector stores
-      store4(out.x + n, u);
-      store4(out.y + n, v);
-      store4(out.t + n, T);
-      store4(out.pixel + n, px);
+      store(out.x + n, u);
+      store(out.y + n, v);
+      store(out.t + n, T);
+      store(out.pixel + n, px);
       n += 4;
       continue;
     }
@@ -346,9 +341,9 @@ bool WarpCompensator::prepare_depth(const RegisteredDepth& depth) {
   const vf flt_max = vf{} + std::numeric_limits<float>::max(), one_f = vf{} + 1.0f;
   std::size_t i = 0;
   for (; i + 4 <= n; i += 4) {
-    const vf zi = load4(z + i);
+    const vf zi = load(z + i);
     const vi valid = (zi > 0) & (zi <= flt_max);
-    store4(raw + i, from_bits(bits(one_f / from_bits((bits(zi) & valid) | (bits(one_f) & ~valid))) & valid));
+    store(raw + i, from_bits(bits(one_f / from_bits((bits(zi) & valid) | (bits(one_f) & ~valid))) & valid));
   }
   for (; i < n; ++i) raw[i] = z[i] > 0 && z[i] <= std::numeric_limits<float>::max() ? 1.0f / z[i] : 0.0f;
   // Holes take the nearest surface (largest ρ) among the neighbours within hole_fill_radius_px:
@@ -365,7 +360,7 @@ bool WarpCompensator::prepare_depth(const RegisteredDepth& depth) {
     const std::size_t x0 = shift < 0 ? static_cast<std::size_t>(-shift) : 0;
     const std::size_t x1 = shift > 0 ? row_len - std::min(row_len, static_cast<std::size_t>(shift)) : row_len;
     std::size_t x = x0;
-    for (; x + 4 <= x1; x += 4) store4(out + x, vmax(load4(out + x), load4(in + x + shift)));
+    for (; x + 4 <= x1; x += 4) store(out + x, vmax(load(out + x), load(in + x + shift)));
     for (; x < x1; ++x) out[x] = out[x] > in[x + shift] ? out[x] : in[x + shift];
   };
   float* rows = row_max_.data();
@@ -390,8 +385,8 @@ bool WarpCompensator::prepare_depth(const RegisteredDepth& depth) {
     // Valid: its own ρ; hole: the dilation, or the policy's −ρ (−0.0f still carries the sign bit).
     std::size_t x = 0;
     for (; x + 4 <= row_len; x += 4) {
-      const vf own = load4(self + x), dil = load4(out + x);
-      store4(out + x, select4(own != zero, own, select4(dil != zero, dil, fallback)));
+      const vf own = load(self + x), dil = load(out + x);
+      store(out + x, select(own != zero, own, select(dil != zero, dil, fallback)));
     }
     for (; x < row_len; ++x) out[x] = self[x] != 0 ? self[x] : out[x] != 0 ? out[x] : -fallback_rho;
   }

@@ -1,6 +1,6 @@
 #pragma once
 /// 4-lane float / int32 / double vectors (GCC vector extensions) for the per-pixel and per-event
-/// loops of detection: 16-byte vectors map onto baseline x86-64 SSE2, no FMA, so results equal the
+/// loops of compensation and detection: 16-byte vectors map onto baseline x86-64 SSE2, no FMA, so results equal the
 /// scalar code's. Comparisons give int lanes of -1 (true) or 0.
 ///
 /// Unaligned loads and stores go through vector types aligned like their element, not memcpy: a
@@ -20,6 +20,9 @@ inline vf load(const float* p) { return *reinterpret_cast<const vf_u*>(p); }
 inline vi load(const std::int32_t* p) { return *reinterpret_cast<const vi_u*>(p); }
 inline void store(float* p, vf v) { *reinterpret_cast<vf_u*>(p) = v; }
 inline void store(std::int32_t* p, vi v) { *reinterpret_cast<vi_u*>(p) = v; }
+/// The lanes' bit patterns, and back.
+inline vi bits(vf v) { return std::bit_cast<vi>(v); }
+inline vf from_bits(vi v) { return std::bit_cast<vf>(v); }
 /// Per lane: m ? a : b.
 inline vf select(vi m, vf a, vf b) {
   return std::bit_cast<vf>((std::bit_cast<vi>(a) & m) | (std::bit_cast<vi>(b) & ~m));
