@@ -152,6 +152,18 @@ TEST(DetectorRefine, RecentredRegionRemovesTheClutterPullAlongTheMotion) {
   const double single = along_error(0), recentred = along_error(DetectorOptions{}.refine_recentre_passes);
   EXPECT_GT(single, 2.0) << "the set-up must show the pull";
   EXPECT_LT(std::abs(recentred), 1.0);
+
+  // The refinement's time slice found by binary search (time-sorted window) and by testing every
+  // event's time (a window not known to be sorted) bins the same events: the same detection.
+  Detector sorted(DetectorOptions{}, lens()), unsorted(DetectorOptions{}, lens());
+  CompensatedEventsView v = view_of(w);
+  ASSERT_TRUE(v.time_sorted);
+  const DetectionResult a = sorted.detect(v);
+  v.time_sorted = false;
+  const DetectionResult b = unsorted.detect(v);
+  ASSERT_TRUE(a.detection && b.detection);
+  EXPECT_EQ(a.detection->center_undistorted, b.detection->center_undistorted);
+  EXPECT_EQ(a.detection->t_ns, b.detection->t_ns);
 }
 
 TEST_F(DetectorTest, StaticBackgroundAndNoiseAloneGiveNoDetection) {

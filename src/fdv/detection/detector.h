@@ -132,7 +132,7 @@ class Detector {
   cv::Mat blanked_;         ///< P with failed candidates blanked; zero outside blanked_bounds_
   cv::Rect blanked_bounds_;
   cv::Mat count_f_, count_integral_;  ///< I as float and its summed-area table (dense-motion cue)
-  cv::Mat refine_count_, refine_time_;  ///< the refinement's slice events per pixel: count, Σt (CV_32S, CV_32F)
+  cv::Mat refine_acc_;  ///< the refinement's slice events per pixel: (count, Σt), CV_32FC2
 };
 
 }  // namespace fdv
