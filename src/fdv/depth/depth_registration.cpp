@@ -181,35 +181,47 @@ std::string DepthRegistrar::check_frame(const DepthFrame& frame) const {
   return why.str();
 }
 
-DepthRegistrationResult DepthRegistrar::register_frame(const DepthFrame& frame) const {
-  DepthRegistrationResult result;
-  if (result.rejected = check_frame(frame); !result.rejected.empty()) return result;
+bool DepthRegistrar::begin_frame(const DepthFrame& frame, DepthRegistrationResult& result) const {
+  if (result.rejected = check_frame(frame); !result.rejected.empty()) return false;
   RegisteredDepth& out = result.depth;
   out.t = frame.t;
   out.width = event_camera_.width;
   out.height = event_camera_.height;
-  // z-buffer in place: "no depth yet" is +inf while splatting, 0 afterwards.
+  // z-buffer in place: "no depth yet" is +inf while splatting, 0 afterwards (end_frame).
+  out.depth_m.assign(static_cast<std::size_t>(out.width) * out.height, std::numeric_limits<float>::infinity());
+  return true;
+}
+
+void DepthRegistrar::end_frame(RegisteredDepth& out) {
+  // A select, not a branch: holes are scattered (mispredicted branches made this loop a quarter
+  // of the frame's time).
   const float inf = std::numeric_limits<float>::infinity();
-  out.depth_m.assign(static_cast<std::size_t>(out.width) * out.height, inf);
+  for (float& z : out.depth_m) z = z == inf ? 0.0f : z;
+}
+
+DepthRegistrationResult DepthRegistrar::register_frame(const DepthFrame& frame) const {
+  DepthRegistrationResult result;
+  if (!begin_frame(frame, result)) return result;
+  RegisteredDepth& out = result.depth;
   const Distortion& d = event_camera_.distortion;
-  Projection p{frame.depth_m.data(),
-               rays_.data(),
-               options_.min_depth_m,
-               options_.max_depth_m,
-               {},
-               {t_E_D_.x(), t_E_D_.y(), t_E_D_.z()},
-               event_camera_.fx,
-               event_camera_.fy,
-               event_camera_.cx,
-               event_camera_.cy,
-               d.k1,
-               d.k2,
-               d.p1,
-               d.p2,
-               d.k3,
-               max_radius2_event_,
-               event_camera_.width - 0.5,
-               event_camera_.height - 0.5};
+  Projection p{.depth = frame.depth_m.data(),
+               .rays = rays_.data(),
+               .lo = options_.min_depth_m,
+               .hi = options_.max_depth_m,
+               .R = {},
+               .t = {t_E_D_.x(), t_E_D_.y(), t_E_D_.z()},
+               .fx = event_camera_.fx,
+               .fy = event_camera_.fy,
+               .cx = event_camera_.cx,
+               .cy = event_camera_.cy,
+               .k1 = d.k1,
+               .k2 = d.k2,
+               .p1 = d.p1,
+               .p2 = d.p2,
+               .k3 = d.k3,
+               .max_r2 = max_radius2_event_,
+               .u_hi = event_camera_.width - 0.5,
+               .v_hi = event_camera_.height - 0.5};
   for (int r = 0; r < 3; ++r)
     for (int k = 0; k < 3; ++k) p.R[3 * r + k] = R_E_D_(r, k);
   Tally c;
@@ -220,22 +232,16 @@ DepthRegistrationResult DepthRegistrar::register_frame(const DepthFrame& frame) 
   out.no_inverse = c.no_inverse;
   out.behind_camera = c.behind;
   out.outside_image = c.outside;
-  // A select, not a branch: holes are scattered (mispredicted branches made this loop a quarter
-  // of the frame's time).
-  for (float& z : out.depth_m) z = z == inf ? 0.0f : z;
+  end_frame(out);
   return result;
 }
 
 DepthRegistrationResult DepthRegistrar::register_frame_plain(const DepthFrame& frame) const {
   DepthRegistrationResult result;
-  if (result.rejected = check_frame(frame); !result.rejected.empty()) return result;
-  const std::size_t n = frame.depth_m.size();
+  if (!begin_frame(frame, result)) return result;
   RegisteredDepth& out = result.depth;
-  out.t = frame.t;
-  out.width = event_camera_.width;
-  out.height = event_camera_.height;
   const float inf = std::numeric_limits<float>::infinity();
-  out.depth_m.assign(static_cast<std::size_t>(out.width) * out.height, inf);
+  const std::size_t n = frame.depth_m.size();
   for (std::size_t i = 0; i < n; ++i) {
     const float z_d = frame.depth_m[i];
     if (!(z_d >= options_.min_depth_m && z_d <= options_.max_depth_m)) {
@@ -270,8 +276,7 @@ DepthRegistrationResult DepthRegistrar::register_frame_plain(const DepthFrame& f
       ++out.occluded;
     }
   }
-  for (float& z : out.depth_m)
-    if (z == inf) z = 0.0f;
+  end_frame(out);
   return result;
 }
 

@@ -67,6 +67,10 @@ class DepthRegistrar {
  private:
   /// Empty when the frame fits the depth camera's calibration, else why not.
   std::string check_frame(const DepthFrame& frame) const;
+  /// Checks the frame (false: rejected, with the reason) and sets up the output, every cell +inf.
+  bool begin_frame(const DepthFrame& frame, DepthRegistrationResult& result) const;
+  /// Cells no depth pixel reached (+inf) become 0.
+  static void end_frame(RegisteredDepth& out);
 
   DepthRegistrationOptions options_;
   PinholeCamera depth_camera_;
