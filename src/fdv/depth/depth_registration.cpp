@@ -134,6 +134,10 @@ __attribute__((target_clones("avx2", "default"))) void project_all(const Project
     const vd4 xn = __builtin_convertvector(__builtin_shufflevector(ra, rb, 0, 2, 4, 6), vd4);
     const vd4 yn = __builtin_convertvector(__builtin_shufflevector(ra, rb, 1, 3, 5, 7), vd4);
     const vl4 valid = (zd >= lo) & (zd <= hi);
+    invalid -= ~valid;
+    // Invalid depth comes in regions (the simulated frames: 26 % invalid, 92 % of it in whole
+    // steps of four): skip their arithmetic.
+    if (!(valid[0] | valid[1] | valid[2] | valid[3])) continue;
     const vl4 has_ray = valid & (xn == xn);
     const vd4 X = xn * zd, Y = yn * zd;
     const vd4 Xe = ((p.R[0] * X + p.R[1] * Y) + p.R[2] * zd) + p.t[0];
@@ -146,7 +150,6 @@ __attribute__((target_clones("avx2", "default"))) void project_all(const Project
     const vd4 yd = (y * radial + p.p1 * (r2 + two * y * y)) + two_p2 * x * y;
     const vd4 u = p.fx * xd + p.cx, v = p.fy * yd + p.cy;
     const vl4 inside = front & ~(r2 > max_r2) & (u >= u_lo) & (v >= u_lo) & (u < u_hi) & (v < v_hi);
-    invalid -= ~valid;
     no_inverse -= valid & ~has_ray;
     behind -= has_ray & ~front;
     outside -= front & ~inside;
