@@ -111,7 +111,11 @@ TEST(DetectionMetrics, MergePoolsRuns) {
   DetectionMetrics a, b;
   a.windows = 10, a.eligible = 4, a.found = 3, a.false_detections = 1, a.center_errors_px = {1, 2};
   b.windows = 30, b.eligible = 6, b.found = 6, b.false_detections = 0, b.center_errors_px = {0.5};
+  a.per_window = {WindowOutcome{.t_start = 1}};
+  b.per_window = {WindowOutcome{.t_start = 2}, WindowOutcome{.t_start = 3}};
   a.merge(b);
+  ASSERT_EQ(a.per_window.size(), 3u);
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(a.per_window[i].t_start, i + 1);
   EXPECT_EQ(a.windows, 40u);
   EXPECT_EQ(a.eligible, 10u);
   EXPECT_EQ(a.found, 9u);

@@ -1,7 +1,7 @@
 #pragma once
 /// 4-lane float / int32 / double vectors (GCC vector extensions) for the per-pixel and per-event
-/// loops of compensation and detection: 16-byte vectors map onto baseline x86-64 SSE2, no FMA, so results equal the
-/// scalar code's. Comparisons give int lanes of -1 (true) or 0.
+/// loops of compensation and detection: 16-byte vectors map onto baseline x86-64 SSE2, no FMA, so
+/// results equal the scalar code's. Comparisons give int lanes of -1 (true) or 0.
 ///
 /// Unaligned loads and stores go through vector types aligned like their element, not memcpy: a
 /// memcpy store may alias anything, and GCC then reloads every pointer after each store.
@@ -24,9 +24,7 @@ inline void store(std::int32_t* p, vi v) { *reinterpret_cast<vi_u*>(p) = v; }
 inline vi bits(vf v) { return std::bit_cast<vi>(v); }
 inline vf from_bits(vi v) { return std::bit_cast<vf>(v); }
 /// Per lane: m ? a : b.
-inline vf select(vi m, vf a, vf b) {
-  return std::bit_cast<vf>((std::bit_cast<vi>(a) & m) | (std::bit_cast<vi>(b) & ~m));
-}
+inline vf select(vi m, vf a, vf b) { return from_bits((bits(a) & m) | (bits(b) & ~m)); }
 inline bool any(vi m) { return (m[0] | m[1] | m[2] | m[3]) != 0; }
 
 }  // namespace fdv::lanes

@@ -94,17 +94,21 @@ DetectionMetrics detection_metrics(const DatasetTruth& truth,
           b.fraction_in_view_min >= options.min_fraction_in_view &&
           b.span_px_min >= options.min_span_px)
         eligible.insert(id);
-    m.eligible += !eligible.empty();
     WindowOutcome o;
     o.t_start = w.t_start;
     o.t_end = w.t_end;
     o.eligible = !eligible.empty();
     o.detections = static_cast<int>(w.detections.size());
+    m.eligible += o.eligible;
+    // The ball to report: eligible before not, then the most in view.
+    const auto rank = [&](int ball, double fraction) { return std::pair(eligible.count(ball), fraction); };
     for (const auto& [id, b] : boxes) {
       if (!b.visible || !truth.in_flight(id, (w.t_start + w.t_end) / 2)) continue;
-      const auto rank = [&](int ball, double fraction) { return std::pair(eligible.count(ball), fraction); };
-      const bool better = o.ball < 0 || rank(id, b.fraction_in_view_min) > rank(o.ball, o.fraction_in_view_min);
-      if (better) o.ball = id, o.fraction_in_view_min = b.fraction_in_view_min, o.span_px_min = b.span_px_min;
+      if (o.ball < 0 || rank(id, b.fraction_in_view_min) > rank(o.ball, o.fraction_in_view_min)) {
+        o.ball = id;
+        o.fraction_in_view_min = b.fraction_in_view_min;
+        o.span_px_min = b.span_px_min;
+      }
     }
     for (const auto& d : w.detections) {
       const int ball = matched_ball(boxes, d, options.margin_px);

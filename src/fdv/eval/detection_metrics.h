@@ -40,12 +40,6 @@ struct DetectionMetricsOptions {
   std::string validate() const;
 };
 
-/// Window w is *eligible* when some ball is in flight at its middle (true speed >= 1 m/s), visible,
-/// and meets the in-view and span bounds throughout it. It is *found* when a detection lies in
-/// such a ball's box. A detection in no visible ball's box is a *false detection* (in any window).
-/// Centre errors: |detected centre − the true centre projected at the detection's time| for each
-/// detection that found an eligible ball (a partly hidden ball's visible centroid is not its
-/// centre).
 /// One window's outcome (the rows of `fdv eval`'s detection_windows.csv): what to look at when a
 /// recall or a false-detection count needs explaining.
 struct WindowOutcome {
@@ -59,6 +53,12 @@ struct WindowOutcome {
   double fraction_in_view_min = 0, span_px_min = 0;
 };
 
+/// Window w is *eligible* when some ball is in flight at its middle (true speed >= 1 m/s), visible,
+/// and meets the in-view and span bounds throughout it. It is *found* when a detection lies in
+/// such a ball's box. A detection in no visible ball's box is a *false detection* (in any window).
+/// Centre errors: |detected centre − the true centre projected at the detection's time| for each
+/// detection that found an eligible ball (a partly hidden ball's visible centroid is not its
+/// centre).
 struct DetectionMetrics {
   std::size_t windows = 0, eligible = 0, found = 0, false_detections = 0;
   std::vector<double> center_errors_px;
