@@ -1,6 +1,8 @@
 // Adaptive threshold, segmentation and pre-processing on hand-made images.
 #include <gtest/gtest.h>
 
+#include <random>
+
 #include "fdv/detection/segmentation.h"
 
 namespace fdv {
@@ -60,6 +62,46 @@ TEST(Segmentation, PreprocessingSuppressesIsolatedPixelsAndSquares) {
   preprocess(S, o, P, scratch);
   EXPECT_EQ(P.at<float>(30, 30), 0.0f);
   EXPECT_NEAR(P.at<float>(8, 8), 0.64, 1e-6);
+}
+
+TEST(Segmentation, BandsOfRowsOnSeveralThreadsGiveTheSameImages) {
+  // segment() and Preprocessor::run split the rows between threads; S, its bounds, P and P's
+  // nonzero bounds must be those of one thread, over consecutive calls whose supports differ
+  // (the preprocessor zeroes what the previous call wrote). Random N and I on 640x480, with the
+  // foreground in a different rectangle each time.
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> n01(0.0f, 1.0f);
+  std::uniform_int_distribution<int> events(0, 3);
+  DetectorOptions o;
+  Preprocessor one(o), many(o);
+  const cv::Rect areas[] = {{0, 0, 640, 480}, {100, 50, 200, 300}, {600, 400, 40, 80}, {0, 0, 0, 0}, {3, 200, 500, 33}};
+  for (const cv::Rect& area : areas) {
+    SCOPED_TRACE(testing::Message() << area);
+    TimeImages ti;
+    ti.normalized = cv::Mat::zeros(480, 640, CV_32F);
+    ti.count = cv::Mat::zeros(480, 640, CV_32S);
+    for (int y = area.y; y < area.y + area.height; ++y)
+      for (int x = area.x; x < area.x + area.width; ++x) {
+        ti.count.at<std::int32_t>(y, x) = events(rng);
+        ti.normalized.at<float>(y, x) = ti.count.at<std::int32_t>(y, x) > 0 ? n01(rng) : 0.0f;
+      }
+    cv::Mat S1, S2;
+    const SegmentResult r1 = segment(ti, 0.6, 1, S1);
+    const cv::Mat& P1 = one.run(S1, r1.bounds);
+    for (int threads : {2, 3, 8}) {
+      SCOPED_TRACE(testing::Message() << threads << " threads");
+      const SegmentResult r2 = segment(ti, 0.6, 1, S2, threads);
+      EXPECT_EQ(r2.pixels, r1.pixels);
+      EXPECT_EQ(r2.bounds, r1.bounds);
+      EXPECT_EQ(cv::norm(S1, S2, cv::NORM_INF), 0);
+      const cv::Mat& P2 = many.run(S2, r2.bounds, threads);
+      EXPECT_EQ(cv::norm(P1, P2, cv::NORM_INF), 0);
+      EXPECT_EQ(many.nonzero_bounds(), one.nonzero_bounds());
+    }
+    if (area.area() > 0) {
+      EXPECT_GT(r1.pixels, 0);  // the case is not vacuous
+    }
+  }
 }
 
 }  // namespace

@@ -91,6 +91,26 @@ TEST(TimeImagesReference, AnyThreadCountGivesTheSameImagesAsOne) {
   }
 }
 
+TEST(TimeImagesReference, SeveralThreadsReusedOverConsecutiveWindowsEqualTheReference) {
+  // The threaded builder keeps its buffers too (blocks of the previous window blanked by the part
+  // that owns them): the windows of the first test, through one TimeImages per thread count.
+  for (int threads : {2, 3}) {
+    TimeImages fast;
+    const Window windows[] = {random_window(640, 480, 120'000, 1), random_window(640, 480, 40'000, 2),
+                              Window{640, 480, {}, {}}, random_window(640, 480, 50'000, 3, -0.01f),
+                              random_window(640, 480, 120'000, 5)};
+    for (const Window& win : windows) {
+      SCOPED_TRACE(testing::Message() << threads << " threads, " << win.pixel.size() << " events");
+      CompensatedEventsView v = win.view();
+      v.threads = threads;
+      TimeImages ref;
+      build_time_images(v, fast);
+      reference_time_images(win.view(), ref);
+      expect_identical(fast, ref);
+    }
+  }
+}
+
 TEST(TimeImagesReference, ReferenceMatchesHandComputedValues) {
   // The reference itself, on the hand-computed window of time_images_test.cpp.
   Window win{3, 2, {0, 4, 0, 2, 4, 4, 6}, {0.001f, 0.006f, 0.003f, 0.010f, 0.006f, 0.009f, 0.020f}};

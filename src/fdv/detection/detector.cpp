@@ -515,7 +515,7 @@ DetectionResult Detector::detect(const CompensatedEventsView& window, std::span<
 
   t = Clock::now();
   res.theta = adaptive_threshold(ti_.mean_normalized, window.omega_rad_s, window.speed_m_s, o);
-  const SegmentResult seg = segment(ti_, res.theta, o.min_pixel_events, S_);
+  const SegmentResult seg = segment(ti_, res.theta, o.min_pixel_events, S_, window.threads);
   res.segmented_pixels = seg.pixels;
   res.timings.segmentation_ms = ms_since(t);
   if (!(ti_.t_max_s > ti_.t_min_s)) return finish(DetectionStatus::kNoTemporalContrast);
@@ -523,7 +523,7 @@ DetectionResult Detector::detect(const CompensatedEventsView& window, std::span<
 
   const double window_s = to_seconds(window.t_end_ns - window.t_start_ns);
   t = Clock::now();
-  const cv::Mat& P = pre_.run(S_, seg.bounds);
+  const cv::Mat& P = pre_.run(S_, seg.bounds, window.threads);
   // P is 0 outside `support`: the maxima below search only there (the same first maximum in
   // raster order as over the whole image).
   const cv::Rect support = pre_.nonzero_bounds();

@@ -1,11 +1,13 @@
 #include "fdv/detection/segmentation.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <limits>
 
 #include "fdv/core/lanes.h"
+#include "fdv/core/parallel_parts.h"
 
 namespace fdv {
 namespace {
@@ -80,12 +82,14 @@ constexpr int kStripRows = 32;
 /// s_bounds. Writes P only inside r1. Works through r1 in strips of kStripRows output rows, each
 /// with the rows above and below it needs (h1 + 2·h2 each side, recomputed), so that the
 /// intermediate images stay in the cache: `a`, `b` are strip buffers of at least
-/// kStripRows + 2·(h1 + 2·h2) rows of S's width. Returns r1.
+/// kStripRows + 2·(h1 + 2·h2) rows of S's width. Of r1's strips it does those with index in
+/// [n·part/parts, n·(part + 1)/parts): the strips are independent, so parts may run on different
+/// threads (each with its own a, b, line) and give the same P. Returns r1.
 // AVX2 clone (chosen at run time): the plain loops below vectorise 8 lanes wide instead of 4. Lane-wise
 // adds, products, minima and maxima, no FMA: the same results as the baseline build, to the bit.
 __attribute__((target_clones("avx2", "default"), flatten)) cv::Rect
 open_mean_square(const cv::Mat& S, const cv::Rect& s_bounds, int h1, int h2, cv::Mat& P, cv::Mat& a, cv::Mat& b,
-                 std::vector<float>& line) {
+                 std::vector<float>& line, int part = 0, int parts = 1) {
   const cv::Rect image(0, 0, S.cols, S.rows);
   const cv::Rect r = s_bounds & image;
   if (r.area() == 0) return {};
@@ -101,7 +105,9 @@ open_mean_square(const cv::Mat& S, const cv::Rect& s_bounds, int h1, int h2, cv:
             b.cols >= S.cols && line.size() >= static_cast<std::size_t>(S.cols + 4 * halo + 2));
   const float scale = static_cast<float>(1.0 / ((2 * h1 + 1) * (2 * h1 + 1)));
 
-  for (int ya = r1.y; ya < r1.y + r1.height; ya += kStripRows) {
+  const int n_strips = (r1.height + kStripRows - 1) / kStripRows;
+  const int first = n_strips * part / parts, last = n_strips * (part + 1) / parts;
+  for (int ya = r1.y + first * kStripRows; ya < r1.y + std::min(r1.height, last * kStripRows); ya += kStripRows) {
     const int yb = std::min(ya + kStripRows, r1.y + r1.height);  // output rows [ya, yb)
     const StripRows A{&a, ya - halo}, B{&b, ya - halo};
     if (!eroded_any) {
@@ -180,18 +186,15 @@ double adaptive_threshold(double mean_normalized, double omega_rad_s, double spe
   return mean_normalized + o.threshold_a_s_per_rad * omega_rad_s + o.threshold_b_s_per_m * speed_m_s + o.threshold_c;
 }
 
+namespace {
+
 // AVX2 clone, as open_mean_square.
+/// segment() over the rows [y0, y1) of S (created).
 __attribute__((target_clones("avx2", "default"))) SegmentResult
-segment(const TimeImages& ti, double theta, int min_pixel_events, cv::Mat& S) {
-  CV_Assert(ti.normalized.type() == CV_32F && ti.count.type() == CV_32S && ti.normalized.size() == ti.count.size());
-  S.create(ti.normalized.size(), CV_32F);
-  // S = N where N ≥ θ (the float comparison N > the float just below θ, as cv::THRESH_TOZERO did)
-  // and I ≥ min_pixel_events. Pixels without events have N = 0 and stay 0 whatever θ.
-  const float th = std::nextafter(static_cast<float>(theta), -std::numeric_limits<float>::infinity());
-  const std::int32_t min_count = min_pixel_events;
+segment_rows(const TimeImages& ti, float th, std::int32_t min_count, cv::Mat& S, int y0, int y1) {
   SegmentResult res;
   int x_lo = S.cols, x_hi = -1, y_lo = S.rows, y_hi = -1;
-  for (int y = 0; y < S.rows; ++y) {
+  for (int y = y0; y < y1; ++y) {
     const float* n = ti.normalized.ptr<float>(y);
     const std::int32_t* c = ti.count.ptr<std::int32_t>(y);
     float* s = S.ptr<float>(y);
@@ -216,11 +219,36 @@ segment(const TimeImages& ti, double theta, int min_pixel_events, cv::Mat& S) {
   return res;
 }
 
+constexpr int kMaxParts = 8;  // threads used at most
+
+}  // namespace
+
+SegmentResult segment(const TimeImages& ti, double theta, int min_pixel_events, cv::Mat& S, int threads) {
+  CV_Assert(ti.normalized.type() == CV_32F && ti.count.type() == CV_32S && ti.normalized.size() == ti.count.size());
+  S.create(ti.normalized.size(), CV_32F);
+  // S = N where N ≥ θ (the float comparison N > the float just below θ, as cv::THRESH_TOZERO did)
+  // and I ≥ min_pixel_events. Pixels without events have N = 0 and stay 0 whatever θ.
+  const float th = std::nextafter(static_cast<float>(theta), -std::numeric_limits<float>::infinity());
+  // Parts: bands of rows, their results merged (the same as one pass).
+  const int parts = std::clamp(std::min(threads, S.rows / kStripRows), 1, kMaxParts);
+  std::array<SegmentResult, kMaxParts> part_res;
+  run_parts(parts, [&](int i) {
+    part_res[i] = segment_rows(ti, th, min_pixel_events, S, S.rows * i / parts, S.rows * (i + 1) / parts);
+  });
+  SegmentResult res;
+  for (int i = 0; i < parts; ++i) {
+    if (part_res[i].pixels == 0) continue;
+    res.bounds = res.pixels == 0 ? part_res[i].bounds : res.bounds | part_res[i].bounds;
+    res.pixels += part_res[i].pixels;
+  }
+  return res;
+}
+
 Preprocessor::Preprocessor(const DetectorOptions& o) : h_mean_(o.mean_filter_px / 2), h_open_(o.opening_px / 2) {
   CV_Assert(o.mean_filter_px >= 1 && o.mean_filter_px % 2 == 1 && o.opening_px >= 1 && o.opening_px % 2 == 1);
 }
 
-const cv::Mat& Preprocessor::run(const cv::Mat& S, const cv::Rect& s_bounds) {
+const cv::Mat& Preprocessor::run(const cv::Mat& S, const cv::Rect& s_bounds, int threads) {
   CV_Assert(S.type() == CV_32F);
   if (P_.size() != S.size()) allocate(S.size());
   // Zero what the last call wrote outside what this one writes (r1 of open_mean_square).
@@ -241,19 +269,32 @@ const cv::Mat& Preprocessor::run(const cv::Mat& S, const cv::Rect& s_bounds) {
     zero(old.x, top, std::min(old.x + old.width, r1.x), bottom);          // left of r1
     zero(std::max(old.x, r1.x + r1.width), top, old.x + old.width, bottom);  // right of r1
   }
-  written_ = open_mean_square(S, s_bounds, h_mean_, h_open_, P_, a_, b_, line_);
-  CV_DbgAssert(written_ == r1);
+  // Parts: r1's strips shared out (open_mean_square), each with its own strip buffers.
+  const int parts = std::clamp(std::min(threads, (r1.height + kStripRows - 1) / kStripRows), 1, kMaxParts);
+  while (static_cast<int>(strips_.size()) < parts) add_strip_buffers(S.cols);  // first use only
+  run_parts(parts, [&](int i) {
+    StripBuffers& sb = strips_[static_cast<std::size_t>(i)];
+    open_mean_square(S, s_bounds, h_mean_, h_open_, P_, sb.a, sb.b, sb.line, i, parts);
+  });
+  written_ = r1;
   return P_;
 }
 
 void Preprocessor::allocate(cv::Size size) {
   P_.create(size, CV_32F);
   P_.setTo(0);
-  const int strip_rows = kStripRows + 2 * (h_mean_ + 2 * h_open_);
-  a_.create(strip_rows, size.width, CV_32F);
-  b_.create(strip_rows, size.width, CV_32F);
-  line_.assign(static_cast<std::size_t>(size.width + 4 * (h_mean_ + 2 * h_open_) + 2), 0.0f);
+  const std::size_t keep = std::max<std::size_t>(1, strips_.size());
+  strips_.clear();
+  while (strips_.size() < keep) add_strip_buffers(size.width);
   written_ = {};
+}
+
+void Preprocessor::add_strip_buffers(int width) {
+  const int strip_rows = kStripRows + 2 * (h_mean_ + 2 * h_open_);
+  StripBuffers& sb = strips_.emplace_back();
+  sb.a.create(strip_rows, width, CV_32F);
+  sb.b.create(strip_rows, width, CV_32F);
+  sb.line.assign(static_cast<std::size_t>(width + 4 * (h_mean_ + 2 * h_open_) + 2), 0.0f);
 }
 
 void Preprocessor::clear() {

@@ -42,7 +42,7 @@ struct SegmentResult {
 
 /// S_ij = N_ij where N_ij ≥ θ and I_ij ≥ min_pixel_events (≥ 1), else 0 (CV_32F, written over the
 /// whole image; reuses S's buffer when it has the size).
-SegmentResult segment(const TimeImages& ti, double theta, int min_pixel_events, cv::Mat& S);
+SegmentResult segment(const TimeImages& ti, double theta, int min_pixel_events, cv::Mat& S, int threads = 1);
 
 /// P = (open_k2(mean_k1(S)))², element-wise square, CV_32F: a k1×k1 mean filter, then the opening
 /// (erosion followed by dilation) with a k2×k2 square, everything zero beyond the image border.
@@ -55,7 +55,8 @@ class Preprocessor {
   explicit Preprocessor(const DetectorOptions& o);
   /// S: CV_32F, zero outside `s_bounds`. Returns P (this object's buffer, valid until the next
   /// call), the size of S, zero outside nonzero_bounds().
-  const cv::Mat& run(const cv::Mat& S, const cv::Rect& s_bounds);
+  /// `threads` (OpenCV's pool, at most 8): bands of rows run in parallel, with the same result.
+  const cv::Mat& run(const cv::Mat& S, const cv::Rect& s_bounds, int threads = 1);
   /// Sizes the buffers for images of `size` (P = 0); run() does it when S's size differs.
   void allocate(cv::Size size);
   /// P = 0 everywhere (e.g. after a window with nothing to pre-process).
@@ -67,8 +68,15 @@ class Preprocessor {
 
  private:
   int h_mean_, h_open_;  // half-widths of the kernels
-  cv::Mat P_, a_, b_;  // P, and two strips of intermediate rows (the passes go through P in strips)
-  std::vector<float> line_;
+  /// Two strips of intermediate rows (the passes go through P in strips) and a padded row, per thread.
+  struct StripBuffers {
+    cv::Mat a, b;
+    std::vector<float> line;
+  };
+  void add_strip_buffers(int width);
+
+  cv::Mat P_;
+  std::vector<StripBuffers> strips_;
   cv::Rect written_;  // where P_ may be nonzero
 };
 

@@ -26,6 +26,8 @@ constexpr std::size_t kBlock = 16;
 /// result does not depend on how the blocks are split between threads.
 constexpr std::size_t kChunkBlocks = 256;
 constexpr std::uint8_t kNow = 1, kBefore = 2;
+using PixelTime = TimeImages::PixelTime;
+constexpr int kMaxParts = 8;  // threads used at most
 
 using lanes::load;
 using lanes::select;
@@ -145,11 +147,12 @@ void pass2(const Images& im, std::uint8_t* blocks, std::size_t b0, std::size_t b
   }
 }
 
-/// Adds the events whose pixel is in [lo, hi) to the accumulator, in event order, and marks their
-/// blocks; returns how many. A function of its own with restrict pointers: inside the caller's
-/// lambda every byte store to `blocks` made GCC reload all the pointers and bounds per event.
-int accumulate(const std::int32_t* __restrict pixel, const float* __restrict t_s, std::size_t n, std::size_t lo,
-               std::size_t hi, std::size_t npx, float* __restrict acc, std::uint8_t* __restrict blocks) {
+/// Adds the events to the accumulator, in event order, and marks their blocks; returns how many.
+/// Events whose pixel is out of range are skipped. A function of its own with restrict pointers:
+/// inside the caller's lambda every byte store to `blocks` made GCC reload all the pointers and
+/// bounds per event.
+int accumulate(const std::int32_t* __restrict pixel, const float* __restrict t_s, std::size_t n, std::size_t npx,
+               float* __restrict acc, std::uint8_t* __restrict blocks) {
   int count = 0;
   // The accumulator is larger than L2 and events are scattered over it: prefetch ahead.
   constexpr std::size_t kPrefetch = 64;
@@ -158,13 +161,91 @@ int accumulate(const std::int32_t* __restrict pixel, const float* __restrict t_s
       __builtin_prefetch(acc + 2 * std::min<std::size_t>(static_cast<std::uint32_t>(pixel[k + kPrefetch]), npx - 1));
     // Unsigned: negative indices wrap far out of range.
     const std::size_t p = static_cast<std::uint32_t>(pixel[k]);
-    if (p < lo || p >= hi) continue;
+    if (p >= npx) continue;
     acc[2 * p] += 1.0f;
     acc[2 * p + 1] += t_s[k];
     blocks[p / kBlock] |= kNow;
     ++count;
   }
   return count;
+}
+
+/// accumulate() over (pixel, time) pairs already known to be in range.
+void accumulate_pairs(const PixelTime* __restrict e, std::size_t n, float* __restrict acc,
+                      std::uint8_t* __restrict blocks) {
+  constexpr std::size_t kPrefetch = 64;
+  for (std::size_t k = 0; k < n; ++k) {
+    if (k + kPrefetch < n) __builtin_prefetch(acc + 2 * static_cast<std::size_t>(e[k + kPrefetch].pixel));
+    const auto p = static_cast<std::size_t>(e[k].pixel);
+    acc[2 * p] += 1.0f;
+    acc[2 * p + 1] += e[k].t_s;
+    blocks[p / kBlock] |= kNow;
+  }
+}
+
+/// Splitting the work between threads. Part j owns the pixels [bound[j], bound[j + 1]) (whole
+/// chunks of blocks) and accumulates only their events, so that no two threads write one pixel.
+/// Events are first sorted by owner in parallel: part i takes the events [first_event[i],
+/// first_event[i + 1]) and writes them, in event order, into its own range of `sorted` grouped by
+/// owner (a counting sort; out-of-range pixels are dropped). Owner j then reads its group of each
+/// range in order i = 0, 1, ...: every pixel still gets its events in event order, so Σt is the
+/// same to the bit as in one pass. (Each part reading all events and skipping the other parts'
+/// took longer than one thread: a branch mispredicted on half the events, and each part's
+/// prefetches shared the other part's cache lines.)
+struct Partition {
+  std::array<std::size_t, kMaxParts + 1> bound{};        ///< pixel ranges of the owners
+  std::array<std::size_t, kMaxParts + 1> first_event{};  ///< event ranges of the sorting parts
+  /// group_begin[i][j]: where owner j's events of range i start in `sorted` (j = parts: the end).
+  std::array<std::array<std::size_t, kMaxParts + 1>, kMaxParts> group_begin{};
+  int parts = 1;
+
+  int owner(std::size_t p) const {  // parts when out of range
+    int j = 0;
+    for (int b = 1; b <= parts; ++b) j += p >= bound[b];
+    return j;
+  }
+};
+
+
+/// sort_by_owner for two parts, the common case: the counts and both cursors stay in registers
+/// (the general version's count and cursor arrays made a dependency chain through memory).
+void sort_by_owner_2(Partition& part, int i, const std::int32_t* pixel, const float* t_s, PixelTime* sorted) {
+  const std::size_t e0 = part.first_event[i], e1 = part.first_event[i + 1];
+  const std::size_t b1 = part.bound[1], b2 = part.bound[2];
+  std::size_t second = 0, outside = 0;
+  for (std::size_t k = e0; k < e1; ++k) {
+    const std::size_t p = static_cast<std::uint32_t>(pixel[k]);
+    second += p >= b1;
+    outside += p >= b2;
+  }
+  auto& begin = part.group_begin[static_cast<std::size_t>(i)];
+  begin[0] = e0;
+  begin[1] = e1 - second;
+  begin[2] = e1 - outside;
+  std::size_t c0 = begin[0], c1 = begin[1];
+  for (std::size_t k = e0; k < e1; ++k) {
+    const std::size_t p = static_cast<std::uint32_t>(pixel[k]);
+    if (p >= b2) continue;  // out of range: rare, predicted
+    const std::size_t is_second = p >= b1;
+    sorted[is_second ? c1 : c0] = {static_cast<std::int32_t>(p), t_s[k]};
+    c0 += 1 - is_second;
+    c1 += is_second;
+  }
+}
+
+void sort_by_owner(Partition& part, int i, const std::int32_t* pixel, const float* t_s, PixelTime* sorted) {
+  if (part.parts == 2) return sort_by_owner_2(part, i, pixel, t_s, sorted);
+  const std::size_t e0 = part.first_event[i], e1 = part.first_event[i + 1];
+  std::array<std::size_t, kMaxParts + 1> count{};
+  for (std::size_t k = e0; k < e1; ++k) ++count[static_cast<std::size_t>(part.owner(static_cast<std::uint32_t>(pixel[k])))];
+  auto& begin = part.group_begin[static_cast<std::size_t>(i)];
+  begin[0] = e0;
+  for (int j = 0; j < part.parts; ++j) begin[j + 1] = begin[j] + count[j];
+  std::array<std::size_t, kMaxParts + 1> cursor = begin;
+  for (std::size_t k = e0; k < e1; ++k) {
+    const std::size_t p = static_cast<std::uint32_t>(pixel[k]);
+    sorted[cursor[static_cast<std::size_t>(part.owner(p))]++] = {static_cast<std::int32_t>(p), t_s[k]};
+  }
 }
 
 }  // namespace
@@ -192,28 +273,44 @@ void build_time_images(const CompensatedEventsView& view, TimeImages& out) {
                   out.mean_time_s.ptr<float>(), out.normalized.ptr<float>()};
   std::uint8_t* blocks = out.blocks.data();
 
-  // Parts: ranges of whole chunks of blocks (the chunk sums do not depend on the split); each
-  // part reads all events and accumulates those on its pixels, in event order (each pixel's Σt
-  // is summed in the same order whatever the split: bit-exact results). Small windows are not
-  // worth a second thread.
+  // Parts (Partition above): pixel ranges of whole chunks of blocks, so that the chunk sums do not
+  // depend on the split either. Small windows are not worth a second thread.
   const std::size_t n = std::min(view.pixel.size(), view.t_s.size());
   const std::size_t n_chunks = (n_blocks + kChunkBlocks - 1) / kChunkBlocks;
   constexpr std::size_t kMinEventsPerPart = 16'384;
-  constexpr int kMaxParts = 8;
-  const int parts = static_cast<int>(
+  Partition split;
+  split.parts = static_cast<int>(
       std::clamp<std::size_t>(std::min(n / kMinEventsPerPart, n_chunks), 1, std::clamp(view.threads, 1, kMaxParts)));
+  const int parts = split.parts;
   std::array<std::size_t, kMaxParts + 1> first_block{};
-  for (int i = 0; i <= parts; ++i)
+  for (int i = 0; i <= parts; ++i) {
     first_block[i] = std::min(n_blocks, n_chunks * static_cast<std::size_t>(i) / static_cast<std::size_t>(parts) * kChunkBlocks);
+    split.bound[i] = std::min(npx, first_block[i] * kBlock);
+    split.first_event[i] = n * static_cast<std::size_t>(i) / static_cast<std::size_t>(parts);
+  }
   std::array<Extremes, kMaxParts> extremes;
   std::array<int, kMaxParts> events{};
   const std::int32_t* pixel = view.pixel.data();
   const float* t_s = view.t_s.data();
-  run_parts(parts, [&](int part) {
-    const std::size_t lo = first_block[part] * kBlock, hi = std::min(npx, first_block[part + 1] * kBlock);
-    events[part] = accumulate(pixel, t_s, n, lo, hi, npx, im.acc, blocks);
-    extremes[part] = pass1(im, blocks, first_block[part], first_block[part + 1], npx, out.chunk_sums.data());
-  });
+  if (parts == 1) {
+    events[0] = accumulate(pixel, t_s, n, npx, im.acc, blocks);
+    extremes[0] = pass1(im, blocks, 0, n_blocks, npx, out.chunk_sums.data());
+  } else {
+    if (out.sorted.size() < n) out.sorted.resize(n);  // grows with the largest window, then reused
+    PixelTime* sorted = out.sorted.data();
+    run_parts(parts, [&](int i) { sort_by_owner(split, i, pixel, t_s, sorted); });
+    run_parts(parts, [&](int j) {
+      const auto owner = static_cast<std::size_t>(j);
+      std::size_t mine = 0;
+      for (int i = 0; i < parts; ++i) {
+        const auto& begin = split.group_begin[static_cast<std::size_t>(i)];
+        accumulate_pairs(sorted + begin[owner], begin[owner + 1] - begin[owner], im.acc, blocks);
+        mine += begin[owner + 1] - begin[owner];
+      }
+      events[owner] = static_cast<int>(mine);
+      extremes[owner] = pass1(im, blocks, first_block[j], first_block[j + 1], npx, out.chunk_sums.data());
+    });
+  }
   Extremes x;
   int n_events = 0;
   for (int i = 0; i < parts; ++i) {

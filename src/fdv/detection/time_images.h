@@ -46,8 +46,9 @@ struct CompensatedEventsView {
   /// t_s is non-decreasing (the compensators keep the input's time order and report it): lets the
   /// detector binary-search time slices. False is always safe.
   bool time_sorted = false;
-  /// Threads for build_time_images (OpenCV's pool, fdv/core/parallel_parts.h): the image is split
-  /// into this many pixel ranges. Results are identical for any count.
+  /// Threads (OpenCV's pool, fdv/core/parallel_parts.h, at most 8) for build_time_images (pixel
+  /// ranges), the segmentation and the pre-processing (bands of rows). Results are identical for
+  /// any count.
   int threads = 1;
   /// Maps a point of this grid (the camera at t_start) to where the camera saw it t_s [s] later, on
   /// the same undistorted grid: the inverse of the compensation's warp
@@ -71,6 +72,11 @@ struct TimeImages {
   /// Per 16-pixel block: bit 0 = events in this window, bit 1 = events in the previous window.
   std::vector<std::uint8_t> blocks;
   std::vector<double> chunk_sums;  ///< Σ T per fixed chunk of blocks (summation order fixed)
+  struct PixelTime {
+    std::int32_t pixel;
+    float t_s;
+  };
+  std::vector<PixelTime> sorted;  ///< with several threads: the events grouped by the thread that adds them
   std::array<const void*, 5> buffer_keys{};  ///< data pointers of the images when last built
 };
 
