@@ -64,6 +64,28 @@ TEST(Segmentation, PreprocessingSuppressesIsolatedPixelsAndSquares) {
   EXPECT_NEAR(P.at<float>(8, 8), 0.64, 1e-6);
 }
 
+TEST(Segmentation, PreprocessorReportsTheFirstMaximumInRasterOrder) {
+  // Two equal plateaus: the higher row wins, and in it the leftmost pixel; a third, lower block
+  // above both does not. Checked for one and for several threads (bands of rows), where the
+  // plateaus fall in different bands.
+  cv::Mat S = cv::Mat::zeros(200, 100, CV_32F);
+  S(cv::Rect(60, 120, 5, 5)).setTo(0.9);
+  S(cv::Rect(10, 150, 5, 5)).setTo(0.9);
+  S(cv::Rect(30, 20, 5, 5)).setTo(0.5);
+  DetectorOptions o;
+  for (int threads : {1, 2, 5}) {
+    Preprocessor pre(o);
+    pre.run(S, cv::Rect(10, 20, 55, 135), threads);
+    // 3x3 mean then 3x3 opening of a 5x5 block of 0.9: the inner 3x3 keeps 0.9, squared 0.81,
+    // first reached at the block's top-left + 1.
+    EXPECT_NEAR(pre.first_max().value, 0.81f, 1e-6) << threads;
+    EXPECT_EQ(pre.first_max().at, cv::Point(61, 121)) << threads;
+  }
+  Preprocessor empty(o);
+  empty.run(cv::Mat::zeros(200, 100, CV_32F), cv::Rect());
+  EXPECT_EQ(empty.first_max().value, 0.0f);
+}
+
 TEST(Segmentation, BandsOfRowsOnSeveralThreadsGiveTheSameImages) {
   // segment() and Preprocessor::run split the rows between threads; S, its bounds, P and P's
   // nonzero bounds must be those of one thread, over consecutive calls whose supports differ
@@ -97,6 +119,9 @@ TEST(Segmentation, BandsOfRowsOnSeveralThreadsGiveTheSameImages) {
       const cv::Mat& P2 = many.run(S2, r2.bounds, threads);
       EXPECT_EQ(cv::norm(P1, P2, cv::NORM_INF), 0);
       EXPECT_EQ(many.nonzero_bounds(), one.nonzero_bounds());
+      const MaxLocation searched = first_maximum(P2, many.nonzero_bounds());
+      EXPECT_EQ(many.first_max().value, searched.value);
+      EXPECT_EQ(many.first_max().at, searched.at);
     }
     if (area.area() > 0) {
       EXPECT_GT(r1.pixels, 0);  // the case is not vacuous

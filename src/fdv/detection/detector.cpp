@@ -537,7 +537,7 @@ DetectionResult Detector::detect(const CompensatedEventsView& window, std::span<
   DetectionStatus why_not =
       res.segmented_pixels == 0 ? DetectionStatus::kNothingSegmented : DetectionStatus::kRemovedAsNoise;
   for (int attempt = 0; attempt < o.max_candidates && support.area() > 0; ++attempt) {
-    const MaxLocation peak = first_maximum(*image, support);
+    const MaxLocation peak = image == &P ? pre_.first_max() : first_maximum(*image, support);
     const double p_max = peak.value;
     const cv::Point arg_max = peak.at;
     if (!(p_max > 0) || p_max < o.min_peak * o.min_peak) break;  // no pattern left can pass

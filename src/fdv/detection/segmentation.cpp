@@ -77,6 +77,41 @@ void column_pass(const StripRows& in, int lo, int hi, int c, int n, float* out, 
 
 constexpr int kStripRows = 32;
 
+/// max of p[0, n), n ≥ 1 (no NaN), four lanes at a time in four independent chains (one chain
+/// waited on each comparison's latency). The maximum is exact in any order.
+inline float row_max(const float* p, int n) {
+  using lanes::vf;
+  int x = 0;
+  float mx = p[0];
+  if (n >= 16) {
+    vf a = lanes::load(p), b = lanes::load(p + 4), c = lanes::load(p + 8), d = lanes::load(p + 12);
+    const auto vmax = [](vf u, vf v) { return lanes::select(v > u, v, u); };
+    for (x = 16; x + 16 <= n; x += 16) {
+      a = vmax(a, lanes::load(p + x));
+      b = vmax(b, lanes::load(p + x + 4));
+      c = vmax(c, lanes::load(p + x + 8));
+      d = vmax(d, lanes::load(p + x + 12));
+    }
+    const vf v = vmax(vmax(a, b), vmax(c, d));
+    mx = std::max(std::max(v[0], v[1]), std::max(v[2], v[3]));
+  }
+  for (; x < n; ++x) mx = std::max(mx, p[x]);
+  return mx;
+}
+
+/// The largest value seen so far and the first row (top to bottom) that holds it.
+struct RowMaximum {
+  float value = -std::numeric_limits<float>::infinity();
+  int y = -1;
+  void add(const float* row, int n, int row_y) {
+    const float m = row_max(row, n);
+    if (m > value) {
+      value = m;
+      y = row_y;
+    }
+  }
+};
+
 /// P = (open_{2h2+1}(mean_{2h1+1}(S)))² on r1 = (s_bounds grown by h1) ∩ image, which holds every
 /// nonzero value of P (the opening never extends the support of the mean); S is 0 outside
 /// s_bounds. Writes P only inside r1. Works through r1 in strips of kStripRows output rows, each
@@ -84,12 +119,14 @@ constexpr int kStripRows = 32;
 /// intermediate images stay in the cache: `a`, `b` are strip buffers of at least
 /// kStripRows + 2·(h1 + 2·h2) rows of S's width. Of r1's strips it does those with index in
 /// [n·part/parts, n·(part + 1)/parts): the strips are independent, so parts may run on different
-/// threads (each with its own a, b, line) and give the same P. Returns r1.
+/// threads (each with its own a, b, line) and give the same P. `best` gets the maximum of the
+/// rows written and the first of them that holds it (while the row is in the cache: the
+/// detector's first candidate search costs nothing more). Returns r1.
 // AVX2 clone (chosen at run time): the plain loops below vectorise 8 lanes wide instead of 4. Lane-wise
 // adds, products, minima and maxima, no FMA: the same results as the baseline build, to the bit.
 __attribute__((target_clones("avx2", "default"), flatten)) cv::Rect
 open_mean_square(const cv::Mat& S, const cv::Rect& s_bounds, int h1, int h2, cv::Mat& P, cv::Mat& a, cv::Mat& b,
-                 std::vector<float>& line, int part = 0, int parts = 1) {
+                 std::vector<float>& line, RowMaximum& best, int part = 0, int parts = 1) {
   const cv::Rect image(0, 0, S.cols, S.rows);
   const cv::Rect r = s_bounds & image;
   if (r.area() == 0) return {};
@@ -111,7 +148,10 @@ open_mean_square(const cv::Mat& S, const cv::Rect& s_bounds, int h1, int h2, cv:
     const int yb = std::min(ya + kStripRows, r1.y + r1.height);  // output rows [ya, yb)
     const StripRows A{&a, ya - halo}, B{&b, ya - halo};
     if (!eroded_any) {
-      for (int y = ya; y < yb; ++y) std::fill(P.ptr<float>(y) + x0, P.ptr<float>(y) + x1, 0.0f);
+      for (int y = ya; y < yb; ++y) {
+        std::fill(P.ptr<float>(y) + x0, P.ptr<float>(y) + x1, 0.0f);
+        best.add(P.ptr<float>(y) + x0, n, y);
+      }
       continue;
     }
     // Rows each stage needs for this strip (inclusive ranges).
@@ -132,8 +172,10 @@ open_mean_square(const cv::Mat& S, const cv::Rect& s_bounds, int h1, int h2, cv:
     for (int y = e_lo; y <= e_hi; ++y)
       row_pass(pad_row(B(y), r2.x, r2.x + r2.width, x0, x1, h2, line), n, h2, A(y) + x0, kMax);
     const auto square = [](float v) { return v * v; };
-    for (int y = ya; y < yb; ++y)
+    for (int y = ya; y < yb; ++y) {
       column_pass(A, std::max(y - h2, e_lo), std::min(y + h2, e_hi), x0, n, P.ptr<float>(y) + x0, 0.0f, kMax, square);
+      best.add(P.ptr<float>(y) + x0, n, y);
+    }
   }
   return r1;
 }
@@ -152,24 +194,10 @@ MaxLocation first_maximum(const cv::Mat& m, const cv::Rect& r) {
   const cv::Rect c = r & cv::Rect(0, 0, m.cols, m.rows);
   MaxLocation best{0, c.tl()};
   if (c.area() == 0) return best;
-  auto row_max = [&](const float* p) {
-    int x = 0;
-    float mx = p[0];
-    if (c.width >= 4) {
-      lanes::vf v = lanes::load(p);
-      for (x = 4; x + 4 <= c.width; x += 4) {
-        const lanes::vf q = lanes::load(p + x);
-        v = lanes::select(q > v, q, v);
-      }
-      mx = std::max(std::max(v[0], v[1]), std::max(v[2], v[3]));
-    }
-    for (; x < c.width; ++x) mx = std::max(mx, p[x]);
-    return mx;
-  };
   int best_y = c.y;
   best.value = m.ptr<float>(c.y)[c.x];
   for (int y = c.y; y < c.y + c.height; ++y) {
-    const float v = row_max(m.ptr<float>(y) + c.x);
+    const float v = row_max(m.ptr<float>(y) + c.x, c.width);
     if (v > best.value) {
       best.value = v;
       best_y = y;
@@ -272,11 +300,23 @@ const cv::Mat& Preprocessor::run(const cv::Mat& S, const cv::Rect& s_bounds, int
   // Parts: r1's strips shared out (open_mean_square), each with its own strip buffers.
   const int parts = std::clamp(std::min(threads, (r1.height + kStripRows - 1) / kStripRows), 1, kMaxParts);
   while (static_cast<int>(strips_.size()) < parts) add_strip_buffers(S.cols);  // first use only
+  std::array<RowMaximum, kMaxParts> part_best;
   run_parts(parts, [&](int i) {
     StripBuffers& sb = strips_[static_cast<std::size_t>(i)];
-    open_mean_square(S, s_bounds, h_mean_, h_open_, P_, sb.a, sb.b, sb.line, i, parts);
+    open_mean_square(S, s_bounds, h_mean_, h_open_, P_, sb.a, sb.b, sb.line, part_best[i], i, parts);
   });
   written_ = r1;
+  // The parts are bands from top to bottom: the first strictly larger one keeps the first row.
+  RowMaximum best;
+  for (int i = 0; i < parts; ++i)
+    if (part_best[i].value > best.value) best = part_best[i];
+  first_max_ = {0.0f, r1.tl()};
+  if (best.y >= 0) {
+    const float* row = P_.ptr<float>(best.y) + r1.x;
+    int x = 0;
+    while (row[x] != best.value) ++x;
+    first_max_ = {best.value, {r1.x + x, best.y}};
+  }
   return P_;
 }
 
@@ -287,6 +327,7 @@ void Preprocessor::allocate(cv::Size size) {
   strips_.clear();
   while (strips_.size() < keep) add_strip_buffers(size.width);
   written_ = {};
+  first_max_ = {};
 }
 
 void Preprocessor::add_strip_buffers(int width) {
@@ -300,6 +341,7 @@ void Preprocessor::add_strip_buffers(int width) {
 void Preprocessor::clear() {
   zero_rect(P_, written_);
   written_ = {};
+  first_max_ = {};
 }
 
 void preprocess(const cv::Mat& S, const DetectorOptions& o, cv::Mat& P, cv::Mat& scratch) {
@@ -309,7 +351,8 @@ void preprocess(const cv::Mat& S, const DetectorOptions& o, cv::Mat& P, cv::Mat&
   scratch.create(2 * strip_rows, S.cols, CV_32F);
   cv::Mat a = scratch.rowRange(0, strip_rows), b = scratch.rowRange(strip_rows, 2 * strip_rows);
   std::vector<float> line(static_cast<std::size_t>(S.cols + 4 * (h1 + 2 * h2) + 2));
-  if (open_mean_square(S, cv::Rect(0, 0, S.cols, S.rows), h1, h2, P, a, b, line).area() == 0) P.setTo(0);
+  RowMaximum best;
+  if (open_mean_square(S, cv::Rect(0, 0, S.cols, S.rows), h1, h2, P, a, b, line, best).area() == 0) P.setTo(0);
 }
 
 }  // namespace fdv

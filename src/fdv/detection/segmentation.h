@@ -65,6 +65,8 @@ class Preprocessor {
   /// P is zero outside this rectangle: the bounds of S grown by the mean filter's half-width (the
   /// opening never extends the support of what it opens).
   const cv::Rect& nonzero_bounds() const { return written_; }
+  /// first_maximum(P(), nonzero_bounds()) of the last run, found while P was written.
+  const MaxLocation& first_max() const { return first_max_; }
 
  private:
   int h_mean_, h_open_;  // half-widths of the kernels
@@ -78,6 +80,7 @@ class Preprocessor {
   cv::Mat P_;
   std::vector<StripBuffers> strips_;
   cv::Rect written_;  // where P_ may be nonzero
+  MaxLocation first_max_;
 };
 
 /// The same computation over the whole image (P and `scratch` are reused when they have the size;
