@@ -2,6 +2,7 @@
 // Shared by the CLI's run, eval and demo commands. The reusable experiment code (replay, dataset
 // truth, metrics, the dataset cache, the paper's tables) lives in the library, src/fdv/eval.
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 
 #include "fdv/io/recording.h"
@@ -13,6 +14,7 @@ struct RunArgs {
   std::string input, calib, config, method, out;
   bool visualize = false;
   bool assume_static = false;
+  std::optional<int> threads;  ///< overrides compensation.threads
   ReaderOptions reader;
 };
 /// `fdv run`: the pipeline over a recording, results into args.out (README, docs/OUTPUTS.md).

@@ -57,6 +57,7 @@ PerceptionOptions load_options(const RunArgs& args) {
                         "' (none, rotation, rotation_translation, contrast_max)");
     o.compensation.method = args.method;
   }
+  if (args.threads) o.compensation.threads = *args.threads;
   o.assume_static_vehicle = args.assume_static;
   return o;
 }
@@ -328,6 +329,7 @@ void run_recording(const RunArgs& args) {
   summary["calibration"] = calib_source;
   summary["method_requested"] = args.method.empty() ? CompensationOptions{}.method : args.method;
   summary["method"] = options.compensation.method;
+  summary["threads"] = options.compensation.threads;
   summary["reader_report"] = reader_report.to_json();
   summary["counts"]["imu"] = c.imu;
   summary["counts"]["odometry"] = c.odometry;
@@ -354,6 +356,10 @@ void add_run_command(CLI::App& app) {
   cmd->add_option("--out", args.out, "output folder")->required();
   cmd->add_flag("--visualize", args.visualize, "write a PNG per window (N, segmentation, detection)");
   cmd->add_flag("--assume-static", args.assume_static, "no odometry: treat the camera as static");
+  cmd->add_option("--threads", args.threads,
+                  "threads per window for the warp, time images, segmentation and pre-processing "
+                  "(compensation.threads; same results for any count)")
+      ->check(CLI::Range(1, 64));
   add_reader_flags(cmd, args.reader);
   cmd->callback([] { run_recording(args); });
 }

@@ -17,6 +17,7 @@ compensation:
   max_depth_age_ms: 66.5
   missing_depth: rotation_only
   hole_fill_radius_px: 2
+  threads: 2
   max_events_per_window: 123456
   contrast_max: {max_fit_events: 5000, blur_sigma_px: 1.5, max_iterations: 7, max_expansion_per_s: 4, warm_start: false}
 detector:
@@ -42,6 +43,7 @@ depth_registration: {min_depth_m: 0.2, max_depth_m: 12}
   EXPECT_EQ(c.max_depth_age_ns, 66'500'000);
   EXPECT_EQ(c.missing_depth, MissingDepthPolicy::kRotationOnly);
   EXPECT_EQ(c.hole_fill_radius_px, 2);
+  EXPECT_EQ(c.threads, 2);
   EXPECT_EQ(c.max_events_per_window, 123456u);
   EXPECT_EQ(c.contrast_max.max_fit_events, 5000);
   EXPECT_DOUBLE_EQ(c.contrast_max.blur_sigma_px, 1.5);
@@ -98,6 +100,7 @@ TEST(FrontendConfig, BadKeysAndValuesNameTheKey) {
   EXPECT_EQ(where_of("compensation: {missing_depth: zero}", 0),
             "key compensation.missing_depth | 'zero' is not median_depth or rotation_only");
   EXPECT_EQ(where_of("detector: [1, 2]", 1), "key detector | expected a map of options");
+  EXPECT_NE(where_of("compensation: {threads: 0}", 0).find("threads must be in [1, 64], got 0"), std::string::npos);
 }
 
 }  // namespace

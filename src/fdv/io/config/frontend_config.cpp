@@ -27,6 +27,7 @@ CompensationOptions load_compensation_options(const YAML::Node& node, const std:
   });
   s.on("hole_fill_radius_px",
        [&](const YAML::Node& n, const std::string& k) { o.hole_fill_radius_px = s.int32(n, k); });
+  s.on("threads", [&](const YAML::Node& n, const std::string& k) { o.threads = s.int32(n, k); });
   s.on("max_events_per_window", [&](const YAML::Node& n, const std::string& k) {
     const long long v = s.integer(n, k);
     if (v < 1) throw InputError(file, "key " + k, "must be positive");
