@@ -28,8 +28,8 @@
 // events.
 //
 // --threads 1 runs everything on the calling thread (also OpenCV: cv::setNumThreads(1));
-// --threads N > 1 splits compensation and time images into N parts (CompensationOptions::threads)
-// and lets OpenCV use N threads.
+// --threads N > 1 splits each window's warp, time images, segmentation and pre-processing into N
+// parts (CompensationOptions::threads) and lets OpenCV use N threads.
 #include <sys/resource.h>
 
 #include <CLI/CLI.hpp>

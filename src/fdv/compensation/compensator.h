@@ -92,9 +92,10 @@ struct CompensationOptions {
   /// dropped events are counted (5 M ev/s over 25 ms is 125 k events; 16x that is a burst).
   std::size_t max_events_per_window = 2'000'000;
   /// Threads for the per-event warp of none / rotation / rotation_translation (OpenCV's pool,
-  /// fdv/core/parallel_parts.h): the events are split into this many parts; fdv::Perception splits
-  /// the time images the same way. Results are identical for any count. 1 = the calling thread
-  /// only: a second thread paid only when the other core was idle (docs/BENCHMARKS.md, Threads).
+  /// fdv/core/parallel_parts.h): the events are split into this many parts; fdv::Perception passes
+  /// the count on to the time images, the segmentation and the pre-processing. Results are
+  /// identical for any count. 1 = the calling thread only; 2 shortens a window's front end by about
+  /// a third when a second core is free (docs/BENCHMARKS.md, Threads).
   int threads = 1;
   ContrastMaxOptions contrast_max;
   std::string validate() const;

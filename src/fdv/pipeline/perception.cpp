@@ -230,7 +230,7 @@ void Perception::process_window(PendingWindow& w) {
   view.time_sorted = cw.report.events_out_of_order == 0;  // lets the detector binary-search time slices
   view.omega_rad_s = cw.report.has_omega ? cw.report.omega_E.norm() : 0.0;
   view.speed_m_s = cw.report.has_velocity ? cw.report.v_E.norm() : 0.0;
-  view.threads = options_.compensation.threads;  // the time images are split like the warp
+  view.threads = options_.compensation.threads;  // time images, segmentation, pre-processing
   // The detection's centre is reported in the camera at its time (paired below with that pose).
   view.observed_at = [this](const Eigen::Vector2d& px, double t_s) { return compensator_->observed_position(px, t_s); };
   // Where confirmed tracks expect their objects at the window's middle (track-aided detection).
