@@ -206,7 +206,6 @@ struct Partition {
   }
 };
 
-
 /// sort_by_owner for two parts, the common case: the counts and both cursors stay in registers
 /// (the general version's count and cursor arrays made a dependency chain through memory).
 void sort_by_owner_2(Partition& part, int i, const std::int32_t* pixel, const float* t_s, PixelTime* sorted) {
