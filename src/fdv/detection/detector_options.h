@@ -64,8 +64,9 @@ struct DetectorOptions {
   /// the centre box, and must lie in the image. Over the image the blob's mean event time must also
   /// stand out from all events' by θ's margin a‖ω‖ + b‖v‖ + c (in N's units), early or late: the
   /// background's events follow the camera's motion over the window, an independently moving
-  /// object's do not. Thresholds measured on training seeds 1-4.
-  bool count_cue = false;
+  /// object's do not. Thresholds measured on training seeds 1-4 (on: hover_headon 83 → 88 of 92
+  /// eligible windows, false detections unchanged).
+  bool count_cue = true;
   int count_cue_box_px = 9;               ///< k [px] (odd): about the smallest eligible ball (8 px across)
   double count_cue_surround_scale = 3.0;  ///< the surround box's side / k (> 1)
   double count_cue_min_contrast = 3.0;    ///< accepted at this contrast or more (ball 3.9-6.3 measured)
