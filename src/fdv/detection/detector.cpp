@@ -172,10 +172,10 @@ void Detector::allocate(int width, int height) {
   count_f_.create(height, width, CV_32F);
   count_integral_.create(height + 1, width + 1, CV_64F);
   refine_acc_.create(height, width, CV_32FC2);
-  cue_count_f_.create(height, width, CV_32F);
-  cue_active_f_.create(height, width, CV_32F);
-  cue_count_integral_.create(height + 1, width + 1, CV_64F);
-  cue_active_integral_.create(height + 1, width + 1, CV_64F);
+  cue_count8_.create(height, width, CV_8U);
+  cue_active8_.create(height, width, CV_8U);
+  cue_count_integral_.create(height + 1, width + 1, CV_32S);
+  cue_active_integral_.create(height + 1, width + 1, CV_32S);
   count_excess_.create(height, width, CV_32F);
   count_excess_.setTo(0);
   excess_bounds_ = {};
@@ -514,15 +514,19 @@ std::optional<Detector::Candidate> Detector::count_contrast_candidate(const cv::
   const cv::Rect area = search & cv::Rect(hs, hs, w - 2 * hs, h - 2 * hs);
   if (area.area() <= 0 || ti_.events <= 0 || !(ti_.t_max_s > ti_.t_min_s)) return std::nullopt;
   res.count_cue_ran = true;
-  // Summed-area tables of I and of its active pixels (I ≥ min_pixel_events) over the whole image:
-  // the surround of a centre near the search area's border reaches outside it.
-  ti_.count.convertTo(cue_count_f_, CV_32F);
-  cv::threshold(cue_count_f_, cue_active_f_, o.min_pixel_events - 0.5, 1.0, cv::THRESH_BINARY);
-  cv::integral(cue_count_f_, cue_count_integral_, CV_64F);
-  cv::integral(cue_active_f_, cue_active_integral_, CV_64F);
+  // Summed-area tables of I and of its active pixels (I ≥ min_pixel_events) over the whole image
+  // (the surround of a centre near the search area's border reaches outside it), once per window.
+  if (!cue_tables_ready_) {
+    // 8-bit images and 32-bit integer tables (exact): counts above 255 (a hot pixel) saturate.
+    ti_.count.convertTo(cue_count8_, CV_8U);
+    cv::compare(ti_.count, o.min_pixel_events - 1, cue_active8_, cv::CMP_GT);  // 255 where active
+    cv::integral(cue_count8_, cue_count_integral_, CV_32S);
+    cv::integral(cue_active8_, cue_active_integral_, CV_32S);
+    cue_tables_ready_ = true;
+  }
   auto box_sum = [](const cv::Mat& sat, const cv::Rect& r) {
-    return sat.at<double>(r.y + r.height, r.x + r.width) - sat.at<double>(r.y, r.x + r.width) -
-           sat.at<double>(r.y + r.height, r.x) + sat.at<double>(r.y, r.x);
+    return static_cast<double>(sat.at<std::int32_t>(r.y + r.height, r.x + r.width) - sat.at<std::int32_t>(r.y, r.x + r.width) -
+                               sat.at<std::int32_t>(r.y + r.height, r.x) + sat.at<std::int32_t>(r.y, r.x));
   };
   const cv::Rect image(0, 0, w, h);
   // The background level: the image's mean events per pixel, the floor of the surround's density
@@ -537,7 +541,7 @@ std::optional<Detector::Candidate> Detector::count_contrast_candidate(const cv::
   for (int y = area.y; y < area.y + area.height; ++y) {
     for (int x = area.x; x < area.x + area.width; ++x) {
       const cv::Rect centre(x - hk, y - hk, k, k);
-      const double fill = box_sum(cue_active_integral_, centre) / centre_area;
+      const double fill = box_sum(cue_active_integral_, centre) / (255.0 * centre_area);
       if (fill < o.count_cue_min_fill) continue;
       const double in = box_sum(cue_count_integral_, centre);
       const double surround = (box_sum(cue_count_integral_, {x - hs, y - hs, 2 * hs + 1, 2 * hs + 1}) - in) / ring_area;
@@ -558,8 +562,9 @@ std::optional<Detector::Candidate> Detector::count_contrast_candidate(const cv::
   const double level = std::max(best_surround, image_density);
   const cv::Rect outer = cv::Rect(at.x - hs, at.y - hs, 2 * hs + 1, 2 * hs + 1) & image;
   zero_rect(count_excess_, excess_bounds_);
-  cv::subtract(cue_count_f_(outer), cv::Scalar(level), count_excess_(outer));
-  cv::max(count_excess_(outer), 0.0, count_excess_(outer));
+  cv::Mat excess = count_excess_(outer);
+  ti_.count(outer).convertTo(excess, CV_32F, 1.0, -level);
+  cv::max(excess, 0.0, excess);
   excess_bounds_ = outer;
   const GaussianFit f = iterative_gaussian_fit(count_excess_, Eigen::Vector2d(at.x, at.y),
                                               Eigen::Vector2d(outer.width, outer.height), o);
@@ -690,6 +695,7 @@ DetectionResult Detector::detect(const CompensatedEventsView& window, std::span<
   // confirmed tracks' gates without the time test (count_cue_in_gates), then over the image with it.
   if (!found && o.count_cue) {
     t = Clock::now();
+    cue_tables_ready_ = false;
     for (const DetectionPrior& prior : priors) {
       if (found || !o.count_cue_in_gates) break;
       const auto gate = prior_gate(prior);

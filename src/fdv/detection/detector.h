@@ -143,10 +143,11 @@ class Detector {
   cv::Mat blanked_;         ///< P with failed candidates blanked; zero outside blanked_bounds_
   cv::Rect blanked_bounds_;
   cv::Mat count_f_, count_integral_;  ///< I as float and its summed-area table (dense-motion cue)
-  // Count-contrast cue: I as float over the whole image, its active pixels, their summed-area
-  // tables, and I above the background level (zero outside excess_bounds_).
-  cv::Mat cue_count_f_, cue_active_f_, cue_count_integral_, cue_active_integral_, count_excess_;
+  // Count-contrast cue: I saturated at 255 and its active pixels (255) as CV_8U, their summed-area
+  // tables (CV_32S), and I above the background level (CV_32F, zero outside excess_bounds_).
+  cv::Mat cue_count8_, cue_active8_, cue_count_integral_, cue_active_integral_, count_excess_;
   cv::Rect excess_bounds_;
+  bool cue_tables_ready_ = false;  ///< the tables hold this window's I (the gates and the image share them)
   cv::Mat refine_acc_;  ///< the refinement's slice events per pixel: (count, Σt), CV_32FC2
 };
 
