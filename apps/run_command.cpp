@@ -149,6 +149,7 @@ class Outputs {
     timing_["preprocess"].push_back(t.detection.preprocess_ms);
     timing_["gaussian_fit"].push_back(t.detection.fit_ms);
     timing_["region_retrieval"].push_back(t.detection.retrieval_ms);
+    timing_["count_cue"].push_back(t.detection.count_cue_ms);
     timing_["detection_total"].push_back(t.detection.total_ms);
     timing_["tracking"].push_back(t.tracking_ms);
     timing_["window_total"].push_back(t.total_ms);

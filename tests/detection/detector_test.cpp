@@ -213,11 +213,23 @@ TEST_F(DetectorTest, BurstFarAboveTheNormalRate) {
   expect_on_blob(mid, s, 2.0);
   // The same burst in the window's last millisecond makes a third of the image "newest". Half of
   // the pixels with events are then burst pixels at N ≈ 1, so mean(N) ≈ 0.7 and θ = mean(N) + c
-  // reaches 1: nothing is segmented, and no detection is reported rather than a random one.
-  const DetectionResult late = run(with_burst(ev, 24 * kNsPerMs, 25 * kNsPerMs, 200'000, 6), s.t0, s.t0 + s.duration);
-  EXPECT_FALSE(late.detection);
-  EXPECT_GT(late.mean_normalized, 0.65);
-  EXPECT_EQ(late.status, DetectionStatus::kNothingSegmented);
+  // reaches 1: nothing is segmented, and the paper's detector reports nothing rather than a
+  // random one.
+  const auto late_burst = with_burst(ev, 24 * kNsPerMs, 25 * kNsPerMs, 200'000, 6);
+  DetectorOptions paper_options;
+  paper_options.count_cue = false;
+  Detector paper(paper_options, lens());
+  const DetectionResult late_paper =
+      paper.detect(view_of(compensator_->compensate({.events = late_burst, .t_start_ns = s.t0, .t_end_ns = s.t0 + s.duration})));
+  EXPECT_FALSE(late_paper.detection);
+  EXPECT_GT(late_paper.mean_normalized, 0.65);
+  EXPECT_EQ(late_paper.status, DetectionStatus::kNothingSegmented);
+  // A late burst of background events is what the count-contrast cue is for: the blob fires
+  // evenly over the window, so it is dense in I and early against all events.
+  const DetectionResult late = run(late_burst, s.t0, s.t0 + s.duration);
+  expect_on_blob(late, s, 2.0);
+  EXPECT_EQ(late.detection->source, DetectionSource::kCountContrast);
+  EXPECT_LT(late.count_cue_time_offset, -late.theta + late.mean_normalized);
   // With c = 0 the burst passes θ and floods the segmentation: reported as such.
   DetectorOptions o;
   o.threshold_c = 0;
@@ -332,6 +344,9 @@ TEST_F(DetectorTest, DenseMotionCueFindsASlowDenseBlobInsideATrackGateOnly) {
   DetectorOptions o;
   o.min_peak = 1.0;
   o.prior_min_peak = 1.0;
+  // The count-contrast cue would find this dense blob too (inside a gate it asks no motion): this
+  // test is about the dense-motion cue alone.
+  o.count_cue = false;
   const PinholeCamera cam = lens();
   auto raw_of = [&](const Eigen::Vector2d& uv) {
     return cam.normalized_to_pixel({(uv.x() - cam.cx) / cam.fx, (uv.y() - cam.cy) / cam.fy});
@@ -377,6 +392,160 @@ TEST_F(DetectorTest, DenseMotionCueFindsASlowDenseBlobInsideATrackGateOnly) {
   EXPECT_LT(static_blob.motion_cue_r2, o.motion_cue_min_r2);
 }
 
+// The hovering camera's jerk (docs/DETECTION.md, "Count-contrast cue"): the textured background
+// fires only in the window's last 40 %, so it is late in N; a slow ball fires evenly over the
+// window. Static camera, so `none` is the exact compensation. `spot` adds a static, dense,
+// compact spot of texture (radius 5 px, 4 events per pixel) that fires with the background.
+std::vector<Event> late_background_scene(const PinholeCamera& cam, const test::BlobScene& s, bool spot) {
+  test::BlobScene ball_only = s;
+  ball_only.edge_segments = 0;
+  ball_only.noise_rate_ev_s = 0;
+  std::vector<Event> ev = test::make_scene(cam, ball_only);
+  std::mt19937 rng(s.seed + 7);
+  std::uniform_int_distribution<TimeNs> late(s.t0 + s.duration * 6 / 10, s.t0 + s.duration - 1);
+  std::uniform_real_distribution<double> ux(0, cam.width - 1), uy(0, cam.height - 1), unit(0, 1);
+  const Eigen::Vector2d ball = s.blob_at(s.t0 + s.duration / 2), spot_at(450, 320);
+  auto add = [&](const Eigen::Vector2d& uv, int count) {
+    Event e;
+    if (!test::to_raw(cam, uv, e)) return;
+    for (int k = 0; k < count; ++k) {
+      e.t = late(rng);
+      e.polarity = k % 2 == 0;
+      ev.push_back(e);
+    }
+  };
+  for (int i = 0; i < s.edge_segments; ++i) {  // texture edges, 3 events per pixel
+    const Eigen::Vector2d a(ux(rng), uy(rng));
+    const double ang = unit(rng) * M_PI, len = 20 + 60 * unit(rng);
+    for (double l = 0; l < len; l += 1.0) {
+      const Eigen::Vector2d p = a + l * Eigen::Vector2d(std::cos(ang), std::sin(ang));
+      if ((p - ball).norm() > 40 && (p - spot_at).norm() > 40) add(p, 3);
+    }
+  }
+  const int n_noise = static_cast<int>(s.noise_rate_ev_s * to_seconds(s.duration));
+  for (int i = 0; i < n_noise; ++i) add({ux(rng), uy(rng)}, 1);
+  if (spot)
+    for (int dy = -5; dy <= 5; ++dy)
+      for (int dx = -5; dx <= 5; ++dx)
+        if (dx * dx + dy * dy <= 25) add(spot_at + Eigen::Vector2d(dx, dy), 4);
+  std::sort(ev.begin(), ev.end(), [](const Event& a, const Event& b) { return a.t < b.t; });
+  return ev;
+}
+
+TEST_F(DetectorTest, CountContrastCueFindsAnEvenlyFiringBlobOnALateBackground) {
+  test::BlobScene s;
+  s.radius_px = 8;
+  s.velocity_px_s = {60, 40};  // ≈ 1.8 px per window: a far head-on ball
+  s.blob_rate_ev_s = 40'000;   // ≈ 1000 events, ≈ 4 per pixel of its sweep
+  s.edge_segments = 120;
+  s.noise_rate_ev_s = 1'000'000;
+  const PinholeCamera cam = lens();
+  auto detect = [&](const std::vector<Event>& ev, const DetectorOptions& options) {
+    const CompensatedWindow& w =
+        compensator_->compensate({.events = ev, .t_start_ns = s.t0, .t_end_ns = s.t0 + s.duration});
+    Detector detector(options, cam);
+    return detector.detect(view_of(w));
+  };
+  DetectorOptions off, on;
+  off.count_cue = false;
+  on.count_cue = true;
+  const auto scene = late_background_scene(cam, s, false);
+  // The premise: the time-based detector does not find the ball.
+  const DetectionResult paper = detect(scene, off);
+  EXPECT_TRUE(!paper.detection || (paper.detection->center_undistorted - s.blob_at(paper.detection->t_ns)).norm() > 10)
+      << paper.detection->center_undistorted.transpose();
+  EXPECT_FALSE(paper.count_cue_ran);
+
+  const DetectionResult found = detect(scene, on);
+  ASSERT_TRUE(found.detection) << to_string(found.status) << ", contrast " << found.count_cue_contrast << ", fill "
+                               << found.count_cue_fill << ", time offset " << found.count_cue_time_offset;
+  const Detection2D& d = *found.detection;
+  EXPECT_EQ(d.source, DetectionSource::kCountContrast);
+  EXPECT_FALSE(d.track_aided);
+  EXPECT_GE(found.count_cue_contrast, on.count_cue_min_contrast);
+  EXPECT_GE(found.count_cue_fill, on.count_cue_min_fill);
+  EXPECT_NEAR(d.score, 1.0 - 1.0 / found.count_cue_contrast, 1e-12);
+  // Early against the late background: the ball's mean time is mid-window (0.5), the background's
+  // ≈ 0.8 of it; by more than θ's margin c = 0.1 (static camera: ω = v = 0).
+  EXPECT_LT(found.count_cue_time_offset, -0.2);
+  // At the ball's true centre at the detection's time, with the ball's size.
+  EXPECT_LT((d.center_undistorted - s.blob_at(d.t_ns)).norm(), 2.0)
+      << d.center_undistorted.transpose() << " vs " << s.blob_at(d.t_ns).transpose();
+  EXPECT_GT(d.box_undistorted.width(), s.radius_px);
+  EXPECT_LT(d.box_undistorted.width(), 4 * s.radius_px);
+
+  // The same late background without the ball: no compact blob (edges are thin, the activity is
+  // sparse: no centre box is filled).
+  test::BlobScene no_ball = s;
+  no_ball.blob_rate_ev_s = 0;
+  const DetectionResult background = detect(late_background_scene(cam, no_ball, false), on);
+  EXPECT_FALSE(background.detection) << background.detection->center_undistorted.transpose();
+  EXPECT_TRUE(background.count_cue_ran);
+  EXPECT_LT(background.count_cue_contrast, on.count_cue_min_contrast);
+
+  // A dense, compact static spot that fires with the background: dense enough in I, but its
+  // events follow the background's time profile, so the time test rejects it.
+  const DetectionResult spot = detect(late_background_scene(cam, no_ball, true), on);
+  EXPECT_FALSE(spot.detection) << spot.detection->center_undistorted.transpose();
+  EXPECT_GE(spot.count_cue_contrast, on.count_cue_min_contrast);
+  EXPECT_LT(std::abs(spot.count_cue_time_offset), 0.1);
+
+  // Uniform density: every pixel fires evenly, ≈ 4 events each (a large, evenly textured
+  // surface): the centre boxes are filled (P(I ≥ 2) ≈ 0.91), but none is denser than its
+  // surroundings.
+  test::BlobScene uniform;
+  uniform.blob_rate_ev_s = 0;
+  uniform.edge_segments = 0;
+  uniform.noise_rate_ev_s = 4.0 * 640 * 480 / to_seconds(uniform.duration);
+  const auto ev = test::make_scene(cam, uniform);
+  const CompensatedWindow& w =
+      compensator_->compensate({.events = ev, .t_start_ns = uniform.t0, .t_end_ns = uniform.t0 + uniform.duration});
+  Detector detector(on, cam);
+  const DetectionResult flat = detector.detect(view_of(w));
+  EXPECT_FALSE(flat.detection) << to_string(flat.status);
+  EXPECT_TRUE(flat.count_cue_ran);
+  EXPECT_GE(flat.count_cue_fill, on.count_cue_min_fill);
+  // The best of ≈ 300 k centres: a 9x9 box's mean count fluctuates by ≈ 0.22 around 4.
+  EXPECT_LT(flat.count_cue_contrast, 2.0);
+}
+
+TEST_F(DetectorTest, CountContrastCueWaivesTheTimeTestOnlyInsideATrackGate) {
+  // An evenly firing ball on an evenly firing background: its mean time is the image's, so over
+  // the image the time test rejects it; inside a confirmed track's gate (count_cue_in_gates) the
+  // track is the evidence that it moves.
+  test::BlobScene s;
+  s.radius_px = 8;
+  s.velocity_px_s = {60, 40};
+  s.blob_rate_ev_s = 40'000;
+  s.edge_segments = 120;
+  s.noise_rate_ev_s = 1'000'000;
+  const PinholeCamera cam = lens();
+  const auto ev = test::make_scene(cam, s);
+  const CompensatedWindow& w =
+      compensator_->compensate({.events = ev, .t_start_ns = s.t0, .t_end_ns = s.t0 + s.duration});
+  const Eigen::Vector2d mid = s.blob_at(s.t0 + s.duration / 2);
+  const DetectionPrior on_ball{cam.normalized_to_pixel({(mid.x() - cam.cx) / cam.fx, (mid.y() - cam.cy) / cam.fy}),
+                               {16, 16}};
+  DetectorOptions o;
+  o.min_peak = 1.0;  // the time-based detection is kept out of the way
+  o.prior_min_peak = 1.0;
+  o.motion_cue = false;
+  o.count_cue = true;
+  o.count_cue_in_gates = false;
+  const DetectionResult image_only = Detector(o, cam).detect(view_of(w), std::span(&on_ball, 1));
+  EXPECT_FALSE(image_only.detection) << to_string(image_only.detection->source);
+  EXPECT_GE(image_only.count_cue_contrast, o.count_cue_min_contrast);
+  EXPECT_LT(std::abs(image_only.count_cue_time_offset), 0.1);
+  o.count_cue_in_gates = true;
+  const DetectionResult gated = Detector(o, cam).detect(view_of(w), std::span(&on_ball, 1));
+  ASSERT_TRUE(gated.detection) << to_string(gated.status);
+  EXPECT_EQ(gated.detection->source, DetectionSource::kCountContrast);
+  EXPECT_TRUE(gated.detection->track_aided);
+  EXPECT_LT((gated.detection->center_undistorted - s.blob_at(gated.detection->t_ns)).norm(), 2.0);
+  // Without a gate: nothing.
+  EXPECT_FALSE(Detector(o, cam).detect(view_of(w)).detection);
+}
+
 TEST_F(DetectorTest, InvalidOptionsAreRejected) {
   DetectorOptions o;
   o.mean_filter_px = 4;
@@ -394,6 +563,10 @@ TEST_F(DetectorTest, InvalidOptionsAreRejected) {
       {"motion_cue_min_pixels", [](DetectorOptions& x) { x.motion_cue_min_pixels = 2; }},
       {"refit_min_roi_px", [](DetectorOptions& x) { x.refit_min_roi_px = 0.5; }},
       {"refit_local_scale", [](DetectorOptions& x) { x.refit_local_scale = -1; }},
+      {"count_cue_box_px", [](DetectorOptions& x) { x.count_cue_box_px = 8; }},
+      {"count_cue_surround_scale", [](DetectorOptions& x) { x.count_cue_surround_scale = 1; }},
+      {"count_cue_min_contrast", [](DetectorOptions& x) { x.count_cue_min_contrast = 0.5; }},
+      {"count_cue_min_fill", [](DetectorOptions& x) { x.count_cue_min_fill = 1.2; }},
   };
   for (const auto& [name, make_bad] : cases) {
     DetectorOptions bad;

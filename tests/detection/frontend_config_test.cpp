@@ -34,6 +34,12 @@ detector:
   motion_cue_radius_px: 7
   motion_cue_min_pixels: 9
   motion_cue_min_r2: 0.35
+  count_cue: false
+  count_cue_box_px: 7
+  count_cue_surround_scale: 2.5
+  count_cue_min_contrast: 4
+  count_cue_min_fill: 0.7
+  count_cue_in_gates: false
 depth_registration: {min_depth_m: 0.2, max_depth_m: 12}
 )");
   const CompensationOptions c = load_compensation_options(root["compensation"], "cfg.yaml");
@@ -64,6 +70,12 @@ depth_registration: {min_depth_m: 0.2, max_depth_m: 12}
   EXPECT_EQ(d.motion_cue_radius_px, 7);
   EXPECT_EQ(d.motion_cue_min_pixels, 9);
   EXPECT_DOUBLE_EQ(d.motion_cue_min_r2, 0.35);
+  EXPECT_FALSE(d.count_cue);
+  EXPECT_EQ(d.count_cue_box_px, 7);
+  EXPECT_DOUBLE_EQ(d.count_cue_surround_scale, 2.5);
+  EXPECT_DOUBLE_EQ(d.count_cue_min_contrast, 4.0);
+  EXPECT_DOUBLE_EQ(d.count_cue_min_fill, 0.7);
+  EXPECT_FALSE(d.count_cue_in_gates);
   EXPECT_EQ(d.mean_filter_px, DetectorOptions{}.mean_filter_px);  // absent: default kept
   const DepthRegistrationOptions r = load_depth_registration_options(root["depth_registration"], "cfg.yaml");
   EXPECT_DOUBLE_EQ(r.min_depth_m, 0.2);

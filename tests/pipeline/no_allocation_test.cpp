@@ -103,7 +103,7 @@ Stream make_stream() {
 struct Counts {
   long path = 0, detector = 0;
   int windows = 0;
-  int candidates = 0, retrievals = 0, motion_cues = 0;  ///< detector paths taken (DetectionResult)
+  int candidates = 0, retrievals = 0, motion_cues = 0, count_cues = 0;  ///< detector paths taken (DetectionResult)
 };
 
 Counts run(const char* method, std::size_t max_events_per_window, const DetectorOptions& detector_options = {},
@@ -138,6 +138,7 @@ Counts run(const char* method, std::size_t max_events_per_window, const Detector
       c.candidates += r.candidates;
       c.retrievals += r.timings.retrieval_ms > 0;
       c.motion_cues += r.motion_cue_ran;
+      c.count_cues += r.count_cue_ran;
     }
   };
   const std::span<const Event> all(s.events);
@@ -193,7 +194,8 @@ TEST(NoAllocation, DetectorAfterWarmUp) {
 TEST(NoAllocation, DetectorRetrievalBlankingAndPriorsToo) {
   // The paths a clean blob does not take: a fit that never converges (one iteration) sends every
   // candidate to region retrieval, an unreachable event density fails them all (blanking and the
-  // next candidates), and a track's prior adds the track-aided look and the dense-motion cue.
+  // next candidates), and a track's prior adds the track-aided look and the dense-motion cue; the
+  // count-contrast cue runs when all of them fail.
   DetectorOptions o;
   o.fit_max_iterations = 1;
   o.min_event_density = 1e3;
@@ -203,6 +205,7 @@ TEST(NoAllocation, DetectorRetrievalBlankingAndPriorsToo) {
   EXPECT_GT(c.candidates, c.windows);  // several candidates per window, and retrieval, were run
   EXPECT_GT(c.retrievals, 0);
   EXPECT_GT(c.motion_cues, 0);
+  EXPECT_GT(c.count_cues, 0);
   EXPECT_EQ(c.detector, 0) << "allocations in " << c.windows << " windows";
 }
 

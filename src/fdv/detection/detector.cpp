@@ -79,6 +79,7 @@ std::string_view to_string(DetectionSource s) {
     case DetectionSource::kGaussianFit: return "gaussian_fit";
     case DetectionSource::kRegionRetrieval: return "region_retrieval";
     case DetectionSource::kDenseMotion: return "dense_motion";
+    case DetectionSource::kCountContrast: return "count_contrast";
   }
   return "?";
 }
@@ -101,7 +102,8 @@ std::string_view to_string(DetectionStatus s) {
 std::string DetectorOptions::validate() const {
   std::ostringstream why;
   auto odd_positive = [](int k) { return k >= 1 && k % 2 == 1 && k <= 31; };
-  const double coeffs[] = {motion_cue_min_r2, motion_cue_min_span, threshold_a_s_per_rad, threshold_b_s_per_m, threshold_c, fit_delta_center_px,
+  const double coeffs[] = {count_cue_surround_scale, count_cue_min_contrast, count_cue_min_fill,
+                           motion_cue_min_r2, motion_cue_min_span, threshold_a_s_per_rad, threshold_b_s_per_m, threshold_c, fit_delta_center_px,
                            fit_delta_size_px, fit_min_size_px, refit_min_roi_px, refit_local_scale, roi_max_fraction, roi_max_aspect, max_segmented_fraction,
                            refine_box_scale, min_peak, min_event_density, prior_min_peak, prior_gate_scale,
                            prior_min_gate_px};
@@ -141,6 +143,12 @@ std::string DetectorOptions::validate() const {
     why << "motion_cue_min_r2 must be in [0, 1], got " << motion_cue_min_r2;
   else if (motion_cue_min_pixels < 3) why << "motion_cue_min_pixels must be at least 3, got " << motion_cue_min_pixels;
   else if (!(motion_cue_min_span >= 0)) why << "motion_cue_min_span must be >= 0, got " << motion_cue_min_span;
+  else if (!odd_positive(count_cue_box_px)) why << "count_cue_box_px must be odd in [1, 31], got " << count_cue_box_px;
+  else if (!(count_cue_surround_scale > 1 && count_cue_surround_scale <= 10))
+    why << "count_cue_surround_scale must be in (1, 10], got " << count_cue_surround_scale;
+  else if (!(count_cue_min_contrast >= 1)) why << "count_cue_min_contrast must be at least 1, got " << count_cue_min_contrast;
+  else if (!(count_cue_min_fill >= 0 && count_cue_min_fill <= 1))
+    why << "count_cue_min_fill must be in [0, 1], got " << count_cue_min_fill;
   else if (min_window_events < 1) why << "min_window_events must be positive, got " << min_window_events;
   else if (!(max_segmented_fraction > 0 && max_segmented_fraction <= 1))
     why << "max_segmented_fraction must be in (0, 1], got " << max_segmented_fraction;
@@ -164,6 +172,13 @@ void Detector::allocate(int width, int height) {
   count_f_.create(height, width, CV_32F);
   count_integral_.create(height + 1, width + 1, CV_64F);
   refine_acc_.create(height, width, CV_32FC2);
+  cue_count8_.create(height, width, CV_8U);
+  cue_active8_.create(height, width, CV_8U);
+  cue_count_integral_.create(height + 1, width + 1, CV_32S);
+  cue_active_integral_.create(height + 1, width + 1, CV_32S);
+  count_excess_.create(height, width, CV_32F);
+  count_excess_.setTo(0);
+  excess_bounds_ = {};
 }
 
 Eigen::Vector2d Detector::undistorted_to_raw(const Eigen::Vector2d& uv) const {
@@ -488,6 +503,97 @@ std::optional<Detector::Candidate> Detector::dense_motion_candidate(double windo
   return cand;
 }
 
+std::optional<Detector::Candidate> Detector::count_contrast_candidate(const cv::Rect& search, bool time_test,
+                                                                    DetectionResult& res) {
+  const DetectorOptions& o = options_;
+  const int w = ti_.count.cols, h = ti_.count.rows;
+  const int k = o.count_cue_box_px, hk = k / 2;
+  const int hs = static_cast<int>(std::lround(0.5 * o.count_cue_surround_scale * k));
+  // Centres whose surround lies in the image: the contrast needs the whole surround (and the
+  // image's border is where compensation is worst: content enters and leaves there).
+  const cv::Rect area = search & cv::Rect(hs, hs, w - 2 * hs, h - 2 * hs);
+  if (area.area() <= 0 || ti_.events <= 0 || !(ti_.t_max_s > ti_.t_min_s)) return std::nullopt;
+  res.count_cue_ran = true;
+  // Summed-area tables of I and of its active pixels (I ≥ min_pixel_events) over the whole image
+  // (the surround of a centre near the search area's border reaches outside it), once per window.
+  if (!cue_tables_ready_) {
+    // 8-bit images and 32-bit integer tables (exact): counts above 255 (a hot pixel) saturate.
+    ti_.count.convertTo(cue_count8_, CV_8U);
+    cv::compare(ti_.count, o.min_pixel_events - 1, cue_active8_, cv::CMP_GT);  // 255 where active
+    cv::integral(cue_count8_, cue_count_integral_, CV_32S);
+    cv::integral(cue_active8_, cue_active_integral_, CV_32S);
+    cue_tables_ready_ = true;
+  }
+  auto box_sum = [](const cv::Mat& sat, const cv::Rect& r) {
+    return static_cast<double>(sat.at<std::int32_t>(r.y + r.height, r.x + r.width) - sat.at<std::int32_t>(r.y, r.x + r.width) -
+                               sat.at<std::int32_t>(r.y + r.height, r.x) + sat.at<std::int32_t>(r.y, r.x));
+  };
+  const cv::Rect image(0, 0, w, h);
+  // The background level: the image's mean events per pixel, the floor of the surround's density
+  // (an empty surround must not make any small cluster "infinitely" dense).
+  const double image_density = static_cast<double>(ti_.events) / (static_cast<double>(w) * h);
+  double best = 0;
+  cv::Point at(-1, -1);
+  double best_fill = 0, best_surround = 0;
+  // Both boxes lie in the image (hs > hk since count_cue_surround_scale > 1).
+  const double centre_area = static_cast<double>(k) * k;
+  const double ring_area = static_cast<double>(2 * hs + 1) * (2 * hs + 1) - centre_area;
+  for (int y = area.y; y < area.y + area.height; ++y) {
+    for (int x = area.x; x < area.x + area.width; ++x) {
+      const cv::Rect centre(x - hk, y - hk, k, k);
+      const double fill = box_sum(cue_active_integral_, centre) / (255.0 * centre_area);
+      if (fill < o.count_cue_min_fill) continue;
+      const double in = box_sum(cue_count_integral_, centre);
+      const double surround = (box_sum(cue_count_integral_, {x - hs, y - hs, 2 * hs + 1, 2 * hs + 1}) - in) / ring_area;
+      const double contrast = in / centre_area / std::max(surround, image_density);
+      if (contrast > best) {
+        best = contrast;
+        at = {x, y};
+        best_fill = fill;
+        best_surround = surround;
+      }
+    }
+  }
+  res.count_cue_contrast = best;
+  res.count_cue_fill = best_fill;
+  if (at.x < 0 || best < o.count_cue_min_contrast) return std::nullopt;
+  // The blob's box: Algorithm 1 on the events above the surround's level, I − max(surround, mean),
+  // within the surround square around the densest centre (zero elsewhere), from that square.
+  const double level = std::max(best_surround, image_density);
+  const cv::Rect outer = cv::Rect(at.x - hs, at.y - hs, 2 * hs + 1, 2 * hs + 1) & image;
+  zero_rect(count_excess_, excess_bounds_);
+  cv::Mat excess = count_excess_(outer);
+  ti_.count(outer).convertTo(excess, CV_32F, 1.0, -level);
+  cv::max(excess, 0.0, excess);
+  excess_bounds_ = outer;
+  const GaussianFit f = iterative_gaussian_fit(count_excess_, Eigen::Vector2d(at.x, at.y),
+                                              Eigen::Vector2d(outer.width, outer.height), o);
+  Candidate cand;
+  cand.source = DetectionSource::kCountContrast;
+  if (f.converged && f.size.maxCoeff() <= o.roi_max_aspect * f.size.minCoeff()) {
+    cand.box = f.roi();
+    cand.center = f.center;
+  } else {
+    cand.box = Box2D{at.x - 0.5 * k + 0.5, at.y - 0.5 * k + 0.5, at.x + 0.5 * k + 0.5, at.y + 0.5 * k + 0.5};
+    cand.center = cand.box.center();
+  }
+  const cv::Rect box = box_pixels(cand.box, w, h);
+  if (box.area() == 0) return std::nullopt;
+  cand.events = static_cast<int>(cv::sum(ti_.count(box))[0]);
+  cand.event_density = static_cast<double>(cand.events) / box.area();
+  if (cand.events < o.roi_min_events || cand.event_density < o.min_event_density) return std::nullopt;
+  // Its events must not follow the background's time profile: their mean time stands out from all
+  // events' by θ's margin a‖ω‖ + b‖v‖ + c, in N's units (the margin by which a pixel of S stands out
+  // from mean(N)); early or late, since a late burst of background events (a jerk of the camera)
+  // moves the image's mean time, not the object's.
+  cand.t_mean_s = cv::sum(ti_.sum_time_s(box))[0] / cand.events;
+  const double image_t_mean_s = cv::sum(ti_.sum_time_s)[0] / ti_.events;
+  res.count_cue_time_offset = (cand.t_mean_s - image_t_mean_s) / (ti_.t_max_s - ti_.t_min_s);
+  if (time_test && !(std::abs(res.count_cue_time_offset) >= res.theta - res.mean_normalized)) return std::nullopt;
+  cand.score = 1.0 - 1.0 / best;  // the fraction of the centre's events above the background level
+  return cand;
+}
+
 DetectionResult Detector::detect(const CompensatedEventsView& window, std::span<const DetectionPrior> priors) {
   const auto t_total = Clock::now();
   DetectionResult res;
@@ -584,6 +690,22 @@ DetectionResult Detector::detect(const CompensatedEventsView& window, std::span<
     if (found && !gate->contains(found->center)) found.reset();
     res.track_aided = found.has_value();
     res.timings.motion_cue_ms += ms_since(t);
+  }
+  // Count-contrast cue: a compact blob far denser than its surroundings in I; first inside the
+  // confirmed tracks' gates without the time test (count_cue_in_gates), then over the image with it.
+  if (!found && o.count_cue) {
+    t = Clock::now();
+    cue_tables_ready_ = false;
+    for (const DetectionPrior& prior : priors) {
+      if (found || !o.count_cue_in_gates) break;
+      const auto gate = prior_gate(prior);
+      if (!gate) continue;
+      found = count_contrast_candidate(box_pixels(*gate, w, h), false, res);
+      if (found && !gate->contains(found->center)) found.reset();
+      res.track_aided = found.has_value();
+    }
+    if (!found) found = count_contrast_candidate({0, 0, w, h}, true, res);
+    res.timings.count_cue_ms = ms_since(t);
   }
   if (!found) return finish(why_not);
   Box2D box = found->box;

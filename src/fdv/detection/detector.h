@@ -50,6 +50,7 @@ struct DetectionTimings {
   double retrieval_ms = 0;  ///< 0 when retrieval was not needed
   double refine_ms = 0;     ///< centre / time refinement from the events
   double motion_cue_ms = 0; ///< the dense-motion cue (0 when not run)
+  double count_cue_ms = 0;  ///< the count-contrast cue (0 when not run)
   double total_ms = 0;
 };
 
@@ -69,6 +70,12 @@ struct DetectionResult {
   /// R² of its time plane and the plane's rise across the square as a fraction of the window.
   bool motion_cue_ran = false;
   double motion_cue_r2 = 0, motion_cue_span = 0;
+  /// The count-contrast cue (DetectorOptions::count_cue), when it ran: the highest contrast among
+  /// centres that fill count_cue_min_fill (0: none did) and that centre's fill.
+  bool count_cue_ran = false;
+  double count_cue_contrast = 0, count_cue_fill = 0;
+  /// (the blob's mean event time − all events') / (max T − min T), when its box passed the event gates.
+  double count_cue_time_offset = 0;
   DetectionTimings timings;
 };
 
@@ -113,6 +120,10 @@ class Detector {
   /// The dense-motion cue: the densest patch of active pixels of I within `search`, accepted when
   /// T rises across it as a plane (DetectorOptions::motion_cue_*) and its box passes the event gates.
   std::optional<Candidate> dense_motion_candidate(double window_s, const cv::Rect& search, DetectionResult& res);
+  /// The count-contrast cue: the filled centre box within `search` with the highest count contrast
+  /// (DetectorOptions::count_cue_*), its box from Algorithm 1 on I above the background level; with
+  /// `time_test`, its events' mean time must stand out from all events' by θ's margin.
+  std::optional<Candidate> count_contrast_candidate(const cv::Rect& search, bool time_test, DetectionResult& res);
   /// The search box on the undistorted grid of a prior, or nothing when its centre has no inverse.
   std::optional<Box2D> prior_gate(const DetectionPrior& prior) const;
   /// Centroid and mean time [s since t_start] of the events in a time-complete slice around the
@@ -132,6 +143,11 @@ class Detector {
   cv::Mat blanked_;         ///< P with failed candidates blanked; zero outside blanked_bounds_
   cv::Rect blanked_bounds_;
   cv::Mat count_f_, count_integral_;  ///< I as float and its summed-area table (dense-motion cue)
+  // Count-contrast cue: I saturated at 255 and its active pixels (255) as CV_8U, their summed-area
+  // tables (CV_32S), and I above the background level (CV_32F, zero outside excess_bounds_).
+  cv::Mat cue_count8_, cue_active8_, cue_count_integral_, cue_active_integral_, count_excess_;
+  cv::Rect excess_bounds_;
+  bool cue_tables_ready_ = false;  ///< the tables hold this window's I (the gates and the image share them)
   cv::Mat refine_acc_;  ///< the refinement's slice events per pixel: (count, Σt), CV_32FC2
 };
 

@@ -96,6 +96,12 @@ DetectorOptions load_detector_options(const YAML::Node& node, const std::string&
   integer("motion_cue_min_pixels", o.motion_cue_min_pixels);
   num("motion_cue_min_r2", o.motion_cue_min_r2);
   num("motion_cue_min_span", o.motion_cue_min_span);
+  s.on("count_cue", [&](const YAML::Node& n, const std::string& k) { o.count_cue = s.boolean(n, k); });
+  integer("count_cue_box_px", o.count_cue_box_px);
+  num("count_cue_surround_scale", o.count_cue_surround_scale);
+  num("count_cue_min_contrast", o.count_cue_min_contrast);
+  num("count_cue_min_fill", o.count_cue_min_fill);
+  s.on("count_cue_in_gates", [&](const YAML::Node& n, const std::string& k) { o.count_cue_in_gates = s.boolean(n, k); });
   s.apply();
   s.check(o.validate());
   return o;
