@@ -13,6 +13,10 @@
 
 namespace fdv {
 
+/// The most parts the per-pixel stages (time images, segmentation, pre-processing) split a window
+/// into, whatever thread count is asked for (their per-part state lives in fixed arrays).
+inline constexpr int kMaxImageParts = 8;
+
 template <class Body>
 void run_parts(int parts, const Body& body) {
   if (parts <= 1) {

@@ -247,8 +247,6 @@ segment_rows(const TimeImages& ti, float th, std::int32_t min_count, cv::Mat& S,
   return res;
 }
 
-constexpr int kMaxParts = 8;  // threads used at most
-
 }  // namespace
 
 SegmentResult segment(const TimeImages& ti, double theta, int min_pixel_events, cv::Mat& S, int threads) {
@@ -258,8 +256,8 @@ SegmentResult segment(const TimeImages& ti, double theta, int min_pixel_events, 
   // and I ≥ min_pixel_events. Pixels without events have N = 0 and stay 0 whatever θ.
   const float th = std::nextafter(static_cast<float>(theta), -std::numeric_limits<float>::infinity());
   // Parts: bands of rows, their results merged (the same as one pass).
-  const int parts = std::clamp(std::min(threads, S.rows / kStripRows), 1, kMaxParts);
-  std::array<SegmentResult, kMaxParts> part_res;
+  const int parts = std::clamp(std::min(threads, S.rows / kStripRows), 1, kMaxImageParts);
+  std::array<SegmentResult, kMaxImageParts> part_res;
   run_parts(parts, [&](int i) {
     part_res[i] = segment_rows(ti, th, min_pixel_events, S, S.rows * i / parts, S.rows * (i + 1) / parts);
   });
@@ -298,9 +296,9 @@ const cv::Mat& Preprocessor::run(const cv::Mat& S, const cv::Rect& s_bounds, int
     zero(std::max(old.x, r1.x + r1.width), top, old.x + old.width, bottom);  // right of r1
   }
   // Parts: r1's strips shared out (open_mean_square), each with its own strip buffers.
-  const int parts = std::clamp(std::min(threads, (r1.height + kStripRows - 1) / kStripRows), 1, kMaxParts);
+  const int parts = std::clamp(std::min(threads, (r1.height + kStripRows - 1) / kStripRows), 1, kMaxImageParts);
   while (static_cast<int>(strips_.size()) < parts) add_strip_buffers(S.cols);  // first use only
-  std::array<RowMaximum, kMaxParts> part_best;
+  std::array<RowMaximum, kMaxImageParts> part_best;
   run_parts(parts, [&](int i) {
     StripBuffers& sb = strips_[static_cast<std::size_t>(i)];
     open_mean_square(S, s_bounds, h_mean_, h_open_, P_, sb.a, sb.b, sb.line, part_best[i], i, parts);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cstring>
 #include <limits>
 
@@ -27,7 +28,6 @@ constexpr std::size_t kBlock = 16;
 constexpr std::size_t kChunkBlocks = 256;
 constexpr std::uint8_t kNow = 1, kBefore = 2;
 using PixelTime = TimeImages::PixelTime;
-constexpr int kMaxParts = 8;  // threads used at most
 
 using lanes::load;
 using lanes::select;
@@ -193,10 +193,10 @@ void accumulate_pairs(const PixelTime* __restrict e, std::size_t n, float* __res
 /// took longer than one thread: a branch mispredicted on half the events, and each part's
 /// prefetches shared the other part's cache lines.)
 struct Partition {
-  std::array<std::size_t, kMaxParts + 1> bound{};        ///< pixel ranges of the owners
-  std::array<std::size_t, kMaxParts + 1> first_event{};  ///< event ranges of the sorting parts
+  std::array<std::size_t, kMaxImageParts + 1> bound{};        ///< pixel ranges of the owners
+  std::array<std::size_t, kMaxImageParts + 1> first_event{};  ///< event ranges of the sorting parts
   /// group_begin[i][j]: where owner j's events of range i start in `sorted` (j = parts: the end).
-  std::array<std::array<std::size_t, kMaxParts + 1>, kMaxParts> group_begin{};
+  std::array<std::array<std::size_t, kMaxImageParts + 1>, kMaxImageParts> group_begin{};
   int parts = 1;
 
   int owner(std::size_t p) const {  // parts when out of range
@@ -235,12 +235,12 @@ void sort_by_owner_2(Partition& part, int i, const std::int32_t* pixel, const fl
 void sort_by_owner(Partition& part, int i, const std::int32_t* pixel, const float* t_s, PixelTime* sorted) {
   if (part.parts == 2) return sort_by_owner_2(part, i, pixel, t_s, sorted);
   const std::size_t e0 = part.first_event[i], e1 = part.first_event[i + 1];
-  std::array<std::size_t, kMaxParts + 1> count{};
+  std::array<std::size_t, kMaxImageParts + 1> count{};
   for (std::size_t k = e0; k < e1; ++k) ++count[static_cast<std::size_t>(part.owner(static_cast<std::uint32_t>(pixel[k])))];
   auto& begin = part.group_begin[static_cast<std::size_t>(i)];
   begin[0] = e0;
   for (int j = 0; j < part.parts; ++j) begin[j + 1] = begin[j] + count[j];
-  std::array<std::size_t, kMaxParts + 1> cursor = begin;
+  std::array<std::size_t, kMaxImageParts + 1> cursor = begin;
   for (std::size_t k = e0; k < e1; ++k) {
     const std::size_t p = static_cast<std::uint32_t>(pixel[k]);
     sorted[cursor[static_cast<std::size_t>(part.owner(p))]++] = {static_cast<std::int32_t>(p), t_s[k]};
@@ -279,23 +279,23 @@ void build_time_images(const CompensatedEventsView& view, TimeImages& out) {
   constexpr std::size_t kMinEventsPerPart = 16'384;
   Partition split;
   split.parts = static_cast<int>(
-      std::clamp<std::size_t>(std::min(n / kMinEventsPerPart, n_chunks), 1, std::clamp(view.threads, 1, kMaxParts)));
+      std::clamp<std::size_t>(std::min(n / kMinEventsPerPart, n_chunks), 1, std::clamp(view.threads, 1, kMaxImageParts)));
   const int parts = split.parts;
-  std::array<std::size_t, kMaxParts + 1> first_block{};
+  std::array<std::size_t, kMaxImageParts + 1> first_block{};
   for (int i = 0; i <= parts; ++i) {
     first_block[i] = std::min(n_blocks, n_chunks * static_cast<std::size_t>(i) / static_cast<std::size_t>(parts) * kChunkBlocks);
     split.bound[i] = std::min(npx, first_block[i] * kBlock);
     split.first_event[i] = n * static_cast<std::size_t>(i) / static_cast<std::size_t>(parts);
   }
-  std::array<Extremes, kMaxParts> extremes;
-  std::array<int, kMaxParts> events{};
+  std::array<Extremes, kMaxImageParts> extremes;
+  std::array<int, kMaxImageParts> events{};
   const std::int32_t* pixel = view.pixel.data();
   const float* t_s = view.t_s.data();
   if (parts == 1) {
     events[0] = accumulate(pixel, t_s, n, npx, im.acc, blocks);
     extremes[0] = pass1(im, blocks, 0, n_blocks, npx, out.chunk_sums.data());
   } else {
-    if (out.sorted.size() < n) out.sorted.resize(n);  // grows with the largest window, then reused
+    if (out.sorted.size() < n) out.sorted.resize(std::bit_ceil(n));  // powers of two, as the compensator's
     PixelTime* sorted = out.sorted.data();
     run_parts(parts, [&](int i) { sort_by_owner(split, i, pixel, t_s, sorted); });
     run_parts(parts, [&](int j) {
