@@ -207,7 +207,7 @@ int run(const Args& a) {
       return 2;
     }
     std::fputs("window,events,status,detected,compensation,time_images,segmentation,preprocess,fit,retrieval,refine,"
-               "motion_cue,detection,front_end\n",
+               "motion_cue,count_cue,detection,front_end\n",
                windows_csv.get());
   }
   cb.on_window = [&](const WindowResult& w) {
@@ -231,11 +231,12 @@ int run(const Args& a) {
     stage["fit+retrieval"].v.push_back(d.fit_ms + d.retrieval_ms);
     stage["refine"].v.push_back(d.refine_ms);
     stage["motion cue"].v.push_back(d.motion_cue_ms);
+    stage["count cue"].v.push_back(d.count_cue_ms);
     // What no stage timer covers: candidate search (maxima, blanking), gates, the detection's
     // mapping to raw pixels.
     stage["detection, other"].v.push_back(d.total_ms - d.time_images_ms - d.segmentation_ms -
                                           d.preprocess_ms - d.fit_ms - d.retrieval_ms -
-                                          d.refine_ms - d.motion_cue_ms);
+                                          d.refine_ms - d.motion_cue_ms - d.count_cue_ms);
     stage["detection (all)"].v.push_back(d.total_ms);
     stage["front end (comp+detection)"].v.push_back(w.timings.compensation_ms + d.total_ms);
     stage["tracking"].v.push_back(w.timings.tracking_ms);
@@ -243,10 +244,10 @@ int run(const Args& a) {
     work.v.push_back(work_ms);
     work_cpu.v.push_back(cpu_ms);
     if (windows_csv)
-      std::fprintf(windows_csv.get(), "%llu,%zu,%s,%d,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n",
+      std::fprintf(windows_csv.get(), "%llu,%zu,%s,%d,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n",
                    static_cast<unsigned long long>(w.index), w.events, std::string(to_string(w.status)).c_str(),
                    w.detection.has_value() ? 1 : 0, w.timings.compensation_ms, d.time_images_ms, d.segmentation_ms,
-                   d.preprocess_ms, d.fit_ms, d.retrieval_ms, d.refine_ms, d.motion_cue_ms, d.total_ms,
+                   d.preprocess_ms, d.fit_ms, d.retrieval_ms, d.refine_ms, d.motion_cue_ms, d.count_cue_ms, d.total_ms,
                    w.timings.compensation_ms + d.total_ms);
   };
   cb.on_depth = [&](const DepthResult& r) { depth_ms.v.push_back(r.ms); };
@@ -338,7 +339,7 @@ int run(const Args& a) {
   std::printf("%-30s %10s %10s %10s\n", "per window [ms]", "median", "p99", "max");
   for (const char* k :
        {"compensation", "time_images", "compensation+time_images", "segmentation+preprocess",
-        "fit+retrieval", "refine", "motion cue", "detection, other", "detection (all)",
+        "fit+retrieval", "refine", "motion cue", "count cue", "detection, other", "detection (all)",
         "front end (comp+detection)", "tracking", "window total"}) {
     const Distribution& d = stage[k];
     std::printf("%-30s %10.3f %10.3f %10.3f\n", k, d.quantile(0.5), d.quantile(0.99), d.max());
