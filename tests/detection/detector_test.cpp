@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdint>
 #include <functional>
 #include <random>
 #include <vector>
@@ -432,6 +434,55 @@ std::vector<Event> late_background_scene(const PinholeCamera& cam, const test::B
   return ev;
 }
 
+/// The count-contrast cue's search done the obvious way, for comparison with the detector's pruned
+/// one: every centre whose surround lies in the image, raster order, box sums from a prefix-sum
+/// table in int64 of I saturated at 255 and of its active pixels.
+struct CountCueSearch {
+  double best_contrast = 0, best_fill = 0;
+  int filled_centres = 0;
+};
+CountCueSearch count_cue_by_brute_force(const CompensatedEventsView& view, const DetectorOptions& o) {
+  TimeImages ti;
+  build_time_images(view, ti);
+  const int w = ti.count.cols, h = ti.count.rows, k = o.count_cue_box_px, hk = k / 2;
+  const int hs = static_cast<int>(std::lround(0.5 * o.count_cue_surround_scale * k));
+  std::vector<std::int64_t> count((w + 1) * (h + 1), 0), active((w + 1) * (h + 1), 0);
+  auto at = [w](std::vector<std::int64_t>& t, int x, int y) -> std::int64_t& { return t[y * (w + 1) + x]; };
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const int c = ti.count.at<std::int32_t>(y, x);
+      at(count, x + 1, y + 1) = std::min(c, 255) + at(count, x, y + 1) + at(count, x + 1, y) - at(count, x, y);
+      at(active, x + 1, y + 1) =
+          (c >= o.min_pixel_events) + at(active, x, y + 1) + at(active, x + 1, y) - at(active, x, y);
+    }
+  auto sum = [&](std::vector<std::int64_t>& t, int x0, int y0, int side) {
+    return static_cast<double>(at(t, x0 + side, y0 + side) - at(t, x0, y0 + side) - at(t, x0 + side, y0) + at(t, x0, y0));
+  };
+  const double centre_area = static_cast<double>(k) * k;
+  const double ring_area = static_cast<double>(2 * hs + 1) * (2 * hs + 1) - centre_area;
+  const double image_density = static_cast<double>(ti.events) / (static_cast<double>(w) * h);
+  CountCueSearch r;
+  for (int y = hs; y < h - hs; ++y)
+    for (int x = hs; x < w - hs; ++x) {
+      const double fill = sum(active, x - hk, y - hk, k) / centre_area;
+      if (fill < o.count_cue_min_fill) continue;
+      ++r.filled_centres;
+      const double in = sum(count, x - hk, y - hk, k);
+      const double surround = (sum(count, x - hs, y - hs, 2 * hs + 1) - in) / ring_area;
+      const double contrast = in / centre_area / std::max(surround, image_density);
+      if (contrast > r.best_contrast) r.best_contrast = contrast, r.best_fill = fill;
+    }
+  return r;
+}
+
+void expect_count_cue_search_as_brute_force(const DetectionResult& r, const CompensatedEventsView& view,
+                                            const DetectorOptions& o) {
+  const CountCueSearch expected = count_cue_by_brute_force(view, o);
+  EXPECT_EQ(r.count_cue_filled_centres, expected.filled_centres);
+  EXPECT_DOUBLE_EQ(r.count_cue_contrast, expected.best_contrast);
+  EXPECT_DOUBLE_EQ(r.count_cue_fill, expected.best_fill);
+}
+
 TEST_F(DetectorTest, CountContrastCueFindsAnEvenlyFiringBlobOnALateBackground) {
   test::BlobScene s;
   s.radius_px = 8;
@@ -457,6 +508,14 @@ TEST_F(DetectorTest, CountContrastCueFindsAnEvenlyFiringBlobOnALateBackground) {
   EXPECT_FALSE(paper.count_cue_ran);
 
   const DetectionResult found = detect(scene, on);
+  {
+    SCOPED_TRACE("few filled centres: their box sums taken directly");
+    const CompensatedWindow& w =
+        compensator_->compensate({.events = scene, .t_start_ns = s.t0, .t_end_ns = s.t0 + s.duration});
+    expect_count_cue_search_as_brute_force(found, view_of(w), on);
+    EXPECT_GT(found.count_cue_filled_centres, 0);
+    EXPECT_LT(found.count_cue_filled_centres, 1000);
+  }
   ASSERT_TRUE(found.detection) << to_string(found.status) << ", contrast " << found.count_cue_contrast << ", fill "
                                << found.count_cue_fill << ", time offset " << found.count_cue_time_offset;
   const Detection2D& d = *found.detection;
@@ -507,6 +566,43 @@ TEST_F(DetectorTest, CountContrastCueFindsAnEvenlyFiringBlobOnALateBackground) {
   EXPECT_GE(flat.count_cue_fill, on.count_cue_min_fill);
   // The best of ≈ 300 k centres: a 9x9 box's mean count fluctuates by ≈ 0.22 around 4.
   EXPECT_LT(flat.count_cue_contrast, 2.0);
+  SCOPED_TRACE("most centres filled: box sums from the whole image's table");
+  expect_count_cue_search_as_brute_force(flat, view_of(w), on);
+  EXPECT_GT(flat.count_cue_filled_centres, 100'000);
+}
+
+TEST_F(DetectorTest, CountContrastCueSkipsNoFilledCentreAtTheEdgesOfItsBlocks) {
+  // The search skips blocks of 8x8 centres whose boxes together hold too few active pixels. Two
+  // 9x9 boxes filled exactly at the threshold (65 of 81 active: a 4x4 hole in the middle, so that
+  // no shifted box is filled), centred on the first and on the last centre of a block: a union
+  // one pixel too small on either side would skip them.
+  DetectorOptions o;
+  o.min_peak = 1.0;  // the time-based detection is kept out of the way
+  ASSERT_EQ(o.count_cue_box_px, 9);
+  ASSERT_DOUBLE_EQ(o.count_cue_surround_scale, 3.0);  // centres from x, y = 14, in blocks of 8
+  ASSERT_DOUBLE_EQ(o.count_cue_min_fill, 0.8);
+  const int w = 640, h = 480;
+  std::vector<std::int32_t> pixel;
+  std::vector<float> t_s;
+  auto fire = [&](int x, int y, int n) {
+    for (int i = 0; i < n; ++i) {
+      pixel.push_back(y * w + x);
+      t_s.push_back(0.001f * static_cast<float>(1 + (x + 3 * y + 7 * i) % 23));
+    }
+  };
+  for (const cv::Point c : {cv::Point(14 + 8 * 10, 14 + 8 * 10), cv::Point(14 + 8 * 30 + 7, 14 + 8 * 20 + 7)})
+    for (int dy = -4; dy <= 4; ++dy)
+      for (int dx = -4; dx <= 4; ++dx)
+        if (!(dx >= -2 && dx <= 1 && dy >= -2 && dy <= 1)) fire(c.x + dx, c.y + dy, 3);
+  for (int i = 0; i < 2000; ++i) fire((37 * i) % w, (53 * i) % h, 1);  // sparse single events
+  const CompensatedEventsView view{.t_start_ns = 0, .t_end_ns = 25 * kNsPerMs, .width = w, .height = h,
+                                   .pixel = pixel, .t_s = t_s};
+  Detector detector(o, lens());
+  const DetectionResult r = detector.detect(view);
+  ASSERT_TRUE(r.count_cue_ran) << to_string(r.status);
+  EXPECT_EQ(r.count_cue_filled_centres, 2);
+  EXPECT_DOUBLE_EQ(r.count_cue_fill, 65.0 / 81.0);
+  expect_count_cue_search_as_brute_force(r, view, o);
 }
 
 TEST_F(DetectorTest, CountContrastCueWaivesTheTimeTestOnlyInsideATrackGate) {

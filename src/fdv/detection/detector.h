@@ -71,9 +71,11 @@ struct DetectionResult {
   bool motion_cue_ran = false;
   double motion_cue_r2 = 0, motion_cue_span = 0;
   /// The count-contrast cue (DetectorOptions::count_cue), when it ran: the highest contrast among
-  /// centres that fill count_cue_min_fill (0: none did) and that centre's fill.
+  /// centres that fill count_cue_min_fill (0: none did), that centre's fill, and how many centres
+  /// filled it (of its last search: the gates' come first, then the image's).
   bool count_cue_ran = false;
   double count_cue_contrast = 0, count_cue_fill = 0;
+  int count_cue_filled_centres = 0;
   /// (the blob's mean event time − all events') / (max T − min T), when its box passed the event gates.
   double count_cue_time_offset = 0;
   DetectionTimings timings;
@@ -143,11 +145,14 @@ class Detector {
   cv::Mat blanked_;         ///< P with failed candidates blanked; zero outside blanked_bounds_
   cv::Rect blanked_bounds_;
   cv::Mat count_f_, count_integral_;  ///< I as float and its summed-area table (dense-motion cue)
-  // Count-contrast cue: I saturated at 255 and its active pixels (255) as CV_8U, their summed-area
-  // tables (CV_32S), and I above the background level (CV_32F, zero outside excess_bounds_).
-  cv::Mat cue_count8_, cue_active8_, cue_count_integral_, cue_active_integral_, count_excess_;
+  // Count-contrast cue: I's active pixels (255) as CV_8U and their summed-area table; I saturated
+  // at 255 as CV_8U and its table, built only when many centres pass the fill test; I above the
+  // background level (CV_32F, zero outside excess_bounds_).
+  cv::Mat cue_active8_, cue_active_integral_, cue_count8_, cue_count_integral_, count_excess_;
   cv::Rect excess_bounds_;
-  bool cue_tables_ready_ = false;  ///< the tables hold this window's I (the gates and the image share them)
+  bool cue_active_ready_ = false;  ///< the active table holds this window's I (gates and image share it)
+  bool cue_count_ready_ = false;   ///< the same for the count table
+  std::vector<int> cue_live_blocks_;  ///< the scan's blocks in one band that it cannot skip
   cv::Mat refine_acc_;  ///< the refinement's slice events per pixel: (count, Σt), CV_32FC2
 };
 
