@@ -153,13 +153,17 @@ TEST(DepthRegistration, WrongSizeIsRejectedWithAReason) {
   EXPECT_NE(r.rejected.find("307199"), std::string::npos) << r.rejected;
 }
 
-TEST(DepthRegistration, LanesGiveThePlainLoopsFrameToTheBit) {
-  // register_frame() (four pixels per step) against register_frame_plain() (one pixel at a time,
-  // a branch per check) on random scenes that exercise every path: invalid values (0, NaN,
-  // beyond range), depth pixels without a lens inverse (strong barrel distortion of the depth
-  // camera folds its corners), points behind the event camera (it sits 0.3 m in front and turned),
-  // outside its image, beyond the trusted radius of its lens, occlusions, and a width that leaves a
-  // tail of 3 pixels (not a multiple of 4).
+TEST(DepthRegistration, LanesAgreeWithThePlainDoublePrecisionLoop) {
+  // register_frame() (eight pixels per step in single precision) against register_frame_plain()
+  // (one pixel at a time in double precision with Eigen, a branch per check) on random scenes that
+  // exercise every path: invalid values (0, NaN, beyond range), depth pixels without a lens inverse
+  // (strong barrel distortion of the depth camera folds its corners), points behind the event
+  // camera (it sits 0.3 m in front and turned), outside its image, beyond the trusted radius of its
+  // lens, occlusions, and a width that leaves a tail of 5 pixels (not a multiple of 8).
+  // The tolerance: single precision moves a projected point by ~1e-4 px, so a depth pixel may land
+  // in the neighbouring cell (or in or out of the image, or of the lens radius) only when it falls
+  // that close to a boundary: at most 1 in 10^4 of them; a cell's depth differs by < 2e-6
+  // relative (float rounding of z·ray + t) unless its winning surface changed.
   Calibration c;
   c.event_camera = {331, 251, 210.0, 212.0, 160.0, 130.0, {-0.28, 0.09, 0.002, -0.001, -0.01}};
   c.depth_camera = PinholeCamera{203, 151, 120.0, 121.0, 100.0, 76.0, {-0.6, 0.0, 0.0, 0.0, 0.0}};
@@ -171,29 +175,42 @@ TEST(DepthRegistration, LanesGiveThePlainLoopsFrameToTheBit) {
   const DepthRegistrar reg(c);
   std::mt19937 rng(7);
   std::uniform_real_distribution<float> z(0.2f, 6.0f), u(0.0f, 1.0f);
-  std::uint64_t behind = 0, outside = 0, no_inverse = 0, occluded = 0;
+  std::uint64_t behind = 0, outside = 0, no_inverse = 0, occluded = 0, cells = 0, cells_moved = 0, registered = 0;
+  auto near = [](std::uint64_t a, std::uint64_t b, std::uint64_t of) {
+    return (a > b ? a - b : b - a) <= of / 10000;
+  };
   for (int frame = 0; frame < 20; ++frame) {
     DepthFrame f = constant_frame(*c.depth_camera, 0.0f, frame);
     for (float& d : f.depth_m) {
       const float r = u(rng);
       d = r < 0.05f ? 0.0f : r < 0.08f ? std::nanf("") : r < 0.1f ? 40.0f : z(rng);
     }
-    // A region beyond the range, as a far background gives: whole 4-pixel steps without depth.
+    // A region beyond the range, as a far background gives: whole 8-pixel steps without depth.
     std::fill_n(f.depth_m.begin() + 203 * (frame % 7), 203 * 9 + frame, 0.0f);
     const DepthRegistrationResult fast = reg.register_frame(f), plain = reg.register_frame_plain(f);
     ASSERT_TRUE(fast.ok() && plain.ok());
     const RegisteredDepth &a = fast.depth, &b = plain.depth;
     ASSERT_EQ(a.depth_m.size(), b.depth_m.size());
-    EXPECT_EQ(std::memcmp(a.depth_m.data(), b.depth_m.data(), a.depth_m.size() * sizeof(float)), 0) << frame;
-    EXPECT_EQ(a.registered, b.registered);
-    EXPECT_EQ(a.occluded, b.occluded);
+    const std::uint64_t n = f.depth_m.size();
+    // The checks that do not depend on geometry are exact.
     EXPECT_EQ(a.invalid_input, b.invalid_input);
     EXPECT_EQ(a.no_inverse, b.no_inverse);
-    EXPECT_EQ(a.behind_camera, b.behind_camera);
-    EXPECT_EQ(a.outside_image, b.outside_image);
-    EXPECT_EQ(a.registered + a.invalid_input + a.no_inverse + a.behind_camera + a.outside_image, f.depth_m.size());
+    EXPECT_TRUE(near(a.registered, b.registered, n)) << a.registered << " vs " << b.registered;
+    EXPECT_TRUE(near(a.occluded, b.occluded, n)) << a.occluded << " vs " << b.occluded;
+    EXPECT_TRUE(near(a.behind_camera, b.behind_camera, n)) << a.behind_camera << " vs " << b.behind_camera;
+    EXPECT_TRUE(near(a.outside_image, b.outside_image, n)) << a.outside_image << " vs " << b.outside_image;
+    EXPECT_EQ(a.registered + a.invalid_input + a.no_inverse + a.behind_camera + a.outside_image, n);
+    for (std::size_t i = 0; i < a.depth_m.size(); ++i) {
+      const float za = a.depth_m[i], zb = b.depth_m[i];
+      if (za == 0 && zb == 0) continue;
+      ++cells;
+      if (!(std::abs(za - zb) <= 2e-6f * zb)) ++cells_moved;
+    }
     behind += a.behind_camera, outside += a.outside_image, no_inverse += a.no_inverse, occluded += a.occluded;
+    registered += a.registered;
   }
+  // Cells whose winning surface changed: each needs a depth pixel within ~1e-4 px of a cell border.
+  EXPECT_LE(cells_moved, registered / 10000) << cells_moved << " of " << cells << " cells";
   // Every path was taken.
   EXPECT_GT(behind, 0u);
   EXPECT_GT(outside, 0u);

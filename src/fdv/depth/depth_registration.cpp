@@ -54,24 +54,33 @@ DepthRegistrar::DepthRegistrar(const Calibration& calibration, const DepthRegist
       rays_[2 * i] = static_cast<float>(xn.x());
       rays_[2 * i + 1] = static_cast<float>(xn.y());
     }
+  // The same rays in the event camera's orientation, R_E_D·[x; y; 1] (NaN stays NaN): per frame a
+  // point is then X_E = z·ray + t_E_D, three products instead of a matrix.
+  ray_E_x_.resize(n);
+  ray_E_y_.resize(n);
+  ray_E_z_.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d r = R_E_D_ * Eigen::Vector3d(rays_[2 * i], rays_[2 * i + 1], 1.0);
+    ray_E_x_[i] = static_cast<float>(r.x());
+    ray_E_y_[i] = static_cast<float>(r.y());
+    ray_E_z_[i] = static_cast<float>(r.z());
+  }
 }
 
 namespace {
 
-using vd4 = double __attribute__((vector_size(32)));
-using vl4 = std::int64_t __attribute__((vector_size(32)));
-using vf4 = float __attribute__((vector_size(16)));
-using vi4 = std::int32_t __attribute__((vector_size(16)));
-using vf4_u = float __attribute__((vector_size(16), aligned(4)));
+using vf8 = float __attribute__((vector_size(32)));
+using vi8 = std::int32_t __attribute__((vector_size(32)));
+using vf8_u = float __attribute__((vector_size(32), aligned(4)));
 
-/// Everything the per-pixel loop reads, as plain numbers.
+/// Everything the per-pixel loop reads, as plain numbers (single precision: see register_frame()).
 struct Projection {
   const float* depth;
-  const float* rays;
-  double lo, hi;
-  double R[9], t[3];  ///< R_E_D row-major, t_E_D
-  double fx, fy, cx, cy, k1, k2, p1, p2, k3;
-  double max_r2, u_hi, v_hi;
+  const float *ray_x, *ray_y, *ray_z;  ///< R_E_D·[x_D; 1] per depth pixel
+  float lo, hi;
+  float t[3];  ///< t_E_D
+  float fx, fy, cx, cy, k1, k2, p1, p2, k3;
+  float max_r2, u_hi, v_hi;
 };
 
 struct Tally {
@@ -90,79 +99,72 @@ inline void splat(float& cell, float z_e, Tally& c) {
   }
 }
 
-/// Pixels [i0, n) one at a time: the same operations, in the same order, as register_frame_plain().
+/// Pixels [i0, n) one at a time: the same operations, in the same order, as project_all's lanes.
 void project_tail(const Projection& p, std::size_t i0, std::size_t n, int out_width, float* cells, Tally& c) {
   for (std::size_t i = i0; i < n; ++i) {
-    const float z_d = p.depth[i], xn = p.rays[2 * i], yn = p.rays[2 * i + 1];
-    const bool valid = z_d >= p.lo && z_d <= p.hi;
-    const bool has_ray = valid && !std::isnan(xn);
-    const double zd = z_d, X = xn * zd, Y = yn * zd;
-    const double Xe = ((p.R[0] * X + p.R[1] * Y) + p.R[2] * zd) + p.t[0];
-    const double Ye = ((p.R[3] * X + p.R[4] * Y) + p.R[5] * zd) + p.t[1];
-    const double Ze = ((p.R[6] * X + p.R[7] * Y) + p.R[8] * zd) + p.t[2];
+    const float z = p.depth[i], rx = p.ray_x[i], ry = p.ray_y[i], rz = p.ray_z[i];
+    const bool valid = z >= p.lo && z <= p.hi;
+    const bool has_ray = valid && !std::isnan(rx);
+    const float Xe = z * rx + p.t[0], Ye = z * ry + p.t[1], Ze = z * rz + p.t[2];
     const bool front = has_ray && Ze > 0;
-    const double x = Xe / Ze, y = Ye / Ze, r2 = x * x + y * y;
-    const double radial = 1 + r2 * (p.k1 + r2 * (p.k2 + r2 * p.k3));
-    const double xd = (x * radial + 2 * p.p1 * x * y) + p.p2 * (r2 + 2 * x * x);
-    const double yd = (y * radial + p.p1 * (r2 + 2 * y * y)) + 2 * p.p2 * x * y;
-    const double u = p.fx * xd + p.cx, v = p.fy * yd + p.cy;
-    const bool inside = front && !(r2 > p.max_r2) && u >= -0.5 && v >= -0.5 && u < p.u_hi && v < p.v_hi;
+    const float x = Xe / Ze, y = Ye / Ze, r2 = x * x + y * y;
+    const float radial = 1 + r2 * (p.k1 + r2 * (p.k2 + r2 * p.k3));
+    const float xd = (x * radial + 2 * p.p1 * x * y) + p.p2 * (r2 + 2 * x * x);
+    const float yd = (y * radial + p.p1 * (r2 + 2 * y * y)) + 2 * p.p2 * x * y;
+    const float u = p.fx * xd + p.cx, v = p.fy * yd + p.cy;
+    const bool inside = front && !(r2 > p.max_r2) && u >= -0.5f && v >= -0.5f && u < p.u_hi && v < p.v_hi;
     c.invalid += !valid;
     c.no_inverse += valid && !has_ray;
     c.behind += has_ray && !front;
     c.outside += front && !inside;
     if (inside)
-      splat(cells[static_cast<std::size_t>(static_cast<int>(v + 0.5)) * out_width + static_cast<int>(u + 0.5)],
-            static_cast<float>(Ze), c);
+      splat(cells[static_cast<std::size_t>(static_cast<int>(v + 0.5f)) * out_width + static_cast<int>(u + 0.5f)], Ze, c);
   }
 }
 
-/// All pixels, four at a time in double lanes (the AVX2 clone holds them in one register, the
-/// baseline in two SSE2 ones), then each lane's z-test in pixel order: lane-wise products, sums and
-/// quotients in the plain loop's order, no FMA, so the same cells and counts to the bit.
+/// All pixels, eight at a time in float lanes (the AVX2 clone holds them in one register, the
+/// baseline in two SSE2 ones), then each lane's z-test in pixel order. No FMA (neither clone
+/// enables it), so the lanes give project_tail's results to the bit.
 __attribute__((target_clones("avx2", "default"))) void project_all(const Projection& p, std::size_t n, int out_width,
                                                                      float* cells, Tally& c) {
-  const vd4 lo = vd4{} + p.lo, hi = vd4{} + p.hi, zero = vd4{}, one = vd4{} + 1.0, half = vd4{} + 0.5;
-  const vd4 two_p1 = vd4{} + 2 * p.p1, two_p2 = vd4{} + 2 * p.p2, two = vd4{} + 2.0;
-  const vd4 u_lo = vd4{} - 0.5, u_hi = vd4{} + p.u_hi, v_hi = vd4{} + p.v_hi, max_r2 = vd4{} + p.max_r2;
-  vl4 invalid{}, no_inverse{}, behind{}, outside{};
+  const vf8 lo = vf8{} + p.lo, hi = vf8{} + p.hi, zero = vf8{}, one = vf8{} + 1.0f, half = vf8{} + 0.5f;
+  const vf8 two_p1 = vf8{} + 2 * p.p1, two_p2 = vf8{} + 2 * p.p2, two = vf8{} + 2.0f;
+  const vf8 u_lo = vf8{} - 0.5f, u_hi = vf8{} + p.u_hi, v_hi = vf8{} + p.v_hi, max_r2 = vf8{} + p.max_r2;
+  vi8 invalid{}, no_inverse{}, behind{}, outside{};
   std::size_t i = 0;
-  for (; i + 4 <= n; i += 4) {
-    const vf4 z4 = *reinterpret_cast<const vf4_u*>(p.depth + i);
-    const vf4 ra = *reinterpret_cast<const vf4_u*>(p.rays + 2 * i), rb = *reinterpret_cast<const vf4_u*>(p.rays + 2 * i + 4);
-    const vd4 zd = __builtin_convertvector(z4, vd4);
-    const vd4 xn = __builtin_convertvector(__builtin_shufflevector(ra, rb, 0, 2, 4, 6), vd4);
-    const vd4 yn = __builtin_convertvector(__builtin_shufflevector(ra, rb, 1, 3, 5, 7), vd4);
-    const vl4 valid = (zd >= lo) & (zd <= hi);
+  for (; i + 8 <= n; i += 8) {
+    const vf8 z = *reinterpret_cast<const vf8_u*>(p.depth + i);
+    const vi8 valid = (z >= lo) & (z <= hi);
     invalid -= ~valid;
-    // Invalid depth comes in regions (the simulated frames: 26 % invalid, 92 % of it in whole
-    // steps of four): skip their arithmetic.
-    if (!(valid[0] | valid[1] | valid[2] | valid[3])) continue;
-    const vl4 has_ray = valid & (xn == xn);
-    const vd4 X = xn * zd, Y = yn * zd;
-    const vd4 Xe = ((p.R[0] * X + p.R[1] * Y) + p.R[2] * zd) + p.t[0];
-    const vd4 Ye = ((p.R[3] * X + p.R[4] * Y) + p.R[5] * zd) + p.t[1];
-    const vd4 Ze = ((p.R[6] * X + p.R[7] * Y) + p.R[8] * zd) + p.t[2];
-    const vl4 front = has_ray & (Ze > zero);
-    const vd4 x = Xe / Ze, y = Ye / Ze, r2 = x * x + y * y;
-    const vd4 radial = one + r2 * (p.k1 + r2 * (p.k2 + r2 * p.k3));
-    const vd4 xd = (x * radial + two_p1 * x * y) + p.p2 * (r2 + two * x * x);
-    const vd4 yd = (y * radial + p.p1 * (r2 + two * y * y)) + two_p2 * x * y;
-    const vd4 u = p.fx * xd + p.cx, v = p.fy * yd + p.cy;
-    const vl4 inside = front & ~(r2 > max_r2) & (u >= u_lo) & (v >= u_lo) & (u < u_hi) & (v < v_hi);
+    // Invalid depth comes in regions (the simulated frames: 26 % invalid, mostly in long runs):
+    // skip their arithmetic.
+    bool any = false;
+    for (int j = 0; j < 8; ++j) any |= valid[j] != 0;
+    if (!any) continue;
+    const vf8 rx = *reinterpret_cast<const vf8_u*>(p.ray_x + i), ry = *reinterpret_cast<const vf8_u*>(p.ray_y + i),
+              rz = *reinterpret_cast<const vf8_u*>(p.ray_z + i);
+    const vi8 has_ray = valid & (rx == rx);
+    const vf8 Xe = z * rx + p.t[0], Ye = z * ry + p.t[1], Ze = z * rz + p.t[2];
+    const vi8 front = has_ray & (Ze > zero);
+    const vf8 x = Xe / Ze, y = Ye / Ze, r2 = x * x + y * y;
+    const vf8 radial = one + r2 * (p.k1 + r2 * (p.k2 + r2 * p.k3));
+    const vf8 xd = (x * radial + two_p1 * x * y) + p.p2 * (r2 + two * x * x);
+    const vf8 yd = (y * radial + p.p1 * (r2 + two * y * y)) + two_p2 * x * y;
+    const vf8 u = p.fx * xd + p.cx, v = p.fy * yd + p.cy;
+    const vi8 inside = front & ~(r2 > max_r2) & (u >= u_lo) & (v >= u_lo) & (u < u_hi) & (v < v_hi);
     no_inverse -= valid & ~has_ray;
     behind -= has_ray & ~front;
     outside -= front & ~inside;
-    if (!(inside[0] | inside[1] | inside[2] | inside[3])) continue;
+    bool any_inside = false;
+    for (int j = 0; j < 8; ++j) any_inside |= inside[j] != 0;
+    if (!any_inside) continue;
     // Lanes outside convert 0 (their coordinates may be out of the int range).
-    const vd4 ur = u + half, vr = v + half;
-    const vi4 iu = __builtin_convertvector(inside ? ur : zero, vi4);
-    const vi4 iv = __builtin_convertvector(inside ? vr : zero, vi4);
-    const vf4 ze = __builtin_convertvector(Ze, vf4);
-    for (int j = 0; j < 4; ++j)
-      if (inside[j]) splat(cells[static_cast<std::size_t>(iv[j]) * out_width + iu[j]], ze[j], c);
+    const vi8 iu = __builtin_convertvector(inside ? u + half : zero, vi8);
+    const vi8 iv = __builtin_convertvector(inside ? v + half : zero, vi8);
+    for (int j = 0; j < 8; ++j)
+      if (inside[j]) splat(cells[static_cast<std::size_t>(iv[j]) * out_width + iu[j]], Ze[j], c);
   }
-  for (int j = 0; j < 4; ++j) {
+  for (int j = 0; j < 8; ++j) {
     c.invalid += static_cast<std::uint64_t>(invalid[j]);
     c.no_inverse += static_cast<std::uint64_t>(no_inverse[j]);
     c.behind += static_cast<std::uint64_t>(behind[j]);
@@ -207,26 +209,26 @@ DepthRegistrationResult DepthRegistrar::register_frame(const DepthFrame& frame) 
   if (!begin_frame(frame, result)) return result;
   RegisteredDepth& out = result.depth;
   const Distortion& d = event_camera_.distortion;
-  Projection p{.depth = frame.depth_m.data(),
-               .rays = rays_.data(),
-               .lo = options_.min_depth_m,
-               .hi = options_.max_depth_m,
-               .R = {},
-               .t = {t_E_D_.x(), t_E_D_.y(), t_E_D_.z()},
-               .fx = event_camera_.fx,
-               .fy = event_camera_.fy,
-               .cx = event_camera_.cx,
-               .cy = event_camera_.cy,
-               .k1 = d.k1,
-               .k2 = d.k2,
-               .p1 = d.p1,
-               .p2 = d.p2,
-               .k3 = d.k3,
-               .max_r2 = max_radius2_event_,
-               .u_hi = event_camera_.width - 0.5,
-               .v_hi = event_camera_.height - 0.5};
-  for (int r = 0; r < 3; ++r)
-    for (int k = 0; k < 3; ++k) p.R[3 * r + k] = R_E_D_(r, k);
+  const auto f = [](double v) { return static_cast<float>(v); };
+  const Projection p{.depth = frame.depth_m.data(),
+                     .ray_x = ray_E_x_.data(),
+                     .ray_y = ray_E_y_.data(),
+                     .ray_z = ray_E_z_.data(),
+                     .lo = f(options_.min_depth_m),
+                     .hi = f(options_.max_depth_m),
+                     .t = {f(t_E_D_.x()), f(t_E_D_.y()), f(t_E_D_.z())},
+                     .fx = f(event_camera_.fx),
+                     .fy = f(event_camera_.fy),
+                     .cx = f(event_camera_.cx),
+                     .cy = f(event_camera_.cy),
+                     .k1 = f(d.k1),
+                     .k2 = f(d.k2),
+                     .p1 = f(d.p1),
+                     .p2 = f(d.p2),
+                     .k3 = f(d.k3),
+                     .max_r2 = f(max_radius2_event_),
+                     .u_hi = f(event_camera_.width - 0.5),
+                     .v_hi = f(event_camera_.height - 0.5)};
   Tally c;
   project_all(p, frame.depth_m.size(), out.width, out.depth_m.data(), c);
   out.registered = c.registered;

@@ -61,7 +61,8 @@ class DepthRegistrar {
   /// counts rejections (the streaming pipeline reports them per reason).
   DepthRegistrationResult register_frame(const DepthFrame& frame) const;
   /// The plain reference of register_frame(): one pixel at a time with Eigen, a branch per check.
-  /// For tests and benchmarks (register_frame() must give the same frame, to the bit).
+  /// For tests and benchmarks: register_frame() (single precision) must give the same frame up to
+  /// points within ~1e-4 px of a cell border (docs/DETECTION.md, "Depth registration").
   DepthRegistrationResult register_frame_plain(const DepthFrame& frame) const;
 
  private:
@@ -78,6 +79,7 @@ class DepthRegistrar {
   Eigen::Matrix3d R_E_D_;
   Eigen::Vector3d t_E_D_;
   std::vector<float> rays_;  ///< interleaved normalised (x, y) per depth pixel, NaN = no inverse
+  std::vector<float> ray_E_x_, ray_E_y_, ray_E_z_;  ///< R_E_D·[x; y; 1] per depth pixel (register_frame)
   /// Squared normalised radius beyond which the event lens polynomial is not trusted (it can
   /// fold far-off-axis points back into the image); +inf without distortion.
   double max_radius2_event_ = 0;
