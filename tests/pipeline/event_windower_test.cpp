@@ -2,6 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <random>
+#include <string>
+#include <vector>
+
 namespace fdv {
 namespace {
 
@@ -60,6 +64,53 @@ TEST(EventWindower, ABurstIsDecimatedAndCounted) {
   // k = ceil(1000 / 300) = 4 -> 250 kept, 750 dropped.
   EXPECT_EQ(seen[0].n, 250u);
   EXPECT_EQ(seen[0].decimated, 750u);
+}
+
+TEST(EventWindower, SlicesOfAnyLengthGiveTheEventByEventWindows) {
+  // The rule, one event at a time: an event at or past the current window's end closes it (and
+  // any empty windows up to the event's); an event before it, even before the window's start (a
+  // slightly late event), joins the current window. The windower appends runs of events as blocks:
+  // the same windows, event for event, whatever the slicing.
+  std::mt19937 rng(11);
+  std::uniform_int_distribution<TimeNs> step(0, 40 * kNsPerUs), jitter(-300 * kNsPerUs, 0);
+  std::bernoulli_distribution late(0.05), gap(0.002);
+  std::vector<Event> events;
+  TimeNs t = 5 * kNsPerMs;
+  for (int i = 0; i < 20'000; ++i) {
+    t += step(rng) + (gap(rng) ? 60 * kNsPerMs : 0);
+    events.push_back({late(rng) ? t + jitter(rng) : t, static_cast<std::uint16_t>(i % 640),
+                      static_cast<std::uint16_t>(i % 480), i % 2 == 0});
+  }
+  const TimeNs window = 25 * kNsPerMs;
+  std::vector<std::vector<Event>> expected(1);
+  TimeNs start = events.front().t;
+  for (const Event& e : events) {
+    while (e.t >= start + window) {
+      expected.emplace_back();
+      start += window;
+    }
+    expected.back().push_back(e);
+  }
+  for (const std::size_t slice : {std::size_t{1}, std::size_t{3}, std::size_t{1000}, events.size()}) {
+    EventWindower w({.window_ns = window});
+    std::vector<std::vector<Event>> seen;
+    std::vector<TimeNs> starts;
+    const EventWindower::Callback cb = [&](const EventWindow& win) {
+      seen.emplace_back(win.events.begin(), win.events.end());
+      starts.push_back(win.t_start);
+    };
+    for (std::size_t i = 0; i < events.size(); i += slice)
+      w.push(std::span(events).subspan(i, std::min(slice, events.size() - i)), cb);
+    w.flush(cb);
+    SCOPED_TRACE("slices of " + std::to_string(slice));
+    ASSERT_EQ(seen.size(), expected.size());
+    for (std::size_t k = 0; k < seen.size(); ++k) {
+      EXPECT_EQ(starts[k], events.front().t + static_cast<TimeNs>(k) * window);
+      ASSERT_EQ(seen[k].size(), expected[k].size()) << "window " << k;
+      for (std::size_t i = 0; i < seen[k].size(); ++i)
+        ASSERT_TRUE(seen[k][i].t == expected[k][i].t && seen[k][i].x == expected[k][i].x) << k << ":" << i;
+    }
+  }
 }
 
 TEST(EventWindower, OptionsAreValidated) {

@@ -1,5 +1,7 @@
 #include "fdv/pipeline/event_windower.h"
 
+#include <algorithm>
+
 namespace fdv {
 
 std::string EventWindowerOptions::validate() const {
@@ -38,13 +40,20 @@ void EventWindower::advance_to(TimeNs t, const Callback& on_window) {
 }
 
 void EventWindower::push(std::span<const Event> events, const Callback& on_window) {
-  for (const Event& e : events) {
-    if (!started_) {
-      started_ = true;
-      t_start_ = e.t;
-    }
-    if (e.t >= t_start_ + options_.window_ns) advance_to(e.t, on_window);
-    buffer_.push_back(e);
+  if (events.empty()) return;
+  if (!started_) {
+    started_ = true;
+    t_start_ = events.front().t;
+  }
+  // Event by event, the first one at or past the window's end closes it (those before it join the
+  // window whatever their time): the run before that event is appended as one block.
+  while (!events.empty()) {
+    const TimeNs end = t_start_ + options_.window_ns;
+    const auto past = std::find_if(events.begin(), events.end(), [end](const Event& e) { return e.t >= end; });
+    buffer_.insert(buffer_.end(), events.begin(), past);
+    if (past == events.end()) break;
+    advance_to(past->t, on_window);
+    events = events.subspan(static_cast<std::size_t>(past - events.begin()));
   }
 }
 
