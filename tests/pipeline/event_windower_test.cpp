@@ -113,6 +113,46 @@ TEST(EventWindower, SlicesOfAnyLengthGiveTheEventByEventWindows) {
   }
 }
 
+TEST(EventWindower, AConsumerMayTakeTheEventsInsteadOfCopyingThem) {
+  // A consumer swaps each window's storage with an empty vector of its own (as Perception does):
+  // it gets the window's events, and the windower goes on with the vector it was given; also
+  // through a decimated window (its own storage).
+  std::vector<Event> events;
+  for (int i = 0; i < 3000; ++i) events.push_back({i * 20 * kNsPerUs, static_cast<std::uint16_t>(i % 640), 7, true});
+  for (int i = 0; i < 2000; ++i) events.push_back({61 * kNsPerMs + i, 3, static_cast<std::uint16_t>(i % 480), false});
+  for (int i = 0; i < 500; ++i) events.push_back({80 * kNsPerMs + i * 50 * kNsPerUs, 5, 5, true});
+  const EventWindowerOptions options{.window_ns = 25 * kNsPerMs, .max_events_per_window = 1500};
+  auto windows = [&](bool take) {
+    EventWindower w(options);
+    std::vector<std::vector<Event>> seen;
+    std::vector<Event> spare;
+    const EventWindower::Callback cb = [&](const EventWindow& win) {
+      if (take) {
+        ASSERT_NE(win.storage, nullptr);
+        ASSERT_EQ(win.storage->data(), win.events.data());
+        spare.clear();
+        spare.swap(*win.storage);
+        seen.push_back(std::move(spare));
+        spare = {};
+      } else {
+        seen.emplace_back(win.events.begin(), win.events.end());
+      }
+    };
+    for (std::size_t i = 0; i < events.size(); i += 700)
+      w.push(std::span(events).subspan(i, std::min<std::size_t>(700, events.size() - i)), cb);
+    w.flush(cb);
+    return seen;
+  };
+  const auto copied = windows(false), taken = windows(true);
+  ASSERT_EQ(copied.size(), 5u);  // [0, 25) [25, 50) [50, 75) (decimated: 2000 events) [75, 100)
+  ASSERT_EQ(taken.size(), copied.size());
+  EXPECT_LT(copied[2].size(), 2000u);
+  for (std::size_t k = 0; k < copied.size(); ++k) {
+    ASSERT_EQ(taken[k].size(), copied[k].size()) << k;
+    for (std::size_t i = 0; i < copied[k].size(); ++i) ASSERT_EQ(taken[k][i].t, copied[k][i].t) << k << ":" << i;
+  }
+}
+
 TEST(EventWindower, OptionsAreValidated) {
   EXPECT_NE(EventWindowerOptions{.window_ns = 0}.validate(), "");
   EXPECT_EQ(EventWindowerOptions{}.validate(), "");

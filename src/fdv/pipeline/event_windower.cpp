@@ -26,8 +26,10 @@ void EventWindower::emit(const Callback& on_window) {
     for (std::size_t i = 0; i < buffer_.size(); i += k) decimated_.push_back(buffer_[i]);
     w.decimated = buffer_.size() - decimated_.size();
     w.events = decimated_;
+    w.storage = &decimated_;
   } else {
     w.events = buffer_;
+    w.storage = &buffer_;
   }
   on_window(w);
   buffer_.clear();

@@ -11,7 +11,8 @@
 /// Overload policy: a window holding more than `max_events_per_window` events is decimated
 /// uniformly in time order (every k-th event kept) and the number dropped is reported in the
 /// window, so latency stays bounded under bursts instead of falling behind.
-/// The callback's window view is valid only during the call. Not thread-safe.
+/// The callback's window view is valid only during the call (or take the events: EventWindow::storage).
+/// Not thread-safe.
 #include <cstdint>
 #include <functional>
 #include <span>
@@ -36,6 +37,9 @@ struct EventWindow {
   std::span<const Event> events;
   std::uint64_t decimated = 0;  ///< events dropped by the overload policy
   std::uint64_t index = 0;      ///< 0, 1, 2, ... in stream order
+  /// The windower's vector that holds `events`. A consumer that keeps the events may swap it with
+  /// an empty vector of its own (whose capacity the windower then reuses) instead of copying them.
+  std::vector<Event>* storage = nullptr;
 };
 
 class EventWindower {

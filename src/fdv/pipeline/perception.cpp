@@ -86,7 +86,12 @@ void Perception::enqueue(const EventWindow& w) {
   p.t_end = w.t_end;
   p.index = w.index;
   p.decimated = w.decimated;
-  p.events.assign(w.events.begin(), w.events.end());
+  if (w.storage) {  // take the windower's buffer instead of copying 2-4 MB; it gets ours back
+    p.events.clear();
+    p.events.swap(*w.storage);
+  } else {
+    p.events.assign(w.events.begin(), w.events.end());
+  }
   pending_windows_.push_back(std::move(p));
 }
 
