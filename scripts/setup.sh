@@ -5,6 +5,7 @@
 #   scripts/setup.sh                 # install + Release build into build/
 #   BUILD_DIR=build-asan FDV_SANITIZE=ON scripts/setup.sh   # ASan+UBSan build
 #   FDV_SKIP_INSTALL=1 scripts/setup.sh                     # build only
+#   FDV_BUILD_BENCH=OFF scripts/setup.sh                    # without the benchmark programs
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -35,6 +36,7 @@ BUILD_TYPE="${BUILD_TYPE:-Release}"
 cmake -S . -B "$BUILD_DIR" -G Ninja \
   -DCMAKE_BUILD_TYPE="$BUILD_TYPE" \
   -DFDV_WERROR="${FDV_WERROR:-OFF}" \
-  -DFDV_SANITIZE="${FDV_SANITIZE:-OFF}" >/dev/null
+  -DFDV_SANITIZE="${FDV_SANITIZE:-OFF}" \
+  -DFDV_BUILD_BENCH="${FDV_BUILD_BENCH:-ON}" >/dev/null
 cmake --build "$BUILD_DIR" -j "$(nproc)"
 echo "setup: built into $BUILD_DIR"
