@@ -15,7 +15,8 @@ PACKAGES=(
   nlohmann-json3-dev libspdlog-dev libfmt-dev liblz4-dev libzstd-dev
   libflatbuffers-dev flatbuffers-compiler libsqlite3-dev libtinyxml2-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  librosbag-storage-dev libsensor-msgs-dev libnav-msgs-dev libgeometry-msgs-dev libfastcdr-dev
+  librosbag-storage-dev libroslz4-dev libbz2-dev libsensor-msgs-dev libnav-msgs-dev
+  libgeometry-msgs-dev libfastcdr-dev
 )
 
 if [ "${FDV_SKIP_INSTALL:-0}" != "1" ]; then

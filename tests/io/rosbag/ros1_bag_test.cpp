@@ -2,12 +2,15 @@
 // expected value comes from the generator formulas below, never from the reader.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iterator>
 #include <map>
+#include <random>
 
 #include "fdv/core/error.h"
 #include "fdv/io/recording.h"
@@ -425,6 +428,134 @@ TEST_F(Ros1BagTest, NotABagIsAnError) {
   const std::string what = expect_input_error([&] { open_ros1_bag(path); });
   EXPECT_NE(what.find("byte 0"), std::string::npos) << what;
   EXPECT_NE(what.find("1.2"), std::string::npos) << what;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Damaged bags. Debian's rosbag library trusts every length and offset in the file; the reader
+// checks them first (ros1_bag_structure.h). These bags were crashes before that check.
+
+std::string file_string(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+void write_string(const std::string& path, const std::string& bytes) {
+  std::ofstream(path, std::ios::binary | std::ios::trunc) << bytes;
+}
+
+/// The top-level records of a bag, walked the plain way (format 2.0: uint32 header length,
+/// header, uint32 data length, data): position, op and where the data starts.
+struct TopRecord {
+  std::size_t pos = 0, data = 0;
+  int op = 0;
+};
+std::vector<TopRecord> top_records(const std::string& b) {
+  std::vector<TopRecord> out;
+  auto u32 = [&](std::size_t p) {
+    std::uint32_t v;
+    std::memcpy(&v, b.data() + p, 4);
+    return v;
+  };
+  for (std::size_t p = 13; p + 8 <= b.size();) {
+    const std::uint32_t header_len = u32(p);
+    const std::string header = b.substr(p + 4, header_len);
+    const std::size_t op = header.find("op=");
+    out.push_back({p, p + 8 + header_len, op == std::string::npos ? -1 : header[op + 3]});
+    p += 8 + header_len + u32(p + 4 + header_len);
+  }
+  return out;
+}
+
+bool is_prefix(const std::vector<Event>& part, const std::vector<Event>& whole) {
+  return part.size() <= whole.size() && std::equal(part.begin(), part.end(), whole.begin());
+}
+
+TEST_F(Ros1BagTest, IndexOffsetOffItsMessageEndsTheReadAtThatChunkAndIsCounted) {
+  // The first index data record (just after the first chunk): its first entry's offset moved by
+  // one byte, into the middle of a message record. The library would parse a header there.
+  std::string b = file_string(bag_);
+  const auto records = top_records(b);
+  const auto index =
+      std::find_if(records.begin(), records.end(), [](const TopRecord& r) { return r.op == 4; });
+  ASSERT_NE(index, records.end());
+  std::uint32_t offset;
+  std::memcpy(&offset, b.data() + index->data + 8, 4);  // entry: time (8 bytes), offset (4)
+  ++offset;
+  std::memcpy(b.data() + index->data + 8, &offset, 4);
+  const std::string path = dir_ + "/bad_offset.bag";
+  write_string(path, b);
+
+  auto clean = open_ros1_bag(bag_);
+  const Everything whole = read_all(*clean);
+  auto reader = open_ros1_bag(path);
+  Everything part;
+  ASSERT_NO_THROW(part = read_all(*reader));
+  EXPECT_LT(part.all.events.size(), whole.all.events.size());
+  EXPECT_TRUE(is_prefix(part.all.events, whole.all.events));
+  const auto& dropped = reader->report().dropped();
+  ASSERT_EQ(dropped.size(), 1u);
+  EXPECT_EQ(dropped.begin()->first,
+            "bag damaged, the rest is unreadable: the index places a message where no message data "
+            "record of its chunk starts");
+  EXPECT_EQ(dropped.begin()->second.first_where.rfind("byte ", 0), 0u)
+      << dropped.begin()->second.first_where;
+}
+
+TEST_F(Ros1BagTest, DamagedIndexSectionIsAnErrorNamingTheRecord) {
+  // The first connection record of the index section: its header length made huge.
+  std::string b = file_string(bag_);
+  const auto records = top_records(b);
+  const auto connection =
+      std::find_if(records.begin(), records.end(), [](const TopRecord& r) { return r.op == 7; });
+  ASSERT_NE(connection, records.end());
+  const std::uint32_t huge = 0xFFFFFF00u;
+  std::memcpy(b.data() + connection->pos, &huge, 4);
+  const std::string path = dir_ + "/bad_connection.bag";
+  write_string(path, b);
+  const std::string what = expect_input_error([&] { open_ros1_bag(path); });
+  EXPECT_NE(what.find("byte " + std::to_string(connection->pos) +
+                      ": connection record: record header length"),
+            std::string::npos)
+      << what;
+  EXPECT_NE(what.find("rosbag reindex"), std::string::npos) << what;
+}
+
+TEST_F(Ros1BagTest, RandomCorruptionIsAnInputErrorOrAReadableStream) {
+  // Bytes changed anywhere, in plain and compressed bags: an InputError naming where, or a read
+  // that keeps the stream contract; never another exception or a crash (the sanitizer build
+  // runs this too).
+  for (auto c : {BagWriter::Compression::kNone, BagWriter::Compression::kLz4,
+                 BagWriter::Compression::kBz2}) {
+    const std::string src = dir_ + "/source.bag";
+    write_reference_bag(src, c);
+    const std::string f = file_string(src);
+    const std::string path = dir_ + "/fuzz.bag";
+    std::mt19937 rng(20261122);
+    std::uniform_int_distribution<std::size_t> pos(13, f.size() - 1);
+    std::uniform_int_distribution<int> byte(0, 255), count(1, 8);
+    for (int trial = 0; trial < 40; ++trial) {
+      std::string g = f;
+      for (int k = count(rng); k > 0; --k) g[pos(rng)] = static_cast<char>(byte(rng));
+      write_string(path, g);
+      Everything r;
+      try {
+        auto reader = open_ros1_bag(path);
+        r = read_all(*reader);
+      } catch (const InputError& e) {
+        EXPECT_FALSE(e.where().empty() && e.reason().empty()) << "trial " << trial;
+        continue;
+      } catch (const std::exception& e) {
+        ADD_FAILURE() << "trial " << trial << ": not an InputError: " << e.what();
+        continue;
+      }
+      EXPECT_TRUE(non_decreasing(r.all.events)) << "trial " << trial;
+      EXPECT_TRUE(non_decreasing(r.all.imu)) << "trial " << trial;
+      for (const Event& e : r.all.events) {
+        ASSERT_LT(e.x, kWidth) << "trial " << trial;
+        ASSERT_LT(e.y, kHeight) << "trial " << trial;
+      }
+    }
+  }
 }
 
 }  // namespace

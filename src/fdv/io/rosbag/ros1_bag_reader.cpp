@@ -1,15 +1,19 @@
 // ROS 1 bags through Debian's rosbag storage library (rosbag::Bag / rosbag::View): the library
 // reads the index, decompresses chunks and merges connections in time order; the message bytes
-// are decoded here (ros_messages.h).
+// are decoded here (ros_messages.h). The library trusts the file's lengths and offsets, so
+// Ros1BagStructure checks what it will read first: the index before it opens the bag, each chunk's
+// records before the first message the view takes from it.
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
 
 #include <fstream>
 #include <map>
+#include <optional>
 #include <unordered_map>
 
 #include "fdv/core/error.h"
 #include "fdv/io/rosbag/bag_reader.h"
+#include "fdv/io/rosbag/ros1_bag_structure.h"
 #include "fdv/io/rosbag/rosbag_reader.h"
 
 namespace fdv {
@@ -24,6 +28,7 @@ class Ros1BagReader final : public rosbag_impl_reader {
   Ros1BagReader(const std::string& path, const ReaderOptions& options)
       : rosbag_impl_reader(path, options, bag::Dialect::kRos1, "ros1_bag") {
     check_magic(path);
+    structure_.emplace(path);  // InputError naming the byte when the index does not hold together
     try {
       bag_.open(path, ::rosbag::bagmode::Read);
     } catch (const ::rosbag::BagUnindexedException&) {
@@ -79,7 +84,7 @@ class Ros1BagReader final : public rosbag_impl_reader {
       try {
         ::rosbag::View v(bag_, ::rosbag::TopicQuery(s.topic));
         auto it = v.begin();
-        if (it == v.end()) return false;
+        if (it == v.end() || damage_up_to(to_ns(it->getTime()))) return false;  // read() reports it
         copy_bytes(*it, bytes);
         return true;
       } catch (const ::rosbag::BagException&) {
@@ -101,6 +106,12 @@ class Ros1BagReader final : public rosbag_impl_reader {
       const ::rosbag::MessageInstance& mi = *it_;
       const auto sel = selected_index_.find(mi.getTopic());
       if (sel == selected_index_.end()) return next_message(m);  // not possible with TopicQuery
+      if (const auto damage = damage_up_to(to_ns(mi.getTime()))) {
+        report_.drop("bag damaged, the rest is unreadable: " + damage->reason(),
+                     damage->where() + ", after message " + std::to_string(total()));
+        done_ = true;
+        return false;
+      }
       copy_bytes(mi, buffer_);
       m.selected = sel->second;
       m.data = buffer_.data();
@@ -127,6 +138,16 @@ class Ros1BagReader final : public rosbag_impl_reader {
                            " is not supported (only 2.0; `rosbag fix` converts older bags)");
     if (head != kRos1BagMagic)
       throw InputError(path, "byte 0", "not a ROS 1 bag (no #ROSBAG V2.0)");
+  }
+
+  /// Checks the records of every chunk that starts at or before t (a message at t comes from one
+  /// of them: the structure check keeps index times within their chunk's span), once each, in
+  /// order of start time. The first damage found, again at every call.
+  std::optional<InputError> damage_up_to(TimeNs t) {
+    const auto& chunks = structure_->chunks();
+    for (; checked_ < chunks.size() && chunks[checked_].start <= t; ++checked_)
+      if (auto damage = structure_->check_records(checked_)) return damage;
+    return std::nullopt;
   }
 
   static void copy_bytes(const ::rosbag::MessageInstance& mi, std::vector<std::uint8_t>& out) {
@@ -160,6 +181,8 @@ class Ros1BagReader final : public rosbag_impl_reader {
     return n;
   }
 
+  std::optional<bag::Ros1BagStructure> structure_;
+  std::size_t checked_ = 0;  ///< chunks (by start time) whose records were checked
   ::rosbag::Bag bag_;
   std::unique_ptr<::rosbag::View> view_;
   ::rosbag::View::iterator it_, end_;
