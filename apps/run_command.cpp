@@ -127,6 +127,7 @@ class Outputs {
     }
     detections_ << j.dump() << "\n";
     ++windows_;
+    windows_skipped_ += w.skipped_before;
     events_ += w.events;
     ++methods_used_[std::string(to_string(w.compensation.used))];
     const CompensationReport& r = w.compensation;
@@ -245,7 +246,8 @@ class Outputs {
     }
     std::uint64_t dropped_total = 0;
     for (const auto& [_, n] : dropped_) dropped_total += n;
-    return {{"counts", {{"events", events_}, {"windows", windows_}, {"detections", detections_count_},
+    return {{"counts", {{"events", events_}, {"windows", windows_}, {"windows_skipped_in_gaps", windows_skipped_},
+                        {"detections", detections_count_},
                         {"events_dropped", dropped_total}, {"events_dropped_by_reason", dropped_},
                         {"windows_by_status", statuses_}, {"windows_by_method", methods_used_},
                         {"windows_with_fallback_flag", flags_}}},
@@ -256,7 +258,7 @@ class Outputs {
   fs::path dir_;
   bool visualize_;
   std::ofstream detections_, depth_, trajectories_, predictions_;
-  std::uint64_t windows_ = 0, events_ = 0, detections_count_ = 0;
+  std::uint64_t windows_ = 0, windows_skipped_ = 0, events_ = 0, detections_count_ = 0;
   std::map<std::string, std::uint64_t> dropped_, flags_, statuses_, methods_used_;
   std::map<std::string, std::vector<double>> timing_;
   std::map<int, TrajectoryEstimate> final_fusion_, final_mono_;

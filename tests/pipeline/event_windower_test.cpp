@@ -55,6 +55,36 @@ TEST(EventWindower, AGapYieldsEmptyWindows) {
   EXPECT_EQ(seen[4].n, 1u);
 }
 
+TEST(EventWindower, ALongGapIsSkippedAfterTheAllowedEmptyWindowsAndCounted) {
+  // Events at 0 and 1 s, then one two years on (a corrupt time): 3 empty windows are emitted,
+  // the rest of each gap is skipped in one step, alignment to the first event kept.
+  constexpr TimeNs kTwoYears = TimeNs{2} * 365 * 24 * 3600 * kNsPerS;
+  const std::vector<Event> events{{0, 1, 1, true}, {kNsPerS, 1, 1, true}, {kTwoYears + 7 * kNsPerMs, 1, 1, true}};
+  EventWindower w({.window_ns = 25 * kNsPerMs, .max_empty_windows = 3});
+  std::vector<EventWindow> seen;  // their spans are valid during the call only: sizes kept aside
+  std::vector<std::size_t> sizes;
+  const auto cb = [&](const EventWindow& win) {
+    seen.push_back(win);
+    sizes.push_back(win.events.size());
+  };
+  w.push(events, cb);
+  w.flush(cb);
+  ASSERT_EQ(seen.size(), 1u + 3u + 1u + 3u + 1u);
+  EXPECT_EQ(sizes, (std::vector<std::size_t>{1, 0, 0, 0, 1, 0, 0, 0, 1}));
+  for (int i : {1, 2, 3}) EXPECT_EQ(seen[static_cast<std::size_t>(i)].t_start, i * 25 * kNsPerMs);
+  // [100 ms, 1 s) holds 36 windows: 36 skipped; the window [1 s, 1.025 s) comes next, index 40.
+  EXPECT_EQ(seen[4].t_start, kNsPerS);
+  EXPECT_EQ(seen[4].skipped_before, 36u);
+  EXPECT_EQ(seen[4].index, 40u);
+  // Two years = 2 522 880 000 windows from 1 s + 25 ms on, 3 of them emitted.
+  const std::uint64_t windows_to_event = static_cast<std::uint64_t>(kTwoYears / (25 * kNsPerMs)) - 41;
+  EXPECT_EQ(seen[8].t_start, kTwoYears);
+  EXPECT_EQ(seen[8].skipped_before, windows_to_event - 3);
+  EXPECT_EQ(seen[8].index, 41 + windows_to_event);
+  EXPECT_EQ(w.windows_skipped(), 36u + windows_to_event - 3);
+  EXPECT_EQ(w.windows_passed(), seen[8].index + 1);
+}
+
 TEST(EventWindower, ABurstIsDecimatedAndCounted) {
   std::vector<Event> events;
   for (int i = 0; i < 1000; ++i) events.push_back({i, 1, 1, true});  // 1000 events in 1 µs

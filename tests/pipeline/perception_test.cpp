@@ -96,6 +96,27 @@ Collected run(TimeNs lag_ns, const SimulatedThrow& s = simulated_throw(), const 
   return out;
 }
 
+TEST(Perception, AFarFutureEventTimeSkipsTheGapInsteadOfMakingBillionsOfWindows) {
+  // A corrupt time a year ahead: 1 261 440 000 windows of 25 ms lie before it. The windower emits
+  // 400 empty ones (EventWindowerOptions::max_empty_windows), skips the rest, and says so.
+  Collected out;
+  Perception p(simulated_throw().calib, {}, collect(out));
+  const std::vector<Event> events{{0, 10, 10, true}, {kNsPerMs, 11, 10, false}};
+  constexpr TimeNs kYear = TimeNs{365} * 24 * 3600 * kNsPerS;
+  const std::vector<Event> late{{kYear, 12, 10, true}};
+  p.push_events(events);
+  p.push_events(late);
+  p.finish();
+  const std::uint64_t windows_before_event = static_cast<std::uint64_t>(kYear / (25 * kNsPerMs));
+  ASSERT_EQ(out.results.size(), 1u + 400u + 1u);
+  EXPECT_EQ(p.counters().windows, 402u);
+  EXPECT_EQ(p.counters().windows_skipped, windows_before_event - 1 - 400);
+  EXPECT_EQ(out.results.back().skipped_before, windows_before_event - 1 - 400);
+  EXPECT_EQ(out.results.back().t_start, kYear);
+  EXPECT_EQ(out.results.back().index, windows_before_event);
+  EXPECT_EQ(out.results.back().events, 1u);
+}
+
 TEST(Perception, ResultsDoNotDependOnHowStreamsAreInterleavedWithinTheLatenessBound) {
   const Collected in_order = run(-5 * kNsPerMs);  // slower sensors slightly ahead of the events
   const Collected late = run(30 * kNsPerMs);      // 30 ms behind: within the 50 ms default bound

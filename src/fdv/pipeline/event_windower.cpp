@@ -19,6 +19,9 @@ void EventWindower::emit(const Callback& on_window) {
   w.t_start = t_start_;
   w.t_end = t_start_ + options_.window_ns;
   w.index = next_index_++;
+  w.skipped_before = skipped_pending_;
+  skipped_pending_ = 0;
+  empty_run_ = buffer_.empty() ? empty_run_ + 1 : 0;
   if (buffer_.size() > options_.max_events_per_window) {
     // Keep every k-th event, k = ceil(n / cap): uniform in time, polarity and place.
     const std::size_t k = (buffer_.size() + options_.max_events_per_window - 1) / options_.max_events_per_window;
@@ -38,7 +41,20 @@ void EventWindower::emit(const Callback& on_window) {
 
 void EventWindower::advance_to(TimeNs t, const Callback& on_window) {
   if (!started_) return;
-  while (t >= t_start_ + options_.window_ns) emit(on_window);
+  while (t >= t_start_ + options_.window_ns) {
+    if (buffer_.empty() && empty_run_ >= options_.max_empty_windows) {
+      // The rest of the gap: every complete window before t's, in one step (alignment kept;
+      // unsigned difference: no overflow whatever the times).
+      const auto step = static_cast<std::uint64_t>(options_.window_ns);
+      const auto n = (static_cast<std::uint64_t>(t) - static_cast<std::uint64_t>(t_start_)) / step;
+      t_start_ = static_cast<TimeNs>(static_cast<std::uint64_t>(t_start_) + n * step);
+      next_index_ += n;
+      skipped_pending_ += n;
+      skipped_total_ += n;
+      break;
+    }
+    emit(on_window);
+  }
 }
 
 void EventWindower::push(std::span<const Event> events, const Callback& on_window) {

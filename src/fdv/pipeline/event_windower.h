@@ -7,7 +7,10 @@
 ///   w.flush([&](const EventWindow& win) { process(win); });   // the last, partial window
 ///
 /// Windows are aligned to multiples of Δt after the first event's time. A gap in the stream
-/// yields empty windows (each is still reported, so the output has one row per window).
+/// yields empty windows (each is still reported, so the output has one row per window), up to
+/// `max_empty_windows` in a row: the rest of a longer gap is skipped in one step and counted in
+/// the next window (`skipped_before`), so that a corrupt far-future time cannot make billions of
+/// windows.
 /// Overload policy: a window holding more than `max_events_per_window` events is decimated
 /// uniformly in time order (every k-th event kept) and the number dropped is reported in the
 /// window, so latency stays bounded under bursts instead of falling behind.
@@ -28,6 +31,9 @@ struct EventWindowerOptions {
   /// Decimation cap: 20 M events/s sustained over 25 ms is 500 k events; twice that is a burst
   /// the front end cannot absorb within one window period on one core (docs/BENCHMARKS.md).
   std::size_t max_events_per_window = 1'000'000;
+  /// Gap policy: consecutive empty windows emitted before the rest of a gap is skipped
+  /// (400 = 10 s at Δt = 25 ms; a live camera sees noise events far more often than that).
+  std::uint64_t max_empty_windows = 400;
   std::string validate() const;
 };
 
@@ -36,7 +42,8 @@ struct EventWindow {
   TimeNs t_end = 0;  ///< exclusive
   std::span<const Event> events;
   std::uint64_t decimated = 0;  ///< events dropped by the overload policy
-  std::uint64_t index = 0;      ///< 0, 1, 2, ... in stream order
+  std::uint64_t index = 0;           ///< (t_start − first window's t_start) / Δt
+  std::uint64_t skipped_before = 0;  ///< empty windows skipped just before this one (gap policy)
   /// The windower's vector that holds `events`. A consumer that keeps the events may swap it with
   /// an empty vector of its own (whose capacity the windower then reuses) instead of copying them.
   std::vector<Event>* storage = nullptr;
@@ -52,7 +59,10 @@ class EventWindower {
   void advance_to(TimeNs t, const Callback& on_window);
   /// Emits the last, partial window (if it holds any events).
   void flush(const Callback& on_window);
-  std::uint64_t windows_emitted() const { return next_index_; }
+  /// Windows emitted or skipped so far (the next window's index).
+  std::uint64_t windows_passed() const { return next_index_; }
+  /// Empty windows skipped by the gap policy so far.
+  std::uint64_t windows_skipped() const { return skipped_total_; }
 
  private:
   void emit(const Callback& on_window);
@@ -62,6 +72,8 @@ class EventWindower {
   std::vector<Event> buffer_;
   std::vector<Event> decimated_;
   std::uint64_t next_index_ = 0;
+  std::uint64_t empty_run_ = 0;  ///< empty windows emitted in a row
+  std::uint64_t skipped_pending_ = 0, skipped_total_ = 0;
 };
 
 }  // namespace fdv

@@ -86,6 +86,7 @@ void Perception::enqueue(const EventWindow& w) {
   p.t_end = w.t_end;
   p.index = w.index;
   p.decimated = w.decimated;
+  p.skipped_before = w.skipped_before;
   if (w.storage) {  // take the windower's buffer instead of copying 2-4 MB; it gets ours back
     p.events.clear();
     p.events.swap(*w.storage);
@@ -210,7 +211,9 @@ void Perception::process_window(PendingWindow& w) {
   result.t_end = w.t_end;
   result.events = w.events.size();
   result.decimated = w.decimated;
+  result.skipped_before = w.skipped_before;
   ++counters_.windows;
+  counters_.windows_skipped += w.skipped_before;
 
   CompensationInput in;
   in.events = w.events;

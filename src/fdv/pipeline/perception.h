@@ -87,6 +87,7 @@ struct WindowResult {
   TimeNs t_start = 0, t_end = 0;
   std::size_t events = 0;        ///< events in the window (after the windower's decimation)
   std::uint64_t decimated = 0;   ///< dropped by the windower's overload policy
+  std::uint64_t skipped_before = 0;  ///< empty windows skipped just before (windower's gap policy)
   CompensationReport compensation;
   DetectionStatus status = DetectionStatus::kTooFewEvents;
   std::optional<Detection2D> detection;
@@ -130,6 +131,7 @@ struct PerceptionCallbacks {
 /// Counts of what the pipeline received, used and refused.
 struct PerceptionCounters {
   std::uint64_t events = 0, windows = 0, detections = 0;
+  std::uint64_t windows_skipped = 0;  ///< empty windows of long gaps not emitted (EventWindowerOptions)
   std::uint64_t imu = 0, imu_out_of_order = 0;
   std::uint64_t odometry = 0, odometry_out_of_order = 0;
   std::uint64_t depth_frames = 0, depth_rejected_registration = 0, depth_observations = 0;
@@ -156,7 +158,7 @@ class Perception {
  private:
   struct PendingWindow {
     TimeNs t_start = 0, t_end = 0;
-    std::uint64_t index = 0, decimated = 0;
+    std::uint64_t index = 0, decimated = 0, skipped_before = 0;
     std::vector<Event> events;
   };
   struct TrackEstimators {

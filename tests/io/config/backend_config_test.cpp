@@ -103,6 +103,7 @@ FieldComparison compare(const PredictionOptions& a, const PredictionOptions& b) 
 FieldComparison compare_top(const PerceptionOptions& a, const PerceptionOptions& b) {
   FieldComparison r;
   FDV_COMPARE_FIELD(windows.window_ns);
+  FDV_COMPARE_FIELD(windows.max_empty_windows);
   FDV_COMPARE_FIELD(monocular_baseline);
   FDV_COMPARE_FIELD(estimate_aided_association);
   FDV_COMPARE_FIELD(max_lateness_ns);
@@ -118,6 +119,7 @@ FieldComparison compare_top(const PerceptionOptions& a, const PerceptionOptions&
 
 constexpr const char* kFullConfig = R"(
 window_ms: 20
+max_empty_windows: 80
 monocular_baseline: false
 estimate_aided_association: false
 max_lateness_ms: 30
@@ -248,6 +250,7 @@ TEST(BackendConfig, FullFileRoundTripsEveryKey) {
 
   PerceptionOptions top;
   top.windows.window_ns = 20'000'000;
+  top.windows.max_empty_windows = 80;
   top.monocular_baseline = false;
   top.estimate_aided_association = false;
   top.max_lateness_ns = 30'000'000;
@@ -333,8 +336,9 @@ TEST(BackendConfig, UnknownKeysNameTheKey) {
             "baseline beside it when monocular_baseline is true");
   EXPECT_EQ(error_of("estimator: {}"),
             "key estimator | unknown section (expected compensation, depth_registration, "
-            "depth_segmentation, detector, estimate_aided_association, estimation, max_lateness_ms, "
-            "monocular_baseline, odometry_max_extrapolation_ms, prediction, tracking, window_ms)");
+            "depth_segmentation, detector, estimate_aided_association, estimation, max_empty_windows, "
+            "max_lateness_ms, monocular_baseline, odometry_max_extrapolation_ms, prediction, tracking, "
+            "window_ms)");
   // Front-end sections go through the same function.
   EXPECT_EQ(error_of("detector: {threshold_d: 1}"), "key detector.threshold_d | unknown key");
 }
@@ -392,6 +396,7 @@ TEST(BackendConfig, InvalidValuesNameTheFileAndKey) {
   EXPECT_EQ(error_of("prediction: {safety_radius_m: -0.1}"),
             "key prediction | safety_radius_m must be >= 0");
   EXPECT_EQ(error_of("window_ms: 0"), "key window_ms | must be > 0");
+  EXPECT_EQ(error_of("max_empty_windows: -1"), "key max_empty_windows | must be >= 0");
   EXPECT_EQ(error_of("max_lateness_ms: -1"), "key max_lateness_ms | must be >= 0");
   EXPECT_EQ(error_of("odometry_max_extrapolation_ms: -2"),
             "key odometry_max_extrapolation_ms | must be >= 0");

@@ -152,6 +152,11 @@ PerceptionOptions load_perception_options(const YAML::Node& root, const std::str
     o.windows.window_ns = s.millis(n, k);
     if (o.windows.window_ns <= 0) throw InputError(file, "key " + k, "must be > 0");
   });
+  s.on("max_empty_windows", [&](const YAML::Node& n, const std::string& k) {
+    const long long v = s.integer(n, k);
+    if (v < 0) throw InputError(file, "key " + k, "must be >= 0");
+    o.windows.max_empty_windows = static_cast<std::uint64_t>(v);
+  });
   s.bind("monocular_baseline", o.monocular_baseline);
   s.bind("estimate_aided_association", o.estimate_aided_association);
   s.on("max_lateness_ms", [&](const YAML::Node& n, const std::string& k) {
