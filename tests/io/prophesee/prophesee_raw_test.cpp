@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdint>
+#include <cstring>
 #include <fstream>
 #include <iterator>
 #include <random>
@@ -389,6 +390,93 @@ TEST(PropheseeRaw, TimeHighGoingBackwardsDropsEventsUntilTimeRecovers) {
     EXPECT_EQ(dropped(reader->report(), "event timestamp went backwards"), 1u);
     EXPECT_TRUE(reader->report().repaired().empty());
   }
+}
+
+TEST(PropheseeRaw, TimeHighFarAheadIsHeldUntilTheNextOneDecides) {
+  const std::string glitch_reason =
+      "event under a TIME_HIGH far ahead of the stream (held until the next TIME_HIGH)";
+  {  // EVT 2.0: 100 -> 100 + 2^20 (67 s ahead: a corrupt word) -> 101. Without the hold, every
+     // later event would be "behind" the corrupt time and dropped.
+    RawWriter w("% evt 2.0\n% geometry 64x32\n");
+    w.end_header().w32(th2(100)).w32(cd(true, 10, 1, 1));
+    w.w32(th2(100 + (1 << 20))).w32(cd(true, 0, 2, 2)).w32(cd(false, 1, 3, 3));  // words 2-4
+    w.w32(th2(101)).w32(cd(true, 5, 4, 4));
+    w.w32(th2(102)).w32(cd(true, 6, 5, 5));
+    auto reader = open_prophesee_raw(w.write("evt2_glitch"));
+    const std::vector<Event> expected = {
+        {us(6400 + 10), 1, 1, true}, {us(6464 + 5), 4, 4, true}, {us(6528 + 6), 5, 5, true}};
+    EXPECT_EQ(read_all(*reader).events, expected);
+    ASSERT_EQ(dropped(reader->report(), glitch_reason), 2u);
+    EXPECT_EQ(reader->report().dropped().at(glitch_reason).first_where,
+              "byte " + std::to_string(w.data_offset() + 4 * 3));
+    EXPECT_EQ(dropped(reader->report(), "event timestamp went backwards"), 0u);
+    EXPECT_TRUE(has_note(reader->info(), "came back 1 time(s)"));
+  }
+  {  // EVT 2.0: a real jump of 67 s (the next TIME_HIGH follows it): the held period's events
+     // are lost, the stream goes on from the new time.
+    RawWriter w("% evt 2.0\n% geometry 64x32\n");
+    const std::uint32_t far = 100 + (1 << 20);
+    w.end_header().w32(th2(100)).w32(cd(true, 10, 1, 1));
+    w.w32(th2(far)).w32(cd(true, 0, 2, 2));
+    w.w32(th2(far + 1)).w32(cd(true, 5, 4, 4));
+    auto reader = open_prophesee_raw(w.write("evt2_jump"));
+    const std::vector<Event> expected = {{us(6400 + 10), 1, 1, true},
+                                         {us(std::int64_t{far + 1} * 64 + 5), 4, 4, true}};
+    EXPECT_EQ(read_all(*reader).events, expected);
+    EXPECT_EQ(dropped(reader->report(), glitch_reason), 1u);
+    EXPECT_FALSE(has_note(reader->info(), "came back"));
+  }
+  {  // EVT 3.0: 10 -> 10 + 1000 (4.1 s ahead; without the hold the next word, 11, would be a
+     // step back and every event dropped for 4 s) -> 11.
+    RawWriter w("% evt 3.0\n% geometry 64x32\n");
+    w.end_header().w16(th3(10)).w16(tl3(0)).w16(addr_y(0)).w16(addr_x(1, true));
+    w.w16(th3(1010)).w16(tl3(7)).w16(addr_x(2, true)).w16(vect12(0x3)).w16(base_x(8, false));
+    w.w16(th3(11)).w16(tl3(5)).w16(addr_x(3, true));
+    auto reader = open_prophesee_raw(w.write("evt3_glitch"));
+    const std::vector<Event> expected = {{us(10 * 4096), 1, 0, true},
+                                         {us(11 * 4096 + 5), 3, 0, true}};
+    EXPECT_EQ(read_all(*reader).events, expected);
+    EXPECT_EQ(dropped(reader->report(), glitch_reason), 1u + 2u);  // ADDR_X, then VECT_12 bits 0-1
+    EXPECT_EQ(dropped(reader->report(), "event timestamp went backwards"), 0u);
+    EXPECT_TRUE(reader->report().repaired().empty());  // nor taken for a wrap
+    EXPECT_TRUE(has_note(reader->info(), "came back 1 time(s)"));
+  }
+}
+
+TEST(PropheseeRaw, ACorruptTimeHighInARealRecordingCostsOnlyItsPeriod) {
+  // One TIME_HIGH word in the middle of the real EVT 2.0 recording moved 100000 periods (6.4 s)
+  // ahead. The plain decoder (above) gives the events under it that far-future time; the reader
+  // drops those and nothing else (before the hold: 195 485 events, the rest of the file).
+  const std::string src = test::real_data("gen3_sparks_evt2.raw");
+  FDV_REQUIRE_REAL_FILE(src);
+  std::vector<unsigned char> b = file_bytes(src);
+  std::vector<std::size_t> time_highs;
+  for (std::size_t p = skip_header(b); p + 4 <= b.size(); p += 4)
+    if (b[p + 3] >> 4 == 8) time_highs.push_back(p);
+  const std::size_t p = time_highs[time_highs.size() / 2];
+  std::uint32_t w;
+  std::memcpy(&w, &b[p], 4);
+  const std::uint32_t corrupt = (w & 0xF0000000u) | ((w & 0x0FFFFFFFu) + 100'000);
+  std::memcpy(&b[p], &corrupt, 4);
+  const std::string path = test::scratch_dir("prophesee_time_high_glitch") + "/g.raw";
+  std::ofstream(path, std::ios::binary)
+      .write(reinterpret_cast<const char*>(b.data()), static_cast<std::streamsize>(b.size()));
+
+  const TimeNs glitch_ns = static_cast<TimeNs>(corrupt & 0x0FFFFFFFu) * 64 * 1000;
+  std::vector<Event> expected;
+  std::size_t under_glitch = 0;
+  for (const Event& e : reference_evt2(path)) {
+    if (e.t >= glitch_ns) {
+      ++under_glitch;
+    } else {
+      expected.push_back(e);
+    }
+  }
+  ASSERT_GT(under_glitch, 0u);
+  auto reader = open_prophesee_raw(path, chunked(50'000));
+  EXPECT_EQ(read_all(*reader).events, expected);
+  EXPECT_EQ(reader->report().total_dropped(), under_glitch);
+  EXPECT_TRUE(has_note(reader->info(), "came back 1 time(s)"));
 }
 
 TEST(PropheseeRaw, OutOfRangeCoordinatesAreDroppedAndCounted) {

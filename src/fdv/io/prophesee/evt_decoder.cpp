@@ -24,6 +24,15 @@ constexpr std::uint32_t kAddrY = 0x0, kAddrX = 0x2, kVectBaseX = 0x3, kVect12 = 
   n += how_many;
 }
 
+// TIME_HIGH steps, values in [0, range): b is behind a when smaller by at most half the range
+// (a step back, taken as stated); otherwise b is ahead (across a wrap when smaller).
+bool behind(std::uint64_t a, std::uint64_t b, std::uint64_t range) { return b < a && a - b <= range / 2; }
+std::uint64_t ahead(std::uint64_t a, std::uint64_t b, std::uint64_t range) { return (b + range - a) % range; }
+/// Whether TIME_HIGH b plausibly comes after a: not behind it, at most max_step periods ahead.
+bool follows(std::uint64_t a, std::uint64_t b, std::uint64_t range, std::uint64_t max_step) {
+  return !behind(a, b, range) && ahead(a, b, range) <= max_step;
+}
+
 }  // namespace
 
 std::size_t Evt2Decoder::decode(const Word* words, std::size_t n, Event* out,
@@ -33,34 +42,59 @@ std::size_t Evt2Decoder::decode(const Word* words, std::size_t n, Event* out,
   std::size_t i = 0;
   TimeNs high_ns = high_ns_;
   bool have_time = have_time_;
+  bool emitting = have_time && !suspect_;  // a known, trusted time base
+  constexpr std::uint64_t kMaxStep = kMaxTimeHighJumpUs >> 6;
+  const auto set_high = [&](std::uint32_t h) {
+    if (have_time && h < time_high_) {
+      if (time_high_ - h > kTimeHighRange / 2) {
+        epoch_us_ += static_cast<std::int64_t>(kTimeHighRange) << 6;
+        count(counts.wraps, counts.first_wrap, i);
+      } else {
+        ++counts.time_high_backwards;
+      }
+    }
+    have_time = true;
+    time_high_ = h;
+    high_ns = (epoch_us_ + (static_cast<std::int64_t>(h) << 6)) * kNsPerUs;
+  };
   for (; i < n && k < max_events; ++i) {
     const std::uint32_t w = words[i];
     const std::uint32_t type = w >> 28;
     if (type <= evt2::kCdOn) [[likely]] {
       // [27:22] time low 6 bits, [21:11] x, [10:0] y; polarity = type (CD_ON = 1).
-      if (have_time) [[likely]] {
+      if (emitting) [[likely]] {
         out[k++] = Event{high_ns + static_cast<TimeNs>((w >> 22) & 0x3F) * kNsPerUs,
                          static_cast<std::uint16_t>((w >> 11) & 0x7FF),
                          static_cast<std::uint16_t>(w & 0x7FF), type == evt2::kCdOn};
-      } else {
+      } else if (!have_time) {
         count(counts.before_time, counts.first_before_time, i);
+      } else {
+        count(counts.glitch_events, counts.first_glitch_event, i);
       }
       continue;
     }
     switch (type) {
       case evt2::kTimeHigh: {  // [27:0] bits 33..6 of the time in us
         const std::uint32_t h = w & 0x0FFFFFFF;
-        if (have_time && h < time_high_) {
-          if (time_high_ - h > kTimeHighRange / 2) {
-            epoch_us_ += static_cast<std::int64_t>(kTimeHighRange) << 6;
-            count(counts.wraps, counts.first_wrap, i);
+        if (have_time && suspect_) {  // the header comment: glitch or real jump
+          if (follows(time_high_, h, kTimeHighRange, kMaxStep)) {
+            ++counts.time_high_glitches;
+          } else if (follows(suspect_high_, h, kTimeHighRange, kMaxStep)) {
+            set_high(suspect_high_);
           } else {
-            ++counts.time_high_backwards;
+            suspect_high_ = h;  // no sense yet: the newest word is the suspect
+            break;
           }
+          suspect_ = false;
+        } else if (have_time && !behind(time_high_, h, kTimeHighRange) &&
+                   ahead(time_high_, h, kTimeHighRange) > kMaxStep) {
+          suspect_ = true;
+          suspect_high_ = h;
+          emitting = false;
+          break;
         }
-        have_time = true;
-        time_high_ = h;
-        high_ns = (epoch_us_ + (static_cast<std::int64_t>(h) << 6)) * kNsPerUs;
+        set_high(h);
+        emitting = true;
         break;
       }
       case evt2::kExtTrigger:
@@ -91,18 +125,27 @@ std::size_t Evt3Decoder::decode(const Word* words, std::size_t n, Event* out,
   std::uint16_t y = y_;
   std::uint16_t base_x = base_x_;
   bool base_polarity = base_polarity_;
-  bool ready = have_time_ && have_y_;       // single events can be output
-  bool vector_ready = ready && have_base_;  // vector events can be output
+  bool ready = have_time_ && have_y_ && !suspect_;  // single events can be output
+  bool vector_ready = ready && have_base_;          // vector events can be output
+  constexpr std::uint64_t kMaxStep = kMaxTimeHighJumpUs >> 12;
+  // Events that cannot be output, by reason.
+  const auto not_ready = [&](std::size_t index, std::uint64_t how_many) {
+    if (!have_time_) {
+      count(counts.before_time, counts.first_before_time, index, how_many);
+    } else if (suspect_) {
+      count(counts.glitch_events, counts.first_glitch_event, index, how_many);
+    } else {
+      count(counts.missing_address, counts.first_missing_address, index, how_many);
+    }
+  };
   for (; i < n && k < max_events; ++i) {
     const std::uint32_t w = words[i];
     // ADDR_X is most words of a dense stream: tested before the switch's indirect jump.
     if ((w >> 12) == evt3::kAddrX) [[likely]] {  // [11] polarity, [10:0] x: one event
       if (ready) [[likely]] {
         out[k++] = Event{t, static_cast<std::uint16_t>(w & 0x7FF), y, ((w >> 11) & 1) != 0};
-      } else if (!have_time_) {
-        count(counts.before_time, counts.first_before_time, i);
       } else {
-        count(counts.missing_address, counts.first_missing_address, i);
+        not_ready(i, 1);
       }
       continue;
     }
@@ -110,7 +153,7 @@ std::size_t Evt3Decoder::decode(const Word* words, std::size_t n, Event* out,
       case evt3::kAddrY:  // [11] system type (ignored), [10:0] y
         y = static_cast<std::uint16_t>(w & 0x7FF);
         have_y_ = true;
-        ready = have_time_;
+        ready = have_time_ && !suspect_;
         vector_ready = ready && have_base_;
         break;
       case evt3::kVectBaseX:  // [11] polarity, [10:0] x of the next vector's bit 0
@@ -131,11 +174,7 @@ std::size_t Evt3Decoder::decode(const Word* words, std::size_t n, Event* out,
             k += (mask >> b) & 1;
           }
         } else if (mask != 0) {
-          if (!have_time_) {
-            count(counts.before_time, counts.first_before_time, i, std::popcount(mask));
-          } else {
-            count(counts.missing_address, counts.first_missing_address, i, std::popcount(mask));
-          }
+          not_ready(i, static_cast<std::uint64_t>(std::popcount(mask)));
         }
         base_x = static_cast<std::uint16_t>(base_x + (is12 ? 12 : 8));
         break;
@@ -147,23 +186,43 @@ std::size_t Evt3Decoder::decode(const Word* words, std::size_t n, Event* out,
         break;
       case evt3::kTimeHigh: {  // [11:0] bits 23..12 of the time in us
         const std::uint32_t h = w & 0xFFF;
-        if (!have_time_ || h != time_high_) {
-          if (have_time_ && h < time_high_) {
-            if (time_high_ - h > kTimeHighRange / 2) {
-              epoch_us_ += std::int64_t{1} << 24;
-              count(counts.wraps, counts.first_wrap, i);
-            } else {
-              ++counts.time_high_backwards;
+        const auto set_high = [&](std::uint32_t v) {
+          if (!have_time_ || v != time_high_) {
+            if (have_time_ && v < time_high_) {
+              if (time_high_ - v > kTimeHighRange / 2) {
+                epoch_us_ += std::int64_t{1} << 24;
+                count(counts.wraps, counts.first_wrap, i);
+              } else {
+                ++counts.time_high_backwards;
+              }
             }
+            // A new TIME_HIGH value starts a new 4096 us period: the last TIME_LOW belongs to
+            // the previous one, so the time base is the period's start until a TIME_LOW comes.
+            time_high_ = v;
+            time_low_ = 0;
+            update_time();
+            t = t_ns_;
           }
-          // A new TIME_HIGH value starts a new 4096 us period: the last TIME_LOW belongs to
-          // the previous one, so the time base is the period's start until a TIME_LOW comes.
-          time_high_ = h;
-          time_low_ = 0;
-          update_time();
-          t = t_ns_;
+          have_time_ = true;
+        };
+        if (have_time_ && suspect_) {  // the header comment: glitch or real jump
+          if (follows(time_high_, h, kTimeHighRange, kMaxStep)) {
+            ++counts.time_high_glitches;
+          } else if (follows(suspect_high_, h, kTimeHighRange, kMaxStep)) {
+            set_high(suspect_high_);
+          } else {
+            suspect_high_ = h;  // no sense yet: the newest word is the suspect
+            break;
+          }
+          suspect_ = false;
+        } else if (have_time_ && !behind(time_high_, h, kTimeHighRange) &&
+                   ahead(time_high_, h, kTimeHighRange) > kMaxStep) {
+          suspect_ = true;
+          suspect_high_ = h;
+          ready = vector_ready = false;
+          break;
         }
-        have_time_ = true;
+        set_high(h);
         ready = have_y_;
         vector_ready = ready && have_base_;
         break;

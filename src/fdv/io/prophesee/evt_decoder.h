@@ -19,6 +19,12 @@
 ///    adds one full period (EVT 2.0: 2^34 us, EVT 3.0: 2^24 us) and counts it; a smaller step
 ///    back is taken as stated (the events after it then go back in time, and the reader's
 ///    EventSanitizer drops them until time catches up), and counted in `time_high_backwards`;
+///  - a TIME_HIGH more than kMaxTimeHighJumpUs ahead (a single corrupt word would otherwise move
+///    the time base far ahead, after which every correct word looks like a step back or a wrap:
+///    the rest of the file dropped, or shifted by a wrap) is held as suspect, and the events
+///    under it are not output (counted in `glitch_events`). The next TIME_HIGH decides: if it
+///    follows the time before the suspect, the suspect was a glitch (`time_high_glitches`); if
+///    it follows the suspect, the jump was real and decoding goes on from there;
 ///  - EXT_TRIGGER, OTHERS and CONTINUED words are skipped and counted; words of a reserved type
 ///    are skipped and counted as unknown.
 /// Events are not checked against the sensor size (the reader does that). No allocation; words
@@ -32,6 +38,9 @@
 #include "fdv/core/sensor_data.h"
 
 namespace fdv {
+
+/// A TIME_HIGH further ahead than this is suspect until the next TIME_HIGH confirms it.
+inline constexpr std::int64_t kMaxTimeHighJumpUs = 1'000'000;
 
 static_assert(std::endian::native == std::endian::little,
               "the Prophesee decoders read little-endian words in place");
@@ -49,6 +58,9 @@ struct DecodeCounts {
   std::uint64_t wraps = 0;  ///< time counter wraps (repaired)
   std::size_t first_wrap = kNone;
   std::uint64_t time_high_backwards = 0;  ///< TIME_HIGH smaller than the last, not a wrap
+  std::uint64_t time_high_glitches = 0;   ///< TIME_HIGH far ahead that the next one contradicted
+  std::uint64_t glitch_events = 0;        ///< CD events under a suspect TIME_HIGH (dropped)
+  std::size_t first_glitch_event = kNone;
   std::uint64_t triggers = 0;             ///< EXT_TRIGGER words (skipped)
   std::uint64_t vendor = 0;               ///< OTHERS / CONTINUED words (skipped)
 };
@@ -70,6 +82,8 @@ class Evt2Decoder {
   std::uint32_t time_high_ = 0;  ///< last TIME_HIGH payload (bits 33..6 of the time in us)
   std::int64_t epoch_us_ = 0;    ///< wraps x 2^34 us
   TimeNs high_ns_ = 0;           ///< (epoch + time_high << 6) in ns
+  bool suspect_ = false;         ///< a TIME_HIGH far ahead waits for the next one
+  std::uint32_t suspect_high_ = 0;
 };
 
 class Evt3Decoder {
@@ -94,6 +108,8 @@ class Evt3Decoder {
   std::uint32_t time_low_ = 0;   ///< bits 11..0
   std::int64_t epoch_us_ = 0;    ///< wraps x 2^24 us
   TimeNs t_ns_ = 0;              ///< current time base in ns
+  bool suspect_ = false;         ///< a TIME_HIGH far ahead waits for the next one
+  std::uint32_t suspect_high_ = 0;
   std::uint16_t y_ = 0;
   std::uint16_t base_x_ = 0;
   bool base_polarity_ = false;

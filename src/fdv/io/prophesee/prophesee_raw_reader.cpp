@@ -253,6 +253,10 @@ class RawReader final : public RecordingReader {
           std::string("unknown ") + (sizeof(Word) == 4 ? "EVT 2.0" : "EVT 3.0") + " word type",
           at(c.first_unknown), c.unknown);
     if (c.wraps) report_.repair("time counter wrapped", at(c.first_wrap), c.wraps);
+    if (c.glitch_events)
+      report_.drop("event under a TIME_HIGH far ahead of the stream (held until the next TIME_HIGH)",
+                   at(c.first_glitch_event), c.glitch_events);
+    time_high_glitches_ += c.time_high_glitches;
     triggers_ += c.triggers;
     vendor_ += c.vendor;
     time_high_backwards_ += c.time_high_backwards;
@@ -263,6 +267,9 @@ class RawReader final : public RecordingReader {
     finished_ = true;
     info_.notes.push_back("external trigger words skipped: " + std::to_string(triggers_));
     info_.notes.push_back("vendor words (OTHERS / CONTINUED) skipped: " + std::to_string(vendor_));
+    if (time_high_glitches_)
+      info_.notes.push_back("TIME_HIGH jumped far ahead and the next one came back " +
+                            std::to_string(time_high_glitches_) + " time(s): taken as corrupt words");
     if (time_high_backwards_)
       info_.notes.push_back("TIME_HIGH went backwards " + std::to_string(time_high_backwards_) +
                             " time(s); events until the time recovered were dropped");
@@ -281,7 +288,7 @@ class RawReader final : public RecordingReader {
   std::vector<Word> buffer_;
   std::size_t n_words_ = 0, pos_ = 0;
   std::vector<Event> raw_;
-  std::uint64_t triggers_ = 0, vendor_ = 0, time_high_backwards_ = 0;
+  std::uint64_t triggers_ = 0, vendor_ = 0, time_high_backwards_ = 0, time_high_glitches_ = 0;
   bool finished_ = false;
 };
 
