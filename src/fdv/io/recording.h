@@ -92,8 +92,15 @@ std::unique_ptr<RecordingReader> open_recording(const std::string& path,
 
 /// Drops events that break the stream contract (time going backwards, pixel outside the
 /// sensor) and counts them in `report`. Readers run every decoded batch through it.
+/// An event more than kMaxForwardJumpNs after the last one kept is held until the next event
+/// decides (a single corrupt time far ahead would otherwise make every later event "go
+/// backwards"): if that event follows the last kept time (not behind it, at most the same span
+/// ahead), the held one was a corrupt time and is dropped (`event time far ahead of the stream`);
+/// if it follows the held one, the jump was real and both are kept. An event still held when the
+/// stream ends is not output.
 class EventSanitizer {
  public:
+  static constexpr TimeNs kMaxForwardJumpNs = 1'000'000'000;
   EventSanitizer(int width, int height) : width_(width), height_(height) {}
   /// Appends the valid events of [first, last) to `out`; `where` locates the batch for the report.
   void append(const Event* first, const Event* last, std::vector<Event>& out, ReadReport& report,
@@ -103,6 +110,7 @@ class EventSanitizer {
  private:
   int width_, height_;
   TimeNs last_t_ = std::numeric_limits<TimeNs>::min();
+  std::optional<Event> held_;
 };
 
 }  // namespace fdv
