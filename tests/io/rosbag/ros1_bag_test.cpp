@@ -520,6 +520,25 @@ TEST_F(Ros1BagTest, DamagedIndexSectionIsAnErrorNamingTheRecord) {
   EXPECT_NE(what.find("rosbag reindex"), std::string::npos) << what;
 }
 
+TEST_F(Ros1BagTest, ImplausibleChunkSizeIsAnErrorNotAnAllocation) {
+  // The first chunk's `size` field (its records' size once decompressed) set to 4 GiB - 16: the
+  // library would allocate that; the reader stops at the chunk record instead.
+  std::string b = file_string(bag_);
+  const auto records = top_records(b);
+  const auto chunk = std::find_if(records.begin(), records.end(), [](const TopRecord& r) { return r.op == 5; });
+  ASSERT_NE(chunk, records.end());
+  const std::size_t field = b.find("size=", chunk->pos);
+  ASSERT_LT(field, chunk->data);
+  const std::uint32_t huge = 0xFFFFFFF0u;
+  std::memcpy(b.data() + field + 5, &huge, 4);
+  const std::string path = dir_ + "/huge_chunk.bag";
+  write_string(path, b);
+  const std::string what = expect_input_error([&] { open_ros1_bag(path); });
+  EXPECT_NE(what.find("byte " + std::to_string(chunk->pos) + ": chunk record: size 4294967280 is implausible"),
+            std::string::npos)
+      << what;
+}
+
 TEST_F(Ros1BagTest, RandomCorruptionIsAnInputErrorOrAReadableStream) {
   // Bytes changed anywhere, in plain and compressed bags: an InputError naming where, or a read
   // that keeps the stream contract; never another exception or a crash (the sanitizer build

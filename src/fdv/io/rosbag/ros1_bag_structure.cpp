@@ -19,6 +19,11 @@ constexpr std::uint64_t kMagicSize = 13;  // "#ROSBAG V2.0\n"
 /// No record header of a well-formed bag comes near this (they hold a few short fields); a larger
 /// length is damage, and is not allocated.
 constexpr std::uint32_t kMaxHeaderLength = 1u << 20;
+/// Likewise for a connection record's data (its connection header: type, MD5 sum, message
+/// definition) and for a chunk's records once decompressed (rosbag's default chunk is 768 KB): a
+/// damaged length above these is not allocated.
+constexpr std::uint32_t kMaxConnectionDataLength = 16u << 20;
+constexpr std::uint32_t kMaxChunkSize = 512u << 20;
 
 using Fields = std::map<std::string, std::string>;
 
@@ -180,6 +185,9 @@ Ros1BagStructure::Ros1BagStructure(const std::string& path) : path_(path) {
     connections.insert(f.required<std::uint32_t>(r, pos, "conn", "connection record"));
     if (r.fields.find("topic") == r.fields.end())
       f.fail(pos, "connection record: no `topic` field");
+    if (r.data_len > kMaxConnectionDataLength)
+      f.fail(pos, "connection record: data length " + std::to_string(r.data_len) +
+                      " is implausible (> 16 MiB)");
     std::vector<std::uint8_t> data(r.data_len);
     f.read(r.data_pos, data.data(), data.size());
     if (!parse_fields(data.data(), data.size(), connection_header))
@@ -235,6 +243,8 @@ Ros1BagStructure::Ros1BagStructure(const std::string& path) : path_(path) {
       f.fail(c.pos, "chunk record: compression is missing or not none, bz2 or lz4");
     c.compression = compression->second;
     c.size = f.required<std::uint32_t>(r, c.pos, "size", "chunk record");
+    if (c.size > kMaxChunkSize)
+      f.fail(c.pos, "chunk record: size " + std::to_string(c.size) + " is implausible (> 512 MiB)");
     if (c.compression == "none" && c.size != r.data_len)
       f.fail(c.pos, "chunk record: uncompressed, but its size field differs from its data length");
     c.data_pos = r.data_pos;
