@@ -33,6 +33,38 @@ bool follows(std::uint64_t a, std::uint64_t b, std::uint64_t range, std::uint64_
   return !behind(a, b, range) && ahead(a, b, range) <= max_step;
 }
 
+/// The TIME_HIGH values to set, in order, after one TIME_HIGH word.
+struct TimeHighStep {
+  std::uint32_t values[2] = {0, 0};
+  int n = 0;
+};
+
+/// The hold of a TIME_HIGH far ahead (evt_decoder.h), for both encodings: given the current
+/// TIME_HIGH (if any) and the new word h, updates the hold and says which values to set (none
+/// while a word is held: its events are then not output).
+TimeHighStep on_time_high(bool have_time, std::uint32_t current, std::uint32_t h, bool& suspect,
+                          std::uint32_t& suspect_high, std::uint64_t range, std::uint64_t max_step,
+                          DecodeCounts& counts) {
+  TimeHighStep step;
+  if (have_time && suspect) {
+    if (follows(current, h, range, max_step)) {  // the held word was corrupt
+      ++counts.time_high_glitches;
+    } else if (follows(suspect_high, h, range, max_step)) {  // a real jump
+      step.values[step.n++] = suspect_high;
+    } else {
+      suspect_high = h;  // no sense yet: the newest word is the suspect
+      return step;
+    }
+    suspect = false;
+  } else if (have_time && !behind(current, h, range) && ahead(current, h, range) > max_step) {
+    suspect = true;
+    suspect_high = h;
+    return step;
+  }
+  step.values[step.n++] = h;
+  return step;
+}
+
 }  // namespace
 
 std::size_t Evt2Decoder::decode(const Word* words, std::size_t n, Event* out,
@@ -75,26 +107,10 @@ std::size_t Evt2Decoder::decode(const Word* words, std::size_t n, Event* out,
     }
     switch (type) {
       case evt2::kTimeHigh: {  // [27:0] bits 33..6 of the time in us
-        const std::uint32_t h = w & 0x0FFFFFFF;
-        if (have_time && suspect_) {  // the header comment: glitch or real jump
-          if (follows(time_high_, h, kTimeHighRange, kMaxStep)) {
-            ++counts.time_high_glitches;
-          } else if (follows(suspect_high_, h, kTimeHighRange, kMaxStep)) {
-            set_high(suspect_high_);
-          } else {
-            suspect_high_ = h;  // no sense yet: the newest word is the suspect
-            break;
-          }
-          suspect_ = false;
-        } else if (have_time && !behind(time_high_, h, kTimeHighRange) &&
-                   ahead(time_high_, h, kTimeHighRange) > kMaxStep) {
-          suspect_ = true;
-          suspect_high_ = h;
-          emitting = false;
-          break;
-        }
-        set_high(h);
-        emitting = true;
+        const TimeHighStep step = on_time_high(have_time, time_high_, w & 0x0FFFFFFF, suspect_,
+                                               suspect_high_, kTimeHighRange, kMaxStep, counts);
+        for (int j = 0; j < step.n; ++j) set_high(step.values[j]);
+        emitting = have_time && !suspect_;
         break;
       }
       case evt2::kExtTrigger:
@@ -205,25 +221,10 @@ std::size_t Evt3Decoder::decode(const Word* words, std::size_t n, Event* out,
           }
           have_time_ = true;
         };
-        if (have_time_ && suspect_) {  // the header comment: glitch or real jump
-          if (follows(time_high_, h, kTimeHighRange, kMaxStep)) {
-            ++counts.time_high_glitches;
-          } else if (follows(suspect_high_, h, kTimeHighRange, kMaxStep)) {
-            set_high(suspect_high_);
-          } else {
-            suspect_high_ = h;  // no sense yet: the newest word is the suspect
-            break;
-          }
-          suspect_ = false;
-        } else if (have_time_ && !behind(time_high_, h, kTimeHighRange) &&
-                   ahead(time_high_, h, kTimeHighRange) > kMaxStep) {
-          suspect_ = true;
-          suspect_high_ = h;
-          ready = vector_ready = false;
-          break;
-        }
-        set_high(h);
-        ready = have_y_;
+        const TimeHighStep step = on_time_high(have_time_, time_high_, h, suspect_, suspect_high_,
+                                               kTimeHighRange, kMaxStep, counts);
+        for (int j = 0; j < step.n; ++j) set_high(step.values[j]);
+        ready = have_time_ && have_y_ && !suspect_;
         vector_ready = ready && have_base_;
         break;
       }
