@@ -53,6 +53,23 @@ TEST(EventSanitizer, ACorruptTimeFarAheadIsDroppedAndTheStreamGoesOn) {
   EXPECT_EQ(dropped(r, "event timestamp went backwards"), 0u);
 }
 
+TEST(EventSanitizer, TwoCorruptTimesInARowAreBothDropped) {
+  // 10 ms, then 2 years, then 4 years ahead (neither follows the other), then 11 ms: the second
+  // replaces the first as the held event, and 11 ms shows it corrupt too.
+  constexpr TimeNs kYear = TimeNs{365} * 24 * 3600 * 1'000'000'000;
+  EventSanitizer s(10, 10);
+  ReadReport r;
+  const auto out = run(s,
+                       {{{10 * kMs, 1, 1, true},
+                         {2 * kYear, 2, 2, true},
+                         {4 * kYear, 3, 3, true},
+                         {11 * kMs, 4, 4, true}}},
+                       r);
+  EXPECT_EQ(out, (std::vector<Event>{{10 * kMs, 1, 1, true}, {11 * kMs, 4, 4, true}}));
+  EXPECT_EQ(dropped(r, "event time far ahead of the stream"), 2u);
+  EXPECT_EQ(s.last_time(), 11 * kMs);
+}
+
 TEST(EventSanitizer, ARealJumpIsKeptOnceTheNextEventFollowsIt) {
   // A 5 s gap in a recording: the event after it is held, then kept with the one that follows;
   // an event behind the kept time meanwhile is dropped as going backwards.
