@@ -300,6 +300,14 @@ void Perception::process_window(PendingWindow& w) {
         std::find(to_solve.begin(), to_solve.end(), a.track_id) == to_solve.end())
       to_solve.push_back(a.track_id);
   }
+  // Tracks confirmed now missed the depth frames segmented while they were tentative: those since
+  // their first detection are still in recent_depth_ (the frames after processed_until_ are
+  // pending and come after this window, for every confirmed track).
+  if (options_.depth_since_first_detection)
+    for (int id : step.confirmed)
+      if (const Track* track = tracker_.find(id))
+        for (const RegisteredDepth& d : recent_depth_)
+          if (d.t >= track->first_time() && d.t <= processed_until_) segment_depth(d, *track);
   for (int id : to_solve) estimate(id, w.t_end);
   result.timings.total_ms = ms_since(start);
   result.detector = &detector_;
@@ -330,42 +338,48 @@ std::optional<double> Perception::trajectory_mahalanobis2(const TrajectoryEstima
 }
 
 void Perception::process_depth(const RegisteredDepth& depth) {
-  for (const Track& track : tracker_.tracks()) {
-    if (!track.confirmed()) continue;
-    const auto start = Clock::now();
-    const TrackPrediction p = track.predict(depth.t);
-    DepthQuery query;
-    query.centre_px = p.centre_px;
-    query.box_size_px = p.box_size_px;
-    auto it = estimators_.find(track.id());
-    const auto T_W_E = camera_pose(depth.t);
-    // Gate the depth on the trajectory only when that trajectory was itself fitted to depth: an
-    // event-only fit knows the range only through gravity's curvature, and its (linearised)
-    // covariance can be confidently wrong; gating on it locked the true depth out (swing).
-    if (it != estimators_.end() && it->second.fusion.latest().usable &&
-        it->second.fusion.latest().method == EstimateMethod::kFusion && T_W_E) {
-      const TrajectoryEstimate& est = it->second.fusion.latest();
-      const Eigen::Vector3d p_E = T_W_E->inverse() * est.trajectory.position(depth.t);
-      query.expected_depth_m = p_E.z();
-      if (const auto cov = est.position_covariance(depth.t)) {
-        const Eigen::Vector3d axis_W = T_W_E->linear().col(2);
-        query.expected_depth_sigma_m = std::sqrt(std::max(0.0, axis_W.dot(*cov * axis_W)));
-      }
+  for (const Track& track : tracker_.tracks())
+    if (track.confirmed() && segment_depth(depth, track)) estimate(track.id(), depth.t);
+}
+
+bool Perception::segment_depth(const RegisteredDepth& depth, const Track& track) {
+  const auto start = Clock::now();
+  const TrackPrediction p = track.predict(depth.t);
+  DepthQuery query;
+  query.centre_px = p.centre_px;
+  // A square of the box's longer side: the object is a sphere (the paper's model) whose silhouette
+  // is a disc, while the detector's box is often the thin leading crescent of its sweep, whose long
+  // side is the diameter; judged against the crescent, the ball's own footprint failed the depth
+  // segmentation's footprint gate (docs/ESTIMATION.md, "Depth from before the confirmation").
+  if (options_.square_depth_box) query.box_size_px = Eigen::Vector2d::Constant(p.box_size_px.maxCoeff());
+  else query.box_size_px = p.box_size_px;
+  auto it = estimators_.find(track.id());
+  const auto T_W_E = camera_pose(depth.t);
+  // Gate the depth on the trajectory only when that trajectory was itself fitted to depth: an
+  // event-only fit knows the range only through gravity's curvature, and its (linearised)
+  // covariance can be confidently wrong; gating on it locked the true depth out (swing).
+  if (it != estimators_.end() && it->second.fusion.latest().usable &&
+      it->second.fusion.latest().method == EstimateMethod::kFusion && T_W_E) {
+    const TrajectoryEstimate& est = it->second.fusion.latest();
+    const Eigen::Vector3d p_E = T_W_E->inverse() * est.trajectory.position(depth.t);
+    query.expected_depth_m = p_E.z();
+    if (const auto cov = est.position_covariance(depth.t)) {
+      const Eigen::Vector3d axis_W = T_W_E->linear().col(2);
+      query.expected_depth_sigma_m = std::sqrt(std::max(0.0, axis_W.dot(*cov * axis_W)));
     }
-    DepthResult r;
-    r.t = depth.t;
-    r.track_id = track.id();
-    r.segmentation = segment_object_depth(depth_view(depth), calibration_.event_camera, query,
-                                          options_.depth_segmentation);
-    r.ms = ms_since(start);
-    if (callbacks_.on_depth) callbacks_.on_depth(r);
-    if (!r.segmentation.observation || !T_W_E) continue;
-    ++counters_.depth_observations;
-    const DepthObservation& o = *r.segmentation.observation;
-    TrackEstimators& e = estimators_for(track.id());
-    if (e.fusion.add(DepthMeasurement{o.t, o.depth_m, o.sigma_m, *T_W_E}) == AddResult::kAccepted)
-      estimate(track.id(), depth.t);
   }
+  DepthResult r;
+  r.t = depth.t;
+  r.track_id = track.id();
+  r.segmentation = segment_object_depth(depth_view(depth), calibration_.event_camera, query,
+                                        options_.depth_segmentation);
+  r.ms = ms_since(start);
+  if (callbacks_.on_depth) callbacks_.on_depth(r);
+  if (!r.segmentation.observation || !T_W_E) return false;
+  ++counters_.depth_observations;
+  const DepthObservation& o = *r.segmentation.observation;
+  TrackEstimators& e = estimators_for(track.id());
+  return e.fusion.add(DepthMeasurement{o.t, o.depth_m, o.sigma_m, *T_W_E}) == AddResult::kAccepted;
 }
 
 void Perception::estimate(int track_id, TimeNs t) {

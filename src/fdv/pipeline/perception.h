@@ -63,6 +63,14 @@ struct PerceptionOptions {
   /// covariance propagated) even when the image-plane filter's gate rejects it, so that the track
   /// and its 3D history go on instead of a new track starting from nothing (Tracker, ExternalGate).
   bool estimate_aided_association = true;
+  /// When a track is confirmed, the depth frames segmented since its first detection (while it
+  /// was tentative, and so skipped) are segmented for it then, with its filter's prediction at
+  /// each frame's time: the first depth observations of a throw are not lost to the confirmation
+  /// delay (docs/ESTIMATION.md, "Depth from before the confirmation").
+  bool depth_since_first_detection = true;
+  /// The depth segmentation looks for the object in a square of the track's box's longer side
+  /// (a sphere's silhouette) instead of the box itself (see segment_depth).
+  bool square_depth_box = true;
   PredictionOptions prediction;
   /// How long (stream time) a completed window may wait for IMU and odometry to catch up [ns].
   TimeNs max_lateness_ns = 50 * kNsPerMs;
@@ -172,6 +180,9 @@ class Perception {
   bool window_ready(const PendingWindow& w, bool flush) const;
   void process_window(PendingWindow& w);
   void process_depth(const RegisteredDepth& depth);
+  /// The depth observation of one track in one registered frame (and its on_depth report); true
+  /// when the track's fusion estimator accepted it.
+  bool segment_depth(const RegisteredDepth& depth, const Track& track);
   void estimate(int track_id, TimeNs t);
   std::optional<Eigen::Isometry3d> camera_pose(TimeNs t) const;
   std::optional<OdometrySample> vehicle_state(TimeNs t) const;
