@@ -41,6 +41,7 @@ struct Collected {
   std::vector<TimeNs> fusion_t;  // EstimateResult::t of each fusion estimate
   int depth_accepted = 0;
   std::vector<std::pair<int, DepthObservation>> depth;  // accepted observations and their track
+  std::vector<std::pair<int, TimeNs>> depth_segmented;   // every segmentation: track, frame time
 };
 
 PerceptionCallbacks collect(Collected& c) {
@@ -56,6 +57,7 @@ PerceptionCallbacks collect(Collected& c) {
     c.results.back().detector = nullptr;
   };
   cb.on_depth = [&c](const DepthResult& d) {
+    c.depth_segmented.emplace_back(d.track_id, d.t);
     c.depth_accepted += d.segmentation.observation.has_value();
     if (d.segmentation.observation) c.depth.emplace_back(d.track_id, *d.segmentation.observation);
   };
@@ -81,20 +83,25 @@ std::vector<int> ball_detection_tracks(const SimulatedThrow& s, const Collected&
 /// Pushes every stream; `lag_ns` delays IMU and odometry relative to the events (a live system
 /// whose slower sensors arrive late), by handing them over only once the events are that far past
 /// them. Depth frames are handed over in time order with the events.
-Collected run(TimeNs lag_ns, const SimulatedThrow& s = simulated_throw(), const PerceptionOptions& options = {}) {
+/// `depth_order` (optional) gives the order in which the depth frames are handed over, each when
+/// the events are `depth_lag_ns` past the frame at its position in time order.
+Collected run(TimeNs lag_ns, const SimulatedThrow& s = simulated_throw(), const PerceptionOptions& options = {},
+              TimeNs depth_lag_ns = 0, std::vector<std::size_t> depth_order = {}) {
   Collected out;
   Perception p(s.calib, options, collect(out));
+  if (depth_order.empty())
+    for (std::size_t i = 0; i < s.data.depth.size(); ++i) depth_order.push_back(i);
   std::size_t imu = 0, odo = 0, depth = 0;
   auto release_until = [&](TimeNs t, TimeNs t_depth) {
     while (imu < s.data.imu.size() && s.data.imu[imu].t <= t) p.push_imu(s.data.imu[imu++]);
     while (odo < s.data.odometry.size() && s.data.odometry[odo].t <= t) p.push_odometry(s.data.odometry[odo++]);
-    while (depth < s.data.depth.size() && s.data.depth[depth].t <= t_depth) p.push_depth(s.data.depth[depth++]);
+    while (depth < s.data.depth.size() && s.data.depth[depth].t <= t_depth) p.push_depth(s.data.depth[depth_order[depth++]]);
   };
   const auto& ev = s.data.events;
   for (std::size_t i = 0; i < ev.size(); i += 5000) {
     const std::size_t n = std::min<std::size_t>(5000, ev.size() - i);
     // Stream time after this push is the chunk's last event: the lag is measured from there.
-    release_until(ev[i + n - 1].t - lag_ns, ev[i + n - 1].t);
+    release_until(ev[i + n - 1].t - lag_ns, ev[i + n - 1].t - depth_lag_ns);
     p.push_events(std::span(ev).subspan(i, n));
   }
   release_until(std::numeric_limits<TimeNs>::max(), std::numeric_limits<TimeNs>::max());
@@ -219,6 +226,26 @@ TEST(Perception, DepthFramesFromBeforeATracksConfirmationAreUsed) {
   for (const DepthObservation& o : early) {
     EXPECT_GE(o.t, first_detection);
     EXPECT_NEAR(o.depth_m, true_depth(s, o.t), 4 * o.sigma_m) << "frame at " << o.t;
+  }
+}
+
+// Depth frames out of order (each pair swapped), handed over 30 ms ahead of the events or 40 ms
+// behind them: an older frame can then wait in the pending queue behind a newer one although the
+// windows covering it are done; a track confirmed meanwhile must not get it twice (once as an
+// earlier frame at its confirmation, once when the queue reaches it).
+TEST(Perception, NoDepthFrameIsSegmentedTwiceForATrackWhenFramesArriveOutOfOrder) {
+  const SimulatedThrow& s = simulated_throw();
+  for (const TimeNs lag : {-30 * kNsPerMs, 40 * kNsPerMs}) {
+    SCOPED_TRACE(lag);
+    const bool swap = true;
+    std::vector<std::size_t> order;
+    for (std::size_t i = 0; i < s.data.depth.size(); ++i) order.push_back(swap ? (i ^ 1) : i);
+    if (order.back() >= s.data.depth.size()) order.back() = s.data.depth.size() - 1, order[order.size() - 2] = order.size() - 2;
+    const Collected c = run(0, s, PerceptionOptions{}, lag, order);
+    std::set<std::pair<int, TimeNs>> seen;
+    for (const auto& key : c.depth_segmented)
+      EXPECT_TRUE(seen.insert(key).second) << "track " << key.first << " frame " << key.second;
+    EXPECT_GT(c.depth_accepted, 0);
   }
 }
 

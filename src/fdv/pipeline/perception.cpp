@@ -301,13 +301,17 @@ void Perception::process_window(PendingWindow& w) {
       to_solve.push_back(a.track_id);
   }
   // Tracks confirmed now missed the depth frames segmented while they were tentative: those since
-  // their first detection are still in recent_depth_ (the frames after processed_until_ are
-  // pending and come after this window, for every confirmed track).
+  // their first detection are still in recent_depth_. The frames still pending (newer than the
+  // windows done, or stuck behind a newer frame that arrived first) are segmented after this window
+  // for every confirmed track, this one included: not here, or the track would get them twice.
   if (options_.depth_since_first_detection)
     for (int id : step.confirmed)
       if (const Track* track = tracker_.find(id))
-        for (const RegisteredDepth& d : recent_depth_)
-          if (d.t >= track->first_time() && d.t <= processed_until_) segment_depth(d, *track);
+        for (const RegisteredDepth& d : recent_depth_) {
+          const bool pending = std::any_of(pending_depth_.begin(), pending_depth_.end(),
+                                           [&](const RegisteredDepth& p) { return p.t == d.t; });
+          if (d.t >= track->first_time() && !pending) segment_depth(d, *track);
+        }
   for (int id : to_solve) estimate(id, w.t_end);
   result.timings.total_ms = ms_since(start);
   result.detector = &detector_;
