@@ -66,7 +66,7 @@ struct PerceptionOptions {
   /// When a track is confirmed, the depth frames segmented since its first detection (while it
   /// was tentative, and so skipped) are segmented for it then, with its filter's prediction at
   /// each frame's time: the first depth observations of a throw are not lost to the confirmation
-  /// delay (docs/ESTIMATION.md, "Depth from before the confirmation").
+  /// delay (docs/ESTIMATION.md §2, "The pipeline's query").
   bool depth_since_first_detection = true;
   /// The depth segmentation looks for the object in a square of the track's box's longer side
   /// (a sphere's silhouette) instead of the box itself (see segment_depth).
