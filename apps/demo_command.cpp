@@ -81,15 +81,23 @@ void demo(const DemoArgs& args) {
     }
   }
   const auto predictions = read_lines(results + "/predictions.jsonl");
+  const double safety_radius_m = PredictionOptions{}.safety_radius_m;
   if (!predictions.empty()) {
     const auto& p = predictions.back();
-    std::cout << fmt::format("  predicted miss distance {:.2f} m at t = {:.3f} s\n",
-                             p["miss_distance"].get<double>(), p["closest_t"].get<double>());
+    std::cout << fmt::format("  predicted miss distance {:.2f} m at t = {:.3f} s (last prediction, made at t = {:.3f} s)\n",
+                             p["miss_distance"].get<double>(), p["closest_t"].get<double>(), p["t"].get<double>());
     if (p.contains("time_to_contact"))
-      std::cout << fmt::format(
-          "  predicted time to contact ({} m safety radius): {:.3f} s from t = {:.3f} s\n",
-          PredictionOptions{}.safety_radius_m, p["time_to_contact"].get<double>(),
-          p["t"].get<double>());
+      std::cout << fmt::format("  predicted contact with the {} m safety sphere at t = {:.3f} s\n", safety_radius_m,
+                               p["t"].get<double>() + p["time_to_contact"].get<double>());
+    else
+      std::cout << fmt::format("  predicted to pass outside the {} m safety sphere\n", safety_radius_m);
+  }
+  if (!truth.radius_m.empty()) {
+    if (const auto contact = true_contact_time(truth, truth.radius_m.begin()->first, safety_radius_m))
+      std::cout << fmt::format("  true contact with the {} m safety sphere at t = {:.3f} s\n", safety_radius_m,
+                               to_seconds(*contact));
+    else
+      std::cout << fmt::format("  truth: the ball stays outside the {} m safety sphere\n", safety_radius_m);
   }
   for (const auto& a : metrics["ape"])
     std::cout << fmt::format(

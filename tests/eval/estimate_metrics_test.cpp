@@ -45,6 +45,17 @@ TEST(EstimateMetrics, ApeSamplesCoverTheObservedIntervalAtEveryTruthSample) {
                                 ms(900)));  // no truth
 }
 
+TEST(DatasetTruth, ContactIsTheFirstSampleInsideTheSafetySphere) {
+  // Along x at 1 m/s from x = 0.9 m, 0.3 m beside the still vehicle's origin: the distance
+  // √(x² + 0.3²) reaches 0.5 m at x = 0.4 m, i.e. at 500 ms; the closest is 0.3 m at 900 ms.
+  const DatasetTruth truth = test::handmade_truth(
+      0.1, 1000, [](double t) { return std::pair{Eigen::Vector3d(0.9 - t, 0.3, 0), Eigen::Vector3d(-1, 0, 0)}; });
+  EXPECT_EQ(true_contact_time(truth, 1, 0.5), ms(500));
+  EXPECT_EQ(true_contact_time(truth, 1, 0.3), ms(900));
+  EXPECT_FALSE(true_contact_time(truth, 1, 0.29));  // never that close
+  EXPECT_FALSE(true_contact_time(truth, 2, 0.5));   // no such ball
+}
+
 TEST(EstimateMetrics, MatchObjectPicksTheClosestBall) {
   DatasetTruth truth = test::handmade_truth(0.1, 400, thrown);
   for (int t = 0; t <= 400; ++t)

@@ -91,6 +91,15 @@ std::optional<TimeNs> first_in_flight_in_view(const DatasetTruth& truth, int id,
   return std::nullopt;
 }
 
+std::optional<TimeNs> true_contact_time(const DatasetTruth& truth, int id, double radius_m) {
+  if (truth.body.empty()) return std::nullopt;
+  for (const ObjectState& s : truth.objects) {
+    if (s.id != id || s.t < truth.body.front().t || s.t > truth.body.back().t) continue;
+    if ((s.p_W - truth.body_at(s.t).p_W_B).norm() <= radius_m) return s.t;
+  }
+  return std::nullopt;
+}
+
 std::optional<TrueClosestApproach> true_closest_approach(const DatasetTruth& truth, int id) {
   if (truth.body.empty()) return std::nullopt;
   std::optional<TrueClosestApproach> best;

@@ -66,4 +66,9 @@ struct TrueClosestApproach {
 };
 std::optional<TrueClosestApproach> true_closest_approach(const DatasetTruth& truth, int id);
 
+/// First truth sample (inside the vehicle truth's time span) at which ball `id` is within
+/// `radius_m` of the vehicle body origin: the true contact with a safety sphere of that radius
+/// (PredictionOptions::safety_radius_m), nothing when it never comes that close.
+std::optional<TimeNs> true_contact_time(const DatasetTruth& truth, int id, double radius_m);
+
 }  // namespace fdv
