@@ -56,11 +56,21 @@ void demo(const DemoArgs& args) {
   if (!truth.radius_m.empty()) {
     // When the ball was released / came into view (truth), and when it was first estimated in 3D.
     const int ball = truth.radius_m.begin()->first;
-    const BallEstimateTiming timing =
-        ball_estimate_timing(truth, read_detections(results), read_estimates(results), ball);
+    const std::vector<WindowDetections> windows = read_detections(results);
+    const BallEstimateTiming timing = ball_estimate_timing(truth, windows, read_estimates(results), ball);
     if (timing.in_flight_from)
       std::cout << fmt::format("  ball in flight and in view from   t = {:.3f} s\n",
                                to_seconds(*timing.in_flight_from));
+    if (const auto first = first_ball_detection(truth, windows, ball)) {
+      const std::string after =
+          timing.in_flight_from
+              ? fmt::format(" ({:.0f} ms after it was in flight and in view)",
+                            1e3 * to_seconds(first->window_end - *timing.in_flight_from))
+              : std::string();
+      std::cout << fmt::format("  first detected at                t = {:.3f} s{}\n", to_seconds(first->window_end), after);
+    } else {
+      std::cout << "  the ball was never detected\n";
+    }
     if (timing.first) {
       const auto latency = timing.latency_s();
       std::cout << fmt::format(

@@ -25,6 +25,23 @@ WindowDetections window(int t0_ms, std::vector<WindowDetections::Det> dets = {})
   return {ms(t0_ms), ms(t0_ms + 10), std::move(dets)};
 }
 
+TEST(DetectionMetrics, TheFirstBallDetectionSkipsDetectionsOffTheBall) {
+  const DatasetTruth truth = test::straight_flight(kP0, kV);
+  const std::vector<WindowDetections> windows{
+      window(10),                                            // nothing
+      window(20, {{ms(25), Eigen::Vector2d(50, 50), 4}}),    // off the ball
+      window(30, {{ms(33), Eigen::Vector2d(60, 60), 4}, {ms(35), pixel_of(ball_at(35)), 7}}),  // the second is on it
+      window(40, {{ms(45), pixel_of(ball_at(45)), 7}}),
+  };
+  const auto first = first_ball_detection(truth, windows, 1);
+  ASSERT_TRUE(first);
+  EXPECT_EQ(first->window_end, ms(40));
+  EXPECT_EQ(first->detection.t, ms(35));
+  EXPECT_EQ(first->detection.track, 7);
+  EXPECT_FALSE(first_ball_detection(truth, {windows[0], windows[1]}, 1));
+  EXPECT_FALSE(first_ball_detection(truth, windows, 2));  // no such ball
+}
+
 TEST(DetectionMetrics, CountsFoundMissedAndFalseAgainstTheTruthBox) {
   const DatasetTruth truth = test::straight_flight(kP0, kV);
   const Eigen::Vector2d exact = pixel_of(ball_at(15));

@@ -161,4 +161,17 @@ std::vector<int> tracks_following(const DatasetTruth& truth,
   return out;
 }
 
+std::optional<FirstBallDetection> first_ball_detection(const DatasetTruth& truth,
+                                                       const std::vector<WindowDetections>& windows, int id,
+                                                       const DetectionMetricsOptions& options) {
+  if (const std::string why = options.validate(); !why.empty()) throw ConfigError("detection metrics: " + why);
+  for (const WindowDetections& w : windows) {  // in window order
+    if (w.detections.empty()) continue;
+    const std::map<int, GroundTruthBox> boxes = window_boxes(truth, w);
+    for (const auto& d : w.detections)
+      if (matched_ball(boxes, d, options.margin_px) == id) return FirstBallDetection{w.t_end, d};
+  }
+  return std::nullopt;
+}
+
 }  // namespace fdv

@@ -10,6 +10,7 @@
 /// The windows come from a run in memory (run_experiment) or from a results folder
 /// (read_detections in fdv/eval/run_results.h).
 #include <nlohmann/json_fwd.hpp>
+#include <optional>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -88,5 +89,15 @@ DetectionMetrics detection_metrics(const DatasetTruth& truth,
 std::vector<int> tracks_following(const DatasetTruth& truth,
                                   const std::vector<WindowDetections>& windows, int id,
                                   const DetectionMetricsOptions& options = {});
+
+/// The first window holding a detection inside ball `id`'s true box (grown by options.margin_px),
+/// and that detection; nothing when no detection ever lies on the ball.
+struct FirstBallDetection {
+  TimeNs window_end = 0;  ///< when the detection was made (its window's end, stream time)
+  WindowDetections::Det detection;
+};
+std::optional<FirstBallDetection> first_ball_detection(const DatasetTruth& truth,
+                                                       const std::vector<WindowDetections>& windows, int id,
+                                                       const DetectionMetricsOptions& options = {});
 
 }  // namespace fdv
