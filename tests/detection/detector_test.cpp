@@ -81,6 +81,49 @@ TEST_F(DetectorTest, FindsAMovingBlobWithinTwoPixels) {
   }
 }
 
+// A ball crossing the image fast: the segmented pattern is its latest sweep, a crescent across the
+// motion (thin along it). With square_box the reported box is the square of its longer side on the
+// refined centre, which holds the whole disc at the detection's time; without it, the crescent.
+TEST(DetectorBox, SquareBoxHoldsTheWholeFastBallNotJustItsLatestSweep) {
+  Calibration c;
+  c.event_camera = lens();
+  CompensationOptions co;
+  co.method = "none";
+  const auto compensator = make_compensator(c, co);
+  for (const bool square : {true, false}) {
+    DetectorOptions o;
+    o.square_box = square;
+    Detector detector(o, lens());
+    int holds_the_disc = 0;
+    for (unsigned seed = 1; seed <= 4; ++seed) {
+      test::BlobScene s;
+      s.seed = seed;
+      s.radius_px = 14;
+      s.blob_rate_ev_s = 1'200'000;
+      s.start_uv = {200.0 + 30 * seed, 150.0 + 20 * seed};
+      s.velocity_px_s = {seed % 2 ? 1200.0 : 0.0, seed % 2 ? 0.0 : 1200.0};  // 30 px per window
+      const auto ev = test::make_scene(lens(), s);
+      const CompensatedWindow& w =
+          compensator->compensate({.events = ev, .t_start_ns = s.t0, .t_end_ns = s.t0 + s.duration});
+      const DetectionResult r = detector.detect(view_of(w));
+      ASSERT_TRUE(r.detection) << to_string(r.status);
+      const Box2D& b = r.detection->box_undistorted;
+      const Eigen::Vector2d at = s.blob_at(r.detection->t_ns);
+      const double margin = 2.0;  // px: the disc's edge pixels are sparse
+      holds_the_disc += b.x0 <= at.x() - s.radius_px + margin && b.x1 >= at.x() + s.radius_px - margin &&
+                        b.y0 <= at.y() - s.radius_px + margin && b.y1 >= at.y() + s.radius_px - margin;
+      if (square) {
+        EXPECT_NEAR(b.width(), b.height(), 1e-9);
+        EXPECT_LT(b.width(), 3 * 2 * s.radius_px) << "seed " << seed;  // the ball's scale, not the sweep's
+      }
+    }
+    if (square)
+      EXPECT_EQ(holds_the_disc, 4);
+    else
+      EXPECT_LT(holds_the_disc, 4) << "the crescent box was expected to cut the disc";
+  }
+}
+
 // The box and centre on the compensated grid stay where the events are; the camera-at-t fields
 // (centre_raw, centre_normalized, box_raw) go through the view's observed_at at the detection's
 // time: here a made-up ego-motion that moves the image by (800, −500) px/s.

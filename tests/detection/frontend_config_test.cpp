@@ -28,6 +28,7 @@ detector:
   min_peak: 0.3
   refine_box_scale: 0
   refine_recentre_passes: 2
+  square_box: false
   fit_max_iterations: 12
   roi_min_events: 11
   motion_cue: false
@@ -64,6 +65,7 @@ depth_registration: {min_depth_m: 0.2, max_depth_m: 12}
   EXPECT_DOUBLE_EQ(d.min_peak, 0.3);
   EXPECT_DOUBLE_EQ(d.refine_box_scale, 0.0);
   EXPECT_EQ(d.refine_recentre_passes, 2);
+  EXPECT_FALSE(d.square_box);
   EXPECT_EQ(d.fit_max_iterations, 12);
   EXPECT_EQ(d.roi_min_events, 11);
   EXPECT_FALSE(d.motion_cue);

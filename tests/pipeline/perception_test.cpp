@@ -253,15 +253,16 @@ TEST(Perception, NoDepthFrameIsSegmentedTwiceForATrackWhenFramesArriveOutOfOrder
   }
 }
 
-// PerceptionOptions::square_depth_box: the detector's box is often the thin leading crescent of
-// the ball's sweep; the ball's footprint in the depth frame is a disc of the crescent's long side.
-// Judged against the crescent, the footprint gate rejected most of the ball's frames on this
-// 320x240 throw (measured: 2 of 9 frames before the ball leaves the image accepted); against the
-// square, most are accepted, each at the ball's true depth.
-TEST(Perception, TheBallsDepthIsSegmentedInASquareOfItsBoxsLongerSide) {
+// DetectorOptions::square_box, seen from the depth segmentation: the detector's segmented pattern
+// is often the thin leading crescent of the ball's sweep, while the ball's footprint in the depth
+// frame is a disc of the crescent's long side. Judged against the crescent, the footprint gate
+// rejected most of the ball's frames on this 320x240 throw (measured: 2 of 9 frames before the
+// ball leaves the image accepted); against the square box, most are accepted, each at the ball's
+// true depth.
+TEST(Perception, TheSquareDetectionBoxLetsTheDepthSegmentationFindTheBall) {
   const SimulatedThrow& s = simulated_throw();
   PerceptionOptions square, crescent;
-  crescent.square_depth_box = false;
+  crescent.detection.square_box = false;
   const Collected a = run(0, s, square), b = run(0, s, crescent);
   const int track = ball_track(s, a);
   ASSERT_GE(track, 0);

@@ -756,6 +756,10 @@ DetectionResult Detector::detect(const CompensatedEventsView& window, std::span<
     }
     res.timings.refine_ms = ms_since(t);
   }
+  if (o.square_box) {
+    const double half = 0.5 * std::max(box.width(), box.height());
+    box = Box2D{center.x() - half, center.y() - half, center.x() + half, center.y() + half};
+  }
   Detection2D d;
   d.t_ns = window.t_start_ns + from_seconds(t_mean_s);
   d.box_undistorted = box;

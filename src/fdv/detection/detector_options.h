@@ -107,6 +107,10 @@ struct DetectorOptions {
   /// first, while the centroid moves by ≥ 0.25 px: residual background events in a region centred
   /// ahead of the object pull the centroid forwards; 0 = the region stays on the box.
   int refine_recentre_passes = 6;
+  /// Report the box as a square of its longer side on the (refined) centre: the segmented sweep
+  /// is often a thin crescent across the motion, whose longer side is the object's extent across
+  /// the motion; a round object is as long along it (docs/DETECTION.md, "The box").
+  bool square_box = true;
   // Whole-window guards.
   int min_window_events = 30;  ///< fewer compensated events: no detection ("too few events")
   /// More than this fraction of the image above θ means the compensation failed or a burst

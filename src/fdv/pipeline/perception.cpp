@@ -351,12 +351,7 @@ bool Perception::segment_depth(const RegisteredDepth& depth, const Track& track)
   const TrackPrediction p = track.predict(depth.t);
   DepthQuery query;
   query.centre_px = p.centre_px;
-  // A square of the box's longer side: the object is a sphere (the paper's model) whose silhouette
-  // is a disc, while the detector's box is often the thin leading crescent of its sweep, whose long
-  // side is the diameter; judged against the crescent, the ball's own footprint failed the depth
-  // segmentation's footprint gate (docs/ESTIMATION.md §2, "The pipeline's query").
-  if (options_.square_depth_box) query.box_size_px = Eigen::Vector2d::Constant(p.box_size_px.maxCoeff());
-  else query.box_size_px = p.box_size_px;
+  query.box_size_px = p.box_size_px;
   auto it = estimators_.find(track.id());
   const auto T_W_E = camera_pose(depth.t);
   // Gate the depth on the trajectory only when that trajectory was itself fitted to depth: an

@@ -68,9 +68,6 @@ struct PerceptionOptions {
   /// each frame's time: the first depth observations of a throw are not lost to the confirmation
   /// delay (docs/ESTIMATION.md §2, "The pipeline's query").
   bool depth_since_first_detection = true;
-  /// The depth segmentation looks for the object in a square of the track's box's longer side
-  /// (a sphere's silhouette) instead of the box itself (see segment_depth).
-  bool square_depth_box = true;
   PredictionOptions prediction;
   /// How long (stream time) a completed window may wait for IMU and odometry to catch up [ns].
   TimeNs max_lateness_ns = 50 * kNsPerMs;

@@ -89,6 +89,7 @@ DetectorOptions load_detector_options(const YAML::Node& node, const std::string&
   integer("min_window_events", o.min_window_events);
   num("refine_box_scale", o.refine_box_scale);
   integer("refine_recentre_passes", o.refine_recentre_passes);
+  s.on("square_box", [&](const YAML::Node& n, const std::string& k) { o.square_box = s.boolean(n, k); });
   num("max_segmented_fraction", o.max_segmented_fraction);
   s.on("motion_cue", [&](const YAML::Node& n, const std::string& k) { o.motion_cue = s.boolean(n, k); });
   integer("motion_cue_density_px", o.motion_cue_density_px);
