@@ -41,6 +41,7 @@ struct Collected {
   std::vector<TimeNs> fusion_t;  // EstimateResult::t of each fusion estimate
   std::vector<std::pair<int, DepthObservation>> depth;  // accepted observations and their track
   std::vector<std::pair<int, TimeNs>> depth_segmented;   // every segmentation: track, frame time
+  std::vector<std::string> warnings;
 };
 
 PerceptionCallbacks collect(Collected& c) {
@@ -64,6 +65,7 @@ PerceptionCallbacks collect(Collected& c) {
     (e.mode == EstimatorMode::kFusion ? c.fusion_track : c.mono_track).push_back(e.track_id);
     if (e.mode == EstimatorMode::kFusion) c.fusion_t.push_back(e.t);
   };
+  cb.on_warning = [&c](const std::string& w) { c.warnings.push_back(w); };
   return cb;
 }
 
@@ -232,6 +234,63 @@ TEST(Perception, DepthFramesFromBeforeATracksConfirmationAreUsed) {
     EXPECT_GE(o.t, first_detection);
     EXPECT_NEAR(o.depth_m, true_depth(s, o.t), 4 * o.sigma_m) << "frame at " << o.t;
   }
+}
+
+// trajectories.jsonl had rows that were no estimate: a solve at a track's confirmation before it
+// held enough observations (fit "none", zeros), and the monocular estimator re-solved on every depth
+// frame with nothing new. An estimate is emitted only with a fit, and a solve only follows a new
+// observation, so each estimate of a track holds more observations than the one before it.
+TEST(Perception, EachEstimateIsAFitOnObservationsThePreviousOneDidNotHave) {
+  const Collected c = run(0);
+  ASSERT_FALSE(c.fusion.empty());
+  ASSERT_FALSE(c.mono.empty());
+  for (const auto& [list, tracks] : {std::pair{&c.fusion, &c.fusion_track}, {&c.mono, &c.mono_track}}) {
+    std::map<int, int> held;  // track -> observations of its previous estimate
+    for (std::size_t i = 0; i < list->size(); ++i) {
+      const TrajectoryEstimate& e = (*list)[i];
+      EXPECT_NE(e.method, EstimateMethod::kNone);
+      const int n = e.event_observations + e.depth_observations;
+      const auto it = held.find((*tracks)[i]);
+      if (it != held.end()) {
+        EXPECT_GT(n, it->second) << "estimate " << i << " of track " << (*tracks)[i];
+      }
+      held[(*tracks)[i]] = n;
+    }
+  }
+}
+
+// Without odometry the camera's poses are unknown: no 3D estimate, and a warning that says how to
+// declare a static vehicle; declared static, estimates are made (wrong here: the vehicle moves).
+TEST(Perception, NoOdometryMeansNo3DEstimateUnlessTheVehicleIsDeclaredStatic) {
+  SimulatedThrow s = simulated_throw();
+  s.data.odometry.clear();
+  PerceptionOptions rotation_only;
+  rotation_only.compensation.method = "rotation";  // translation needs the velocity
+  const Collected none = run(0, s, rotation_only);
+  EXPECT_TRUE(none.fusion.empty());
+  EXPECT_TRUE(none.mono.empty());
+  ASSERT_EQ(none.warnings.size(), 1u);
+  EXPECT_NE(none.warnings[0].find("no odometry"), std::string::npos);
+  EXPECT_NE(none.warnings[0].find("assume_static_vehicle"), std::string::npos);
+  PerceptionOptions declared = rotation_only;
+  declared.assume_static_vehicle = true;
+  const Collected fixed = run(0, s, declared);
+  EXPECT_FALSE(fixed.fusion.empty());
+  for (const std::string& w : fixed.warnings) EXPECT_EQ(w.find("no odometry"), std::string::npos) << w;
+}
+
+// Without depth frames the fusion estimator fits the events alone, and the pipeline says so once.
+TEST(Perception, NoDepthGivesEventOnlyEstimatesAndOneWarning) {
+  SimulatedThrow s = simulated_throw();
+  s.data.depth.clear();
+  PerceptionOptions rotation_only;
+  rotation_only.compensation.method = "rotation";
+  const Collected c = run(0, s, rotation_only);
+  ASSERT_FALSE(c.fusion.empty());
+  for (const TrajectoryEstimate& e : c.fusion) EXPECT_EQ(e.method, EstimateMethod::kEventOnly);
+  EXPECT_EQ(std::count_if(c.warnings.begin(), c.warnings.end(),
+                          [](const std::string& w) { return w.find("no depth frames") != std::string::npos; }),
+            1);
 }
 
 // Depth frames out of order (each pair swapped), handed over 30 ms ahead of the events or 40 ms

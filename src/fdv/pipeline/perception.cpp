@@ -283,8 +283,9 @@ void Perception::process_window(PendingWindow& w) {
     const auto T_W_E = camera_pose(d.t);
     if (!T_W_E) {
       warn_once("no pose", odometry_.empty()
-                               ? "no odometry: 3D estimation skipped (set assume_static_vehicle if the "
-                                 "vehicle does not move)"
+                               ? "no odometry: the camera's poses are unknown, so no 3D estimation (if the "
+                                 "vehicle did not move, say so: PerceptionOptions::assume_static_vehicle, "
+                                 "fdv run --assume-static)"
                                : "odometry does not cover a detection's time: its 3D observation skipped");
       continue;
     }
@@ -293,8 +294,8 @@ void Perception::process_window(PendingWindow& w) {
     obs.xn = d.centre_normalized;
     obs.T_W_E = *T_W_E;
     TrackEstimators& e = estimators_for(a.track_id);
-    e.fusion.add(obs);
-    if (e.mono) e.mono->add(obs);
+    e.fusion_new |= e.fusion.add(obs) == AddResult::kAccepted;
+    if (e.mono) e.mono_new |= e.mono->add(obs) == AddResult::kAccepted;
     const Track* track = tracker_.find(a.track_id);
     if (track && track->confirmed() &&
         std::find(to_solve.begin(), to_solve.end(), a.track_id) == to_solve.end())
@@ -378,21 +379,31 @@ bool Perception::segment_depth(const RegisteredDepth& depth, const Track& track)
   ++counters_.depth_observations;
   const DepthObservation& o = *r.segmentation.observation;
   TrackEstimators& e = estimators_for(track.id());
-  return e.fusion.add(DepthMeasurement{o.t, o.depth_m, o.sigma_m, *T_W_E}) == AddResult::kAccepted;
+  const bool accepted = e.fusion.add(DepthMeasurement{o.t, o.depth_m, o.sigma_m, *T_W_E}) == AddResult::kAccepted;
+  e.fusion_new |= accepted;
+  return accepted;
 }
 
 void Perception::estimate(int track_id, TimeNs t) {
   TrackEstimators& e = estimators_for(track_id);
-  auto solve_and_emit = [&](TrajectoryEstimator& estimator, EstimatorMode mode) {
+  // Solved only with a new observation; emitted only with a fit (not while it waits for the
+  // minimum number of observations).
+  auto solve_and_emit = [&](TrajectoryEstimator& estimator, EstimatorMode mode, bool& is_new) -> const TrajectoryEstimate* {
+    if (!is_new) return nullptr;
+    is_new = false;
     const auto start = Clock::now();
     const TrajectoryEstimate& est = estimator.solve();
+    if (est.method == EstimateMethod::kNone) return nullptr;
     ++counters_.estimates;
     if (callbacks_.on_estimate) callbacks_.on_estimate({t, track_id, mode, &est, ms_since(start)});
     return &est;
   };
-  const TrajectoryEstimate* fused = solve_and_emit(e.fusion, EstimatorMode::kFusion);
-  if (e.mono) solve_and_emit(*e.mono, EstimatorMode::kMonocular);
-  if (!fused->usable || !callbacks_.on_prediction) return;
+  const TrajectoryEstimate* fused = solve_and_emit(e.fusion, EstimatorMode::kFusion, e.fusion_new);
+  if (e.mono) solve_and_emit(*e.mono, EstimatorMode::kMonocular, e.mono_new);
+  if (fused && fused->method == EstimateMethod::kEventOnly && counters_.depth_frames == 0)
+    warn_once("no depth", "no depth frames: 3D estimates are event-only, their range observable only through "
+                          "gravity (docs/ESTIMATION.md)");
+  if (!fused || !fused->usable || !callbacks_.on_prediction) return;
   if (const auto vehicle = vehicle_state(t))
     callbacks_.on_prediction({t, track_id, predict_collision(fused->trajectory, *vehicle, options_.prediction)});
 }

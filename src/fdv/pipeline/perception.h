@@ -169,6 +169,9 @@ class Perception {
   struct TrackEstimators {
     TrajectoryEstimator fusion;
     std::optional<TrajectoryEstimator> mono;
+    // An observation was accepted since the last solve: only then is the estimator solved again
+    // (the same observations give the same estimate).
+    bool fusion_new = false, mono_new = false;
   };
 
   void enqueue(const EventWindow& w);
