@@ -129,6 +129,7 @@ class Outputs {
     ++windows_;
     windows_skipped_ += w.skipped_before;
     events_ += w.events;
+    events_read_ += w.events + w.decimated;
     ++methods_used_[std::string(to_string(w.compensation.used))];
     const CompensationReport& r = w.compensation;
     dropped_["decimated (overload policy)"] += w.decimated + r.dropped_burst;
@@ -149,8 +150,9 @@ class Outputs {
     timing_["segmentation"].push_back(t.detection.segmentation_ms);
     timing_["preprocess"].push_back(t.detection.preprocess_ms);
     timing_["gaussian_fit"].push_back(t.detection.fit_ms);
-    timing_["region_retrieval"].push_back(t.detection.retrieval_ms);
-    timing_["count_cue"].push_back(t.detection.count_cue_ms);
+    // Stages that run only in some windows: timed where they ran ("count" says in how many).
+    if (t.detection.retrieval_ms > 0) timing_["region_retrieval"].push_back(t.detection.retrieval_ms);
+    if (t.detection.count_cue_ms > 0) timing_["count_cue"].push_back(t.detection.count_cue_ms);
     timing_["detection_total"].push_back(t.detection.total_ms);
     timing_["tracking"].push_back(t.tracking_ms);
     timing_["window_total"].push_back(t.total_ms);
@@ -246,7 +248,7 @@ class Outputs {
     }
     std::uint64_t dropped_total = 0;
     for (const auto& [_, n] : dropped_) dropped_total += n;
-    return {{"counts", {{"events", events_}, {"windows", windows_}, {"windows_skipped_in_gaps", windows_skipped_},
+    return {{"counts", {{"events_read", events_read_}, {"events", events_}, {"windows", windows_}, {"windows_skipped_in_gaps", windows_skipped_},
                         {"detections", detections_count_},
                         {"events_dropped", dropped_total}, {"events_dropped_by_reason", dropped_},
                         {"windows_by_status", statuses_}, {"windows_by_method", methods_used_},
@@ -254,11 +256,23 @@ class Outputs {
             {"timing_ms", timing}};
   }
 
+  /// What the run counted without saying it while running (fallbacks, overload decimation): a line each.
+  std::vector<std::string> fallback_warnings() const {
+    std::vector<std::string> lines;
+    for (const auto& [flag, n] : flags_)
+      if (n > 0)
+        lines.push_back(fmt::format("{} of {} windows: {} (compensation fell back, see windows_with_fallback_flag)",
+                                    n, windows_, flag));
+    if (const auto it = dropped_.find("decimated (overload policy)"); it != dropped_.end() && it->second > 0)
+      lines.push_back(fmt::format("{} of {} events decimated by the overload policy", it->second, events_read_));
+    return lines;
+  }
+
  private:
   fs::path dir_;
   bool visualize_;
   std::ofstream detections_, depth_, trajectories_, predictions_;
-  std::uint64_t windows_ = 0, windows_skipped_ = 0, events_ = 0, detections_count_ = 0;
+  std::uint64_t windows_ = 0, windows_skipped_ = 0, events_ = 0, events_read_ = 0, detections_count_ = 0;
   std::map<std::string, std::uint64_t> dropped_, flags_, statuses_, methods_used_;
   std::map<std::string, std::vector<double>> timing_;
   std::map<int, TrajectoryEstimate> final_fusion_, final_mono_;
@@ -324,13 +338,16 @@ void run_recording(const RunArgs& args) {
   ReadReport reader_report;
   const PerceptionCounters c = replay(std::move(reader), calib, options, callbacks, &reader_report);
   out.write_tum();
+  for (const std::string& w : out.fallback_warnings()) warn(w);
+  for (const auto& [reason, e] : reader_report.dropped())
+    warn(fmt::format("the reader dropped {} record(s): {} (first at {})", e.count, reason, e.first_where));
 
   nlohmann::json summary = out.summary();
   summary["input"] = args.input;
   summary["format"] = info.format;
   summary["resolution"] = {info.width, info.height};
   summary["calibration"] = calib_source;
-  summary["method_requested"] = args.method.empty() ? CompensationOptions{}.method : args.method;
+  summary["method_requested"] = to_string(requested);
   summary["method"] = options.compensation.method;
   summary["threads"] = options.compensation.threads;
   summary["reader_report"] = reader_report.to_json();
