@@ -1,0 +1,270 @@
+// `fdv run` and `fdv eval` as a user runs them: the built binary on a small simulated dataset (with
+// exact ground truth) and on real recordings; the files they write are read back and checked
+// against the names the README and the issues give, and against the simulator's truth.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "test_support.h"
+
+namespace fdv {
+namespace {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+struct Ran {
+  int exit_code = -1;
+  std::string output;  // stdout and stderr
+};
+
+/// Runs `fdv ARGS`, capturing its output.
+Ran fdv(const std::string& args) {
+  const fs::path log = fs::path(FDV_TEST_TMP_DIR) / "cli_test_last_output.txt";
+  fs::create_directories(log.parent_path());
+  const int status = std::system((std::string(FDV_BINARY) + " " + args + " > " + log.string() + " 2>&1").c_str());
+  Ran r;
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::ifstream f(log);
+  std::stringstream s;
+  s << f.rdbuf();
+  r.output = s.str();
+  return r;
+}
+
+json read_json(const fs::path& p) {
+  std::ifstream f(p);
+  EXPECT_TRUE(f.good()) << p;
+  return json::parse(f);
+}
+
+std::vector<json> read_lines(const fs::path& p) {
+  std::ifstream f(p);
+  EXPECT_TRUE(f.good()) << p;
+  std::vector<json> out;
+  for (std::string line; std::getline(f, line);) out.push_back(json::parse(line));
+  return out;
+}
+
+bool has_warning(const json& summary, const std::string& part) {
+  for (const auto& w : summary.at("warnings"))
+    if (w.get<std::string>().find(part) != std::string::npos) return true;
+  return false;
+}
+
+/// A copy of the dataset without some of its files (a stream the user's recording lacks).
+fs::path dataset_without(const fs::path& dataset, const std::vector<std::string>& files, const std::string& name) {
+  const fs::path copy = test::scratch_dir("cli_" + name);
+  fs::copy(dataset, copy, fs::copy_options::recursive | fs::copy_options::overwrite_existing);
+  for (const auto& f : files) fs::remove_all(copy / f);
+  return copy;
+}
+
+class Cli : public ::testing::Test {
+ protected:
+  // fast_forward seed 3 at 320x240: a ball thrown across a vehicle flying at 2 m/s, 1 s, ~1.3 s to simulate.
+  static void SetUpTestSuite() {
+    dataset_ = test::scratch_dir("cli_dataset");
+    const Ran r = fdv("simulate --scenario fast_forward --seed 3 --resolution 320x240 --threads 2 --out " + dataset_.string());
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+  }
+  static fs::path dataset_;
+};
+fs::path Cli::dataset_;
+
+TEST_F(Cli, RunWritesEveryOutputWithItsDocumentedFieldsAndEvalScoresItAgainstTheTruth) {
+  const fs::path out = test::scratch_dir("cli_run");
+  const Ran r = fdv("run " + dataset_.string() + " --visualize --out " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+
+  const json summary = read_json(out / "summary.json");
+  EXPECT_EQ(summary.at("method_requested"), "rotation_translation");
+  EXPECT_EQ(summary.at("method"), "rotation_translation");
+  const json& counts = summary.at("counts");
+  const auto windows = counts.at("windows").get<std::uint64_t>();
+  EXPECT_EQ(windows, 40u);  // 1 s in 25 ms windows
+  EXPECT_EQ(counts.at("events_read").get<std::uint64_t>(), counts.at("events").get<std::uint64_t>());  // no overload
+  for (const char* stage : {"compensation", "time_images", "detection_total", "window_total"}) {
+    const json& t = summary.at("timing_ms").at(stage);
+    EXPECT_EQ(t.at("count").get<std::uint64_t>(), windows) << stage;
+    EXPECT_LE(t.at("min").get<double>(), t.at("median").get<double>()) << stage;
+    EXPECT_LE(t.at("median").get<double>(), t.at("p99").get<double>()) << stage;
+    EXPECT_LE(t.at("p99").get<double>(), t.at("max").get<double>()) << stage;
+  }
+  EXPECT_TRUE(summary.at("warnings").empty()) << summary.at("warnings");
+
+  // detections.jsonl: one object per window, the fields issue #4 names, in the input's time base.
+  const std::vector<json> lines = read_lines(out / "detections.jsonl");
+  ASSERT_EQ(lines.size(), windows);
+  int detections = 0;
+  for (const json& w : lines) {
+    const double t0 = w.at("t_start"), t1 = w.at("t_end");
+    EXPECT_NEAR(t1 - t0, 0.025, 1e-9);
+    EXPECT_GE(w.at("events").get<int>(), 0);
+    EXPECT_EQ(w.at("method"), "rotation_translation");
+    for (const json& d : w.at("detections")) {
+      ++detections;
+      ASSERT_EQ(d.at("box").size(), 4u);
+      ASSERT_EQ(d.at("center").size(), 2u);
+      const double x = d.at("center")[0], y = d.at("center")[1];
+      EXPECT_TRUE(x >= 0 && x < 320 && y >= 0 && y < 240) << d;
+      EXPECT_TRUE(d.at("t").get<double>() >= t0 && d.at("t").get<double>() <= t1) << d;
+      EXPECT_GT(d.at("events").get<int>(), 0);
+      EXPECT_TRUE(d.at("score").get<double>() > 0 && d.at("score").get<double>() <= 1) << d;
+    }
+  }
+  EXPECT_EQ(detections, counts.at("detections").get<int>());
+  // --visualize: a PNG per window.
+  int pngs = 0;
+  for (const auto& f : fs::directory_iterator(out / "windows")) pngs += f.path().extension() == ".png";
+  EXPECT_EQ(pngs, static_cast<int>(windows));
+
+  // trajectories.jsonl: every row an estimate (issue #5's fields), fusion among them.
+  int fusion = 0;
+  for (const json& e : read_lines(out / "trajectories.jsonl")) {
+    EXPECT_TRUE(e.at("method") == "fusion" || e.at("method") == "mono") << e;
+    EXPECT_NE(e.at("fit"), "none") << e;
+    EXPECT_EQ(e.at("p0").size(), 3u);
+    EXPECT_EQ(e.at("v0").size(), 3u);
+    EXPECT_GT(e.at("event_observations").get<int>(), 0);
+    EXPECT_TRUE(e.contains("t") && e.contains("track") && e.contains("t0") && e.contains("depth_observations"));
+    if (e.contains("covariance")) {
+      EXPECT_EQ(e.at("covariance").size(), 36u);
+    }
+    fusion += e.at("method") == "fusion";
+  }
+  EXPECT_GT(fusion, 0);
+  for (const json& p : read_lines(out / "predictions.jsonl")) {
+    EXPECT_GE(p.at("miss_distance").get<double>(), 0);
+    EXPECT_EQ(p.at("passage_B").size(), 3u);
+  }
+  EXPECT_FALSE(read_lines(out / "depth.jsonl").empty());
+  // TUM: `t x y z qx qy qz qw`, time increasing.
+  std::ifstream tum(out / "track_1_fusion.tum");
+  ASSERT_TRUE(tum.good());
+  double t_prev = -1;
+  int rows = 0;
+  for (std::string line; std::getline(tum, line); ++rows) {
+    std::istringstream s(line);
+    std::vector<double> v;
+    for (double x; s >> x;) v.push_back(x);
+    ASSERT_EQ(v.size(), 8u) << line;
+    EXPECT_GT(v[0], t_prev);
+    t_prev = v[0];
+    EXPECT_EQ(v[7], 1.0);
+  }
+  EXPECT_GT(rows, 10);
+
+  // fdv eval against the simulator's truth: the ball found, its trajectory within 0.3 m.
+  const Ran e = fdv("eval " + out.string() + " --truth " + dataset_.string());
+  ASSERT_EQ(e.exit_code, 0) << e.output;
+  const json metrics = read_json(out / "metrics.json");
+  EXPECT_GE(metrics.at("detection").at("recall").get<double>(), 0.8) << metrics.at("detection");
+  bool fusion_ape = false;
+  for (const json& a : metrics.at("ape"))
+    if (a.at("method") == "fusion") {
+      fusion_ape = true;
+      EXPECT_LT(a.at("rmse").get<double>(), 0.3) << a;
+    }
+  EXPECT_TRUE(fusion_ape);
+  EXPECT_FALSE(metrics.at("prediction_error").empty());
+}
+
+TEST_F(Cli, TheRequestedMethodIsReportedWhetherItComesFromTheConfigFileOrTheCommandLine) {
+  const fs::path out = test::scratch_dir("cli_method");
+  std::ofstream(out / "config.yaml") << "compensation: {method: none}\n";
+  Ran r = fdv("run " + dataset_.string() + " --config " + (out / "config.yaml").string() + " --out " + (out / "a").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  json s = read_json(out / "a" / "summary.json");
+  EXPECT_EQ(s.at("method_requested"), "none");
+  EXPECT_EQ(s.at("method"), "none");
+  r = fdv("run " + dataset_.string() + " --config " + (out / "config.yaml").string() + " --method rotation --out " +
+          (out / "b").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  s = read_json(out / "b" / "summary.json");
+  EXPECT_EQ(s.at("method_requested"), "rotation");
+  EXPECT_EQ(s.at("method"), "rotation");
+}
+
+TEST_F(Cli, MissingStreamsFallBackAndSaySo) {
+  // No IMU: no compensation is possible ("none"), said.
+  fs::path in = dataset_without(dataset_, {"imu.csv"}, "no_imu");
+  fs::path out = test::scratch_dir("cli_no_imu_out");
+  Ran r = fdv("run " + in.string() + " --out " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  json s = read_json(out / "summary.json");
+  EXPECT_EQ(s.at("method"), "none");
+  EXPECT_TRUE(has_warning(s, "no IMU")) << s.at("warnings");
+  EXPECT_NE(r.output.find("no IMU"), std::string::npos);
+
+  // No odometry: detection goes on, no 3D estimate, and the user is told how to declare a static vehicle.
+  in = dataset_without(dataset_, {"odometry.csv"}, "no_odometry");
+  out = test::scratch_dir("cli_no_odometry_out");
+  r = fdv("run " + in.string() + " --out " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  s = read_json(out / "summary.json");
+  EXPECT_EQ(s.at("method"), "rotation");
+  EXPECT_GT(s.at("counts").at("detections").get<int>(), 0);
+  EXPECT_EQ(s.at("counts").at("estimates").get<int>(), 0);
+  EXPECT_TRUE(has_warning(s, "no odometry")) << s.at("warnings");
+  EXPECT_TRUE(has_warning(s, "--assume-static")) << s.at("warnings");
+
+  // No depth: event-only estimates, said.
+  in = dataset_without(dataset_, {"depth.csv", "depth"}, "no_depth");
+  out = test::scratch_dir("cli_no_depth_out");
+  r = fdv("run " + in.string() + " --out " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  s = read_json(out / "summary.json");
+  EXPECT_TRUE(has_warning(s, "no depth frames: 3D estimates are event-only")) << s.at("warnings");
+  for (const json& e : read_lines(out / "trajectories.jsonl")) EXPECT_EQ(e.at("fit"), "event-only") << e;
+}
+
+TEST_F(Cli, SamplesTheReaderDropsAreWarnedAbout) {
+  // Two odometry rows swapped: the later one goes back in time and is dropped by the reader.
+  const fs::path in = dataset_without(dataset_, {}, "odometry_swapped");
+  std::vector<std::string> rows;
+  {
+    std::ifstream f(in / "odometry.csv");
+    for (std::string line; std::getline(f, line);) rows.push_back(line);
+  }
+  ASSERT_GT(rows.size(), 20u);
+  std::swap(rows[10], rows[11]);
+  {
+    std::ofstream f(in / "odometry.csv");
+    for (const auto& row : rows) f << row << "\n";
+  }
+  const fs::path out = test::scratch_dir("cli_odometry_swapped_out");
+  const Ran r = fdv("run " + in.string() + " --out " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const json s = read_json(out / "summary.json");
+  EXPECT_TRUE(has_warning(s, "the reader dropped 1 record(s): odometry")) << s.at("warnings");
+}
+
+TEST(CliRealRecording, ABareRawFileIsDetectedInPixelCoordinatesAndSaysSo) {
+  const std::string path = test::real_data("gen3_sparks_evt2.raw");
+  FDV_REQUIRE_REAL_FILE(path);
+  const fs::path out = test::scratch_dir("cli_raw");
+  const Ran r = fdv("run " + path + " --out " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const json s = read_json(out / "summary.json");
+  EXPECT_EQ(s.at("method"), "none");
+  EXPECT_EQ(s.at("calibration").get<std::string>().rfind("none", 0), 0u) << s.at("calibration");
+  EXPECT_TRUE(has_warning(s, "no calibration")) << s.at("warnings");
+  EXPECT_EQ(s.at("counts").at("events_read").get<std::uint64_t>(), 521'252u);  // shared/data/README.md
+}
+
+TEST(CliBadInput, AMissingInputIsAClearErrorNamingThePath) {
+  const fs::path out = test::scratch_dir("cli_missing");
+  const Ran r = fdv("run " + (out / "no_such_recording.aedat4").string() + " --out " + (out / "o").string());
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("no_such_recording.aedat4"), std::string::npos) << r.output;
+}
+
+}  // namespace
+}  // namespace fdv
