@@ -49,7 +49,8 @@ nlohmann::json evaluate(const std::string& results, const std::string& dataset) 
   metrics["results"] = results;
   metrics["truth"] = dataset;
   metrics["scenario"] = truth.scenario;
-  const DetectionMetrics detection = detection_metrics(truth, read_detections(results));
+  const std::vector<WindowDetections> windows = read_detections(results);
+  const DetectionMetrics detection = detection_metrics(truth, windows);
   metrics["detection"] = detection.to_json();
   {
     std::ofstream csv(results + "/detection_windows.csv");
@@ -79,11 +80,15 @@ nlohmann::json evaluate(const std::string& results, const std::string& dataset) 
                               {"usable", e.usable}});
   }
 
-  // Prediction error at the true closest approach vs time since the track's first detection.
+  // Prediction error at the true closest approach vs time since the track's first detection (the
+  // earliest detection assigned to it; its estimates' earliest observation if none is listed).
   std::map<int, TimeNs> first_detection;
+  for (const WindowDetections& w : windows)
+    for (const WindowDetections::Det& d : w.detections)
+      if (d.track >= 0 && (!first_detection.count(d.track) || d.t < first_detection[d.track]))
+        first_detection[d.track] = d.t;
   for (const EstimateRecord& e : estimates)
-    if (!first_detection.count(e.track) || e.t_first < first_detection[e.track])
-      first_detection[e.track] = e.t_first;
+    if (!first_detection.count(e.track)) first_detection[e.track] = e.t_first;
   metrics["prediction_error"] = nlohmann::json::array();
   for (const EstimateRecord& e : estimates) {
     const int id = match_object(truth, e);
