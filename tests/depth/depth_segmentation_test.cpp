@@ -221,6 +221,46 @@ TEST(DepthSegmentation, RampWithoutObjectIsRejected) {
   EXPECT_NE(r.rejection, DepthRejection::kNone);
 }
 
+// The variance gate: a sphere's segmented depths spread as its visible cap plus the sensor noise,
+// sqrt((0.236 r)² + σ(z)²) ≈ 0.070 m at 4 m; with the default gate (2×) the ball passes, with a
+// gate a third of that expectation it fails, for that reason and no other.
+TEST(DepthSegmentation, SpreadGateComparesTheDepthsSpreadWithASpheresCapPlusNoise) {
+  Scene s;
+  s.spheres = {kBall};
+  const Frame f = render(s);
+  DepthSegmentationOptions o = known_radius(0.1);
+  const DepthSegmentation pass = segment_object_depth(depth_view(f), kCam, query_for(kBall), o);
+  ASSERT_TRUE(pass.observation) << pass.reason;
+  const double expected = std::hypot(0.236 * 0.1, sigma_d435(4.0));
+  EXPECT_NEAR(pass.observation->expected_spread_m, expected, 0.005);
+  EXPECT_GT(pass.observation->spread_m, expected / 3);
+  EXPECT_LT(pass.observation->spread_m, 2 * expected);
+  o.spread_gate = 1.0 / 3;
+  const DepthSegmentation fail = segment_object_depth(depth_view(f), kCam, query_for(kBall), o);
+  EXPECT_FALSE(fail.observation);
+  EXPECT_EQ(fail.rejection, DepthRejection::kSpreadTooLarge) << fail.reason;
+}
+
+// The ROI is the track's box scaled ×2 about its centre (paper §IV-C.2): (2·w)² pixels for a box
+// of side w, here the ball's 27 px silhouette, so that it holds the ball and the wall around it.
+TEST(DepthSegmentation, RoiIsTheBoxScaledTwiceAboutItsCentre) {
+  Scene s;
+  s.spheres = {kBall};
+  s.hole_fraction = 0;
+  const Frame f = render(s);
+  const DepthQuery q = query_for(kBall);
+  const double w = q.box_size_px.x();
+  ASSERT_NEAR(w, 27, 1);
+  const DepthSegmentation twice = segment_object_depth(depth_view(f), kCam, q, {});
+  EXPECT_NEAR(twice.roi_pixels, 4 * w * w, 4 * w + 1);  // ± a row and a column of pixel centres
+  DepthSegmentationOptions once;
+  once.roi_scale = 1.0;
+  EXPECT_NEAR(segment_object_depth(depth_view(f), kCam, q, once).roi_pixels, w * w, 2 * w + 1);
+  ASSERT_TRUE(twice.observation) << twice.reason;
+  EXPECT_NEAR(twice.observation->depth_m, 4.0, 0.03);
+  EXPECT_NEAR(twice.observation->radius_m, 0.1, 0.015);
+}
+
 TEST(DepthSegmentation, InvalidInputIsReportedNotThrown) {
   Scene s;
   const Frame f = render(s);

@@ -275,6 +275,33 @@ TEST(TrajectoryEstimator, DegenerateAxisGeometryIsFlaggedNotGarbage) {
   }
 }
 
+// The initialisation each solve reports (docs/ESTIMATION.md, "Initialisation"): the first solve on
+// a well-posed arc starts from the linear solution (no previous estimate exists); the next ones
+// from the previous estimate or the linear solution, whichever is cheaper; a rank-deficient
+// geometry (events along the optical axis, no depth) has no linear solution and falls back to the
+// prior depth.
+TEST(TrajectoryEstimator, ReportsWhichInitialisationEachSolveStartedFrom) {
+  const Scene s = test::forward_scene();
+  std::mt19937 rng(1);
+  const Observations obs = test::observe(s, rng, 0.0, false);
+  TrajectoryEstimator est(options_for(s, EstimatorMode::kMonocular));
+  std::vector<std::string> used;
+  for (const EventObservation& o : obs.events) {
+    est.add(o);
+    const TrajectoryEstimate& e = est.solve();
+    if (e.method != EstimateMethod::kNone) used.push_back(e.initialisation);
+  }
+  ASSERT_GE(used.size(), 2u);
+  EXPECT_EQ(used.front(), "linear");
+  for (std::size_t i = 1; i < used.size(); ++i) EXPECT_TRUE(used[i] == "previous" || used[i] == "linear") << used[i];
+
+  const Scene a = axis_scene();
+  const Observations axis = test::observe(a, rng, 0.0, false);
+  TrajectoryEstimator mono(options_for(a, EstimatorMode::kMonocular));
+  for (const EventObservation& o : axis.events) mono.add(o);
+  EXPECT_EQ(mono.solve().initialisation, "prior-depth");
+}
+
 /// Hovering vehicle; a ball thrown at it from 9 m (paper §V-D): mostly range rate, little bearing
 /// change. Events every 25 ms, depth at 30 Hz.
 Scene headon_scene(int events, int depths) {
