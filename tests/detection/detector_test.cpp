@@ -693,6 +693,9 @@ TEST_F(DetectorTest, InvalidOptionsAreRejected) {
   // Each bad value alone, and the words the message must name.
   const std::vector<std::pair<const char*, std::function<void(DetectorOptions&)>>> cases = {
       {"δ_C", [](DetectorOptions& x) { x.fit_delta_center_px = 0; }},
+      {"threshold_a_s_per_rad (a)", [](DetectorOptions& x) { x.threshold_a_s_per_rad = -0.01; }},
+      {"threshold_b_s_per_m (b)", [](DetectorOptions& x) { x.threshold_b_s_per_m = -1; }},
+      {"threshold_c (c) must be in [-1, 1], got -5", [](DetectorOptions& x) { x.threshold_c = -5; }},
       {"max_candidates", [](DetectorOptions& x) { x.max_candidates = 0; }},
       {"min_pixel_events", [](DetectorOptions& x) { x.min_pixel_events = 0; }},
       {"min_event_density", [](DetectorOptions& x) { x.min_event_density = -1; }},

@@ -109,7 +109,11 @@ std::string DetectorOptions::validate() const {
                            prior_min_gate_px};
   for (double v : coeffs)
     if (!std::isfinite(v)) return "non-finite detector parameter";
-  if (!odd_positive(mean_filter_px)) why << "mean_filter_px must be odd in [1, 31], got " << mean_filter_px;
+  // θ = mean(N) + a‖ω‖ + b‖v‖ + c on N in [0, 1]: the motion terms raise it, c shifts it within N's range.
+  if (!(threshold_a_s_per_rad >= 0)) why << "threshold_a_s_per_rad (a) must be >= 0, got " << threshold_a_s_per_rad;
+  else if (!(threshold_b_s_per_m >= 0)) why << "threshold_b_s_per_m (b) must be >= 0, got " << threshold_b_s_per_m;
+  else if (!(threshold_c >= -1 && threshold_c <= 1)) why << "threshold_c (c) must be in [-1, 1], got " << threshold_c;
+  else if (!odd_positive(mean_filter_px)) why << "mean_filter_px must be odd in [1, 31], got " << mean_filter_px;
   else if (!odd_positive(opening_px)) why << "opening_px must be odd in [1, 31], got " << opening_px;
   else if (fit_max_iterations < 1) why << "fit_max_iterations (K) must be positive, got " << fit_max_iterations;
   else if (!(fit_delta_center_px > 0)) why << "fit_delta_center_px (δ_C) must be positive, got " << fit_delta_center_px;
