@@ -81,7 +81,7 @@ void demo(const DemoArgs& args) {
       std::cout << "  no usable 3D estimate of the ball\n";
     }
     if (timing.closest) {
-      std::cout << fmt::format("  true closest approach {:.2f} m at t = {:.3f} s\n",
+      std::cout << fmt::format("  true closest approach {:.3f} m at t = {:.3f} s\n",
                                timing.closest->distance_m, to_seconds(timing.closest->t));
       if (timing.first_error_m && timing.final_error_m)
         std::cout << fmt::format(
@@ -94,7 +94,7 @@ void demo(const DemoArgs& args) {
   const double safety_radius_m = PredictionOptions{}.safety_radius_m;
   if (!predictions.empty()) {
     const auto& p = predictions.back();
-    std::cout << fmt::format("  predicted miss distance {:.2f} m at t = {:.3f} s (last prediction, made at t = {:.3f} s)\n",
+    std::cout << fmt::format("  predicted miss distance {:.3f} m at t = {:.3f} s (last prediction, made at t = {:.3f} s)\n",
                              p["miss_distance"].get<double>(), p["closest_t"].get<double>(), p["t"].get<double>());
     if (p.contains("time_to_contact"))
       std::cout << fmt::format("  predicted contact with the {} m safety sphere at t = {:.3f} s\n", safety_radius_m,
