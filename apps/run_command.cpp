@@ -256,12 +256,13 @@ class Outputs {
             {"timing_ms", timing}};
   }
 
-  /// What the run counted without saying it while running (fallbacks, overload decimation): a line each.
-  std::vector<std::string> fallback_warnings() const {
+  /// What the run counted without saying it while running (fallback flags, overload decimation): a
+  /// line each. With "none" the compensation uses no sensor, and its flags say nothing of the results.
+  std::vector<std::string> after_run_warnings(bool compensation_uses_sensors) const {
     std::vector<std::string> lines;
     for (const auto& [flag, n] : flags_)
-      if (n > 0)
-        lines.push_back(fmt::format("{} of {} windows: {} (compensation fell back, see windows_with_fallback_flag)",
+      if (n > 0 && compensation_uses_sensors)
+        lines.push_back(fmt::format("{} of {} windows flagged '{}' by the compensation (windows_with_fallback_flag)",
                                     n, windows_, flag));
     if (const auto it = dropped_.find("decimated (overload policy)"); it != dropped_.end() && it->second > 0)
       lines.push_back(fmt::format("{} of {} events decimated by the overload policy", it->second, events_read_));
@@ -314,7 +315,13 @@ void run_recording(const RunArgs& args) {
   };
   // The best method the available sensors allow, and say which.
   const auto requested = *parse_compensation_method(options.compensation.method);
-  if (calib_source.rfind("none", 0) == 0 && requested != CompensationMethod::kNone) {
+  const bool pixel_only = calib_source.rfind("none", 0) == 0;
+  if (pixel_only) {
+    // The camera's rays are unknown: no 3D estimate, even for a vehicle declared static.
+    options.estimate_trajectories = false;
+    if (args.assume_static) warn("--assume-static ignored: no calibration, so no 3D estimation");
+  }
+  if (pixel_only && requested != CompensationMethod::kNone) {
     options.compensation.method = "none";
   } else if (!declares(StreamKind::kImu) &&
              (requested == CompensationMethod::kRotation || requested == CompensationMethod::kRotationTranslation)) {
@@ -338,7 +345,7 @@ void run_recording(const RunArgs& args) {
   ReadReport reader_report;
   const PerceptionCounters c = replay(std::move(reader), calib, options, callbacks, &reader_report);
   out.write_tum();
-  for (const std::string& w : out.fallback_warnings()) warn(w);
+  for (const std::string& w : out.after_run_warnings(options.compensation.method != "none")) warn(w);
   for (const auto& [reason, e] : reader_report.dropped())
     warn(fmt::format("the reader dropped {} record(s): {} (first at {})", e.count, reason, e.first_where));
 

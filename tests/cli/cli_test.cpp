@@ -256,7 +256,14 @@ TEST(CliRealRecording, ABareRawFileIsDetectedInPixelCoordinatesAndSaysSo) {
   EXPECT_EQ(s.at("method"), "none");
   EXPECT_EQ(s.at("calibration").get<std::string>().rfind("none", 0), 0u) << s.at("calibration");
   EXPECT_TRUE(has_warning(s, "no calibration")) << s.at("warnings");
+  EXPECT_FALSE(has_warning(s, "no odometry")) << s.at("warnings");  // said once, by "no calibration"
   EXPECT_EQ(s.at("counts").at("events_read").get<std::uint64_t>(), 521'252u);  // shared/data/README.md
+  // A static camera declared: still no 3D estimate, the focal length is made up.
+  const Ran declared = fdv("run " + path + " --assume-static --out " + (out / "static").string());
+  ASSERT_EQ(declared.exit_code, 0) << declared.output;
+  const json d = read_json(out / "static" / "summary.json");
+  EXPECT_EQ(d.at("counts").at("estimates").get<int>(), 0);
+  EXPECT_TRUE(has_warning(d, "--assume-static ignored")) << d.at("warnings");
 }
 
 TEST(CliBadInput, AMissingInputIsAClearErrorNamingThePath) {

@@ -279,6 +279,23 @@ TEST(Perception, NoOdometryMeansNo3DEstimateUnlessTheVehicleIsDeclaredStatic) {
   for (const std::string& w : fixed.warnings) EXPECT_EQ(w.find("no odometry"), std::string::npos) << w;
 }
 
+// estimate_trajectories = false: the same detections and tracks, and no estimate, prediction or
+// warning about poses (what fdv run does for a recording without a calibration).
+TEST(Perception, DetectionAndTrackingOnlyWhenTrajectoriesAreNotEstimated) {
+  PerceptionOptions off;
+  off.estimate_trajectories = false;
+  off.estimate_aided_association = false;  // the one way estimates feed back into tracking
+  PerceptionOptions on = off;
+  on.estimate_trajectories = true;
+  const Collected a = run(0, simulated_throw(), off), b = run(0, simulated_throw(), on);
+  EXPECT_TRUE(a.fusion.empty());
+  EXPECT_TRUE(a.mono.empty());
+  EXPECT_FALSE(b.fusion.empty());
+  EXPECT_EQ(a.windows, b.windows);  // detections, tracks: identical
+  EXPECT_TRUE(a.warnings.empty());
+  EXPECT_FALSE(a.depth_segmented.empty());  // depth is still segmented for the tracks
+}
+
 // Without depth frames the fusion estimator fits the events alone, and the pipeline says so once.
 TEST(Perception, NoDepthGivesEventOnlyEstimatesAndOneWarning) {
   SimulatedThrow s = simulated_throw();

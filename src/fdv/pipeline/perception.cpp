@@ -279,6 +279,7 @@ void Perception::process_window(PendingWindow& w) {
   for (const TrackAssignment& a : step.assignments) {
     if (a.track_id < 0) continue;
     result.track_id = a.track_id;
+    if (!options_.estimate_trajectories) continue;
     const TrackerDetection& d = inputs[a.detection];
     const auto T_W_E = camera_pose(d.t);
     if (!T_W_E) {
@@ -313,7 +314,8 @@ void Perception::process_window(PendingWindow& w) {
                                            [&](const RegisteredDepth& p) { return p.t == d.t; });
           if (d.t >= track->first_time() && !pending) segment_depth(d, *track);
         }
-  for (int id : to_solve) estimate(id, w.t_end);
+  if (options_.estimate_trajectories)
+    for (int id : to_solve) estimate(id, w.t_end);
   result.timings.total_ms = ms_since(start);
   result.detector = &detector_;
   if (callbacks_.on_window) callbacks_.on_window(result);
@@ -375,7 +377,7 @@ bool Perception::segment_depth(const RegisteredDepth& depth, const Track& track)
                                         options_.depth_segmentation);
   r.ms = ms_since(start);
   if (callbacks_.on_depth) callbacks_.on_depth(r);
-  if (!r.segmentation.observation || !T_W_E) return false;
+  if (!r.segmentation.observation || !T_W_E || !options_.estimate_trajectories) return false;
   ++counters_.depth_observations;
   const DepthObservation& o = *r.segmentation.observation;
   TrackEstimators& e = estimators_for(track.id());

@@ -57,6 +57,9 @@ struct PerceptionOptions {
   /// Fusion estimator options; the monocular baseline runs with the same options in kMonocular.
   /// event_focal_px is filled from the calibration when left 0.
   EstimatorOptions estimation;
+  /// false: detection, tracking and depth segmentation only, no 3D estimates or predictions (e.g.
+  /// a recording without a real calibration, where the camera's rays are unknown).
+  bool estimate_trajectories = true;
   bool monocular_baseline = true;  ///< run Su & Shen's events-only estimator beside the fusion
   /// A confirmed track whose fusion estimate is usable keeps a detection its 3D trajectory predicts
   /// (χ²₂ ≤ tracking.gate_chi2 on the normalised-plane residual, the estimate's position

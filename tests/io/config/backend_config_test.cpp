@@ -107,6 +107,7 @@ FieldComparison compare_top(const PerceptionOptions& a, const PerceptionOptions&
   FDV_COMPARE_FIELD(monocular_baseline);
   FDV_COMPARE_FIELD(estimate_aided_association);
   FDV_COMPARE_FIELD(depth_since_first_detection);
+  FDV_COMPARE_FIELD(estimate_trajectories);
   FDV_COMPARE_FIELD(max_lateness_ns);
   FDV_COMPARE_FIELD(odometry_max_extrapolation_ns);
   FDV_COMPARE_FIELD(compensation.method);
@@ -124,6 +125,7 @@ max_empty_windows: 80
 monocular_baseline: false
 estimate_aided_association: false
 depth_since_first_detection: false
+estimate_trajectories: false
 max_lateness_ms: 30
 odometry_max_extrapolation_ms: 15.5
 compensation: {method: rotation, max_imu_gap_ms: 12}
@@ -256,6 +258,7 @@ TEST(BackendConfig, FullFileRoundTripsEveryKey) {
   top.monocular_baseline = false;
   top.estimate_aided_association = false;
   top.depth_since_first_detection = false;
+  top.estimate_trajectories = false;
   top.max_lateness_ns = 30'000'000;
   top.odometry_max_extrapolation_ns = 15'500'000;
   top.compensation.method = "rotation";
@@ -340,7 +343,7 @@ TEST(BackendConfig, UnknownKeysNameTheKey) {
   EXPECT_EQ(error_of("estimator: {}"),
             "key estimator | unknown section (expected compensation, depth_registration, "
             "depth_segmentation, depth_since_first_detection, detector, estimate_aided_association, "
-            "estimation, max_empty_windows, max_lateness_ms, monocular_baseline, "
+            "estimate_trajectories, estimation, max_empty_windows, max_lateness_ms, monocular_baseline, "
             "odometry_max_extrapolation_ms, prediction, tracking, window_ms)");
   // Front-end sections go through the same function.
   EXPECT_EQ(error_of("detector: {threshold_d: 1}"), "key detector.threshold_d | unknown key");

@@ -160,6 +160,7 @@ PerceptionOptions load_perception_options(const YAML::Node& root, const std::str
   s.bind("monocular_baseline", o.monocular_baseline);
   s.bind("estimate_aided_association", o.estimate_aided_association);
   s.bind("depth_since_first_detection", o.depth_since_first_detection);
+  s.bind("estimate_trajectories", o.estimate_trajectories);
   s.on("max_lateness_ms", [&](const YAML::Node& n, const std::string& k) {
     o.max_lateness_ns = s.millis(n, k);
     if (o.max_lateness_ns < 0) throw InputError(file, "key " + k, "must be >= 0");
