@@ -291,6 +291,7 @@ void run_recording(const RunArgs& args) {
   };
   Calibration calib;
   std::string calib_source;
+  bool pixel_only = false;  // no calibration at all: the camera's rays are unknown
   if (!args.calib.empty()) {
     calib = load_calibration(args.calib);
     calib_source = args.calib;
@@ -302,6 +303,7 @@ void run_recording(const RunArgs& args) {
       throw InputError(args.input, "", "no calibration and no sensor size: pass --calib FILE");
     calib = pixel_only_calibration(info.width, info.height);
     calib_source = "none (pixel coordinates, no compensation)";
+    pixel_only = true;
     warn("no calibration: detecting in pixel coordinates with no motion compensation and no 3D estimation");
   }
   if (info.width > 0 && (calib.event_camera.width != info.width || calib.event_camera.height != info.height))
@@ -315,9 +317,8 @@ void run_recording(const RunArgs& args) {
   };
   // The best method the available sensors allow, and say which.
   const auto requested = *parse_compensation_method(options.compensation.method);
-  const bool pixel_only = calib_source.rfind("none", 0) == 0;
   if (pixel_only) {
-    // The camera's rays are unknown: no 3D estimate, even for a vehicle declared static.
+    // No 3D estimate, even for a vehicle declared static.
     options.estimate_trajectories = false;
     if (args.assume_static) warn("--assume-static ignored: no calibration, so no 3D estimation");
   }

@@ -42,6 +42,7 @@ struct Collected {
   std::vector<std::pair<int, DepthObservation>> depth;  // accepted observations and their track
   std::vector<std::pair<int, TimeNs>> depth_segmented;   // every segmentation: track, frame time
   std::vector<std::string> warnings;
+  PerceptionCounters counters;  // at the end of the run
 };
 
 PerceptionCallbacks collect(Collected& c) {
@@ -106,6 +107,7 @@ Collected run(TimeNs lag_ns, const SimulatedThrow& s = simulated_throw(), const 
   }
   release_until(std::numeric_limits<TimeNs>::max(), std::numeric_limits<TimeNs>::max());
   p.finish();
+  out.counters = p.counters();
   return out;
 }
 
@@ -294,6 +296,8 @@ TEST(Perception, DetectionAndTrackingOnlyWhenTrajectoriesAreNotEstimated) {
   EXPECT_EQ(a.windows, b.windows);  // detections, tracks: identical
   EXPECT_TRUE(a.warnings.empty());
   EXPECT_FALSE(a.depth_segmented.empty());  // depth is still segmented for the tracks
+  EXPECT_EQ(a.counters.depth_observations, a.depth.size());  // and its observations counted
+  EXPECT_EQ(a.counters.estimates, 0u);
 }
 
 // Without depth frames the fusion estimator fits the events alone, and the pipeline says so once.

@@ -377,8 +377,9 @@ bool Perception::segment_depth(const RegisteredDepth& depth, const Track& track)
                                         options_.depth_segmentation);
   r.ms = ms_since(start);
   if (callbacks_.on_depth) callbacks_.on_depth(r);
-  if (!r.segmentation.observation || !T_W_E || !options_.estimate_trajectories) return false;
+  if (!r.segmentation.observation || !T_W_E) return false;
   ++counters_.depth_observations;
+  if (!options_.estimate_trajectories) return false;
   const DepthObservation& o = *r.segmentation.observation;
   TrackEstimators& e = estimators_for(track.id());
   const bool accepted = e.fusion.add(DepthMeasurement{o.t, o.depth_m, o.sigma_m, *T_W_E}) == AddResult::kAccepted;
