@@ -23,6 +23,12 @@ inline std::string real_data(const std::string& name) {
     }                                                                                  \
   } while (0)
 
+/// Path of an input in ../shared/fuzz-findings (a reader's past crash, hang or foreign error);
+/// guard it with FDV_REQUIRE_REAL_FILE like a real recording.
+inline std::string fuzz_finding(const std::string& name) {
+  return std::string(FDV_FUZZ_FINDINGS_DIR) + "/" + name;
+}
+
 /// A fresh, empty scratch folder for one test.
 inline std::string scratch_dir(const std::string& name) {
   const auto dir = std::filesystem::path(FDV_TEST_TMP_DIR) / name;

@@ -6,6 +6,7 @@
 /// matched against the input's own time stamps. Durations use the same type.
 #include <cmath>
 #include <cstdint>
+#include <optional>
 
 namespace fdv {
 
@@ -17,5 +18,23 @@ inline constexpr TimeNs kNsPerS = 1'000'000'000;
 
 constexpr double to_seconds(TimeNs t_ns) { return static_cast<double>(t_ns) * 1e-9; }
 inline TimeNs from_seconds(double t_s) { return static_cast<TimeNs>(std::llround(t_s * 1e9)); }
+
+/// Checked time arithmetic for values read from files: a hostile stamp must give an error or a
+/// counted drop, never a wrapped time (signed overflow is undefined behaviour).
+inline std::optional<TimeNs> checked_add(TimeNs a, TimeNs b) {
+  TimeNs sum;
+  if (__builtin_add_overflow(a, b, &sum)) return std::nullopt;
+  return sum;
+}
+inline std::optional<TimeNs> checked_sub(TimeNs a, TimeNs b) {
+  TimeNs difference;
+  if (__builtin_sub_overflow(a, b, &difference)) return std::nullopt;
+  return difference;
+}
+inline std::optional<TimeNs> checked_mul(TimeNs a, TimeNs b) {
+  TimeNs product;
+  if (__builtin_mul_overflow(a, b, &product)) return std::nullopt;
+  return product;
+}
 
 }  // namespace fdv

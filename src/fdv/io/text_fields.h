@@ -37,4 +37,9 @@ bool parse_double(std::string_view s, double& out);  ///< finite values only
 /// (digits beyond the ninth decimal are rounded).
 bool parse_seconds_to_ns(std::string_view s, TimeNs& out);
 
+/// `text` as valid UTF-8: each byte that is not part of a well-formed UTF-8 sequence becomes the
+/// four characters \xNN. For text a file declares (header values, encoding names) that is
+/// printed or put into JSON, which requires UTF-8.
+std::string escape_non_utf8(std::string_view text);
+
 }  // namespace fdv
