@@ -13,6 +13,8 @@
 #include <fstream>
 #include <functional>
 #include <iterator>
+#include <limits>
+#include <nlohmann/json.hpp>
 #include <random>
 
 #include "fdv/core/error.h"
@@ -554,7 +556,9 @@ TEST_F(Ros2SyntheticTest, UnknownEncodingIsDroppedAndCounted) {
   auto reader = open_ros2_bag(path_, options);
   const SensorChunk all = read_everything(*reader);
   EXPECT_TRUE(all.events.empty());
-  EXPECT_EQ(reader->report().dropped().at("event packet: unsupported encoding 'foo'").count, 1u);
+  const auto& drop = reader->report().dropped().at("event packet: unsupported encoding");
+  EXPECT_EQ(drop.count, 1u);
+  EXPECT_NE(drop.first_where.find("(encoding 'foo')"), std::string::npos) << drop.first_where;
   EXPECT_FALSE(all.imu.empty());  // the rest of the bag is read
 }
 
@@ -723,6 +727,301 @@ TEST(Ros2BagBadInput, DamagedPageMidFileKeepsWhatWasReadAndReportsTheRest) {
   EXPECT_NE(dropped.begin()->second.first_where.find(path + ": after messages.id "),
             std::string::npos)
       << dropped.begin()->second.first_where;
+}
+
+// ------------------------------------------------------------------------------------------
+// Hostile input (docs/FORMATS.md, "Bad input"): the fuzz findings, and bags built here to the
+// same effect.
+
+constexpr const char* kTimeOverflowDrop =
+    "event packet: event time outside the 64-bit nanosecond range";
+constexpr TimeNs kMaxTime = std::numeric_limits<TimeNs>::max();
+
+/// A bag of one EventPacket topic, /dvs/events, with the given packets (stamp, time_base,
+/// encoding, events bytes).
+struct Packet {
+  TimeNs stamp;
+  std::uint64_t time_base;
+  std::string encoding;
+  Bytes events;
+};
+std::string packet_bag(const std::string& name, const std::vector<Packet>& packets) {
+  const std::string path = test::scratch_dir("ros2_hostile") + "/" + name;
+  Db3Writer db(path);
+  const int topic = db.topic("/dvs/events", "event_camera_msgs/msg/EventPacket");
+  TimeNs bag_time = kT0;
+  for (const auto& p : packets)
+    db.message(topic, bag_time++, event_packet(p.stamp, 64, 48, p.time_base, p.encoding, p.events));
+  return path;
+}
+
+std::uint64_t dropped(const RecordingReader& reader, const std::string& reason) {
+  const auto it = reader.report().dropped().find(reason);
+  return it == reader.report().dropped().end() ? 0 : it->second.count;
+}
+
+TEST(Ros2BagHostile, LibcaerTimeBeyondInt64IsDroppedAndCounted) {
+  // time_base 1 ms below the int64 maximum: an event 0.5 ms in is kept, one 2 ms in would wrap.
+  // A packet whose time_base itself is above the int64 range loses all its events. A rollover
+  // that leaves the range drops the events after it.
+  Bytes near, above, roll;
+  libcaer_record(near, 1, 1, true, 500);
+  libcaer_record(near, 2, 2, true, 2'000);
+  libcaer_record(above, 3, 3, true, 10);
+  libcaer_record(roll, 4, 4, true, 2'147'483'000);
+  libcaer_record(roll, 5, 5, true, 10);  // rolled over: + 2^31 us
+  const auto base = [](TimeNs below_max) {
+    return static_cast<std::uint64_t>(kMaxTime - below_max);
+  };
+  const std::string path =
+      packet_bag("libcaer.db3", {{kT0, base(1'000'000), "libcaer", near},
+                                 {kT0, std::uint64_t{1} << 63, "libcaer", above},
+                                 {kT0, base(2'147'483'500'000), "libcaer", roll}});
+  auto reader = open_ros2_bag(path);
+  const std::vector<Event> events = read_events(*reader);
+  ASSERT_EQ(events.size(), 2u);
+  EXPECT_EQ(events[0].t, kMaxTime - 500'000);
+  EXPECT_EQ(events[1].t, kMaxTime - 500'000);  // 2'147'483'000 us after the third time_base
+  // The event 2 ms in, the packet above the range, the event after the rollover.
+  EXPECT_EQ(dropped(*reader, kTimeOverflowDrop), 3u);
+}
+
+TEST(Ros2BagHostile, MonoTimeBaseAndClockOffsetBeyondInt64AreDroppedAndCounted) {
+  Bytes two;
+  mono_record(two, 1, 1, true, 0);
+  mono_record(two, 2, 2, true, 1'000);
+  // Packet 1: time_base above the int64 range (2 events). Packet 2: time_base 10 ns below the
+  // int64 maximum, so its second event wraps; the first is near the maximum while the header
+  // stamp is far negative, so no offset joins the clocks. Packet 3: anchors (offset kT0 - 1000).
+  // Packet 4: a time_base that, moved by that offset, leaves the range for its second event.
+  const std::string path = packet_bag(
+      "mono.db3",
+      {{kT0, std::uint64_t{1} << 63, "mono", two},
+       {-2'000'000'000'000'000'000, static_cast<std::uint64_t>(kMaxTime - 10), "mono", two},
+       {kT0, 1'000, "mono", two},
+       {kT0, static_cast<std::uint64_t>(kMaxTime - kT0 + 500), "mono", two}});
+  auto reader = open_ros2_bag(path);
+  const std::vector<Event> events = read_events(*reader);
+  ASSERT_GE(events.size(), 2u);
+  EXPECT_EQ(events[0].t, kT0);
+  EXPECT_EQ(events[1].t, kT0 + 1'000);
+  for (const auto& e : events) EXPECT_GE(e.t, kT0);
+  EXPECT_EQ(dropped(*reader, kTimeOverflowDrop), 2u + 1u + 1u);
+  EXPECT_EQ(dropped(*reader,
+                    "event packet: sensor time too far from the header stamp to share its clock"),
+            1u);
+}
+
+TEST(Ros2BagHostile, FuzzFindingsF4EventTimeOverflow) {
+  // Each file: no wrapped time reaches the stream; the overflow is counted (or the bag is an
+  // InputError naming the file).
+  for (const char* name : {"ros2/f4-libcaer-time-base.db3", "ros2/f4-libcaer-time-overflow-1.db3",
+                           "ros2/f4-libcaer-time-overflow-2.db3", "ros2/f4-mono-offset.db3",
+                           "ros2/f4-mono-time-base.db3"}) {
+    const std::string path = test::fuzz_finding(name);
+    FDV_REQUIRE_REAL_FILE(path);
+    try {
+      auto reader = open_recording(path);
+      const std::vector<Event> events = read_events(*reader);
+      for (std::size_t i = 1; i < events.size(); ++i) ASSERT_GE(events[i].t, events[i - 1].t);
+      const std::uint64_t overflows =
+          dropped(*reader, kTimeOverflowDrop) +
+          dropped(*reader,
+                  "event packet: sensor time too far from the header stamp to share its clock");
+      EXPECT_GT(overflows, 0u) << name;
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.file(), path);
+    }
+  }
+}
+
+TEST(Ros2BagHostile, TopicSpanBeyondInt64GivesANoteNotAWrappedRate) {
+  const std::string path = test::scratch_dir("ros2_hostile") + "/span.db3";
+  {
+    Db3Writer db(path);
+    const int imu = db.topic("/mavros/imu/data", "sensor_msgs/msg/Imu");
+    const Bytes msg = cdr([&](Cdr& c) {
+      header(c, kT0);
+      zeros(c, 4 + 9 + 3 + 9 + 3 + 9);
+    });
+    db.message(imu, std::numeric_limits<TimeNs>::min() + 1, msg);
+    db.message(imu, kMaxTime, msg);
+  }
+  auto reader = open_ros2_bag(path);
+  ASSERT_EQ(reader->info().topics.size(), 1u);
+  EXPECT_EQ(reader->info().topics[0].rate_hz, 0.0);
+  bool noted = false;
+  for (const auto& n : reader->info().notes)
+    noted |= n.find("/mavros/imu/data: message timestamps span more than the 64-bit") !=
+             std::string::npos;
+  EXPECT_TRUE(noted);
+
+  const std::string finding = test::fuzz_finding("ros2/f5-topic-span-overflow.db3");
+  FDV_REQUIRE_REAL_FILE(finding);
+  auto f5 = open_recording(finding);
+  noted = false;
+  for (const auto& n : f5->info().notes)
+    noted |= n.find("/dvs/events: message timestamps span more than") != std::string::npos;
+  EXPECT_TRUE(noted);
+}
+
+/// The InputError of opening `path`, as "file | where | reason".
+std::string folder_error(const std::string& path) {
+  try {
+    open_ros2_bag(path);
+  } catch (const InputError& e) {
+    return e.file() + " | " + e.where() + " | " + e.reason();
+  } catch (const std::exception& e) {
+    return std::string("foreign exception: ") + e.what();
+  }
+  return "no error";
+}
+
+TEST(Ros2BagHostile, MetadataOfTheWrongShapeIsAnInputErrorNamingTheKey) {
+  const std::string finding = test::fuzz_finding("ros2/f9-scalar-metadata-folder");
+  FDV_REQUIRE_REAL_FILE(finding);
+  EXPECT_EQ(folder_error(finding), finding +
+                                       "/metadata.yaml | key rosbag2_bagfile_information | is not "
+                                       "a mapping");
+
+  const std::string dir = test::scratch_dir("ros2_metadata");
+  {
+    Db3Writer db(dir + "/bag_0.db3");
+    db.topic("/imu", "sensor_msgs/msg/Imu");
+  }
+  const std::string meta = dir + "/metadata.yaml";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"just text", " |  | not a YAML mapping (rosbag2 metadata is one)"},
+      {"rosbag2_bagfile_information: [1, 2]",
+       " | key rosbag2_bagfile_information | is not a mapping"},
+      {"rosbag2_bagfile_information: {storage_identifier: [sqlite3]}",
+       " | key storage_identifier | is not a text value"},
+      {"rosbag2_bagfile_information: {relative_file_paths: bag_0.db3}",
+       " | key relative_file_paths | is not a list"},
+      {"rosbag2_bagfile_information: {relative_file_paths: [{a: 1}]}",
+       " | key relative_file_paths[0] | is not a file name"},
+      {"rosbag2_bagfile_information: {relative_file_paths: [[bag_0.db3]]}",
+       " | key relative_file_paths[0] | is not a file name"},
+      {"rosbag2_bagfile_information: {relative_file_paths: [\"\"]}",
+       " | key relative_file_paths[0] | is not a file name"},
+  };
+  for (const auto& [text, expected] : cases) {
+    std::ofstream(meta, std::ios::trunc) << text << "\n";
+    EXPECT_EQ(folder_error(dir), meta + expected) << text;
+  }
+  // Too large to be metadata: refused before yaml-cpp builds its tree.
+  std::ofstream(meta, std::ios::trunc) << "# " << std::string(5 << 20, 'x') << "\n";
+  EXPECT_EQ(folder_error(dir), meta + " |  | is " + std::to_string((5 << 20) + 3) +
+                                   " bytes; a rosbag2 metadata file is at most 4 MiB");
+  // A listed file that is not a regular file (a FIFO would block SQLite's open).
+  fs::create_directories(dir + "/sub.db3");
+  std::ofstream(meta, std::ios::trunc)
+      << "rosbag2_bagfile_information: {relative_file_paths: [sub.db3]}\n";
+  EXPECT_EQ(
+      folder_error(dir),
+      dir + "/sub.db3 |  | bag file listed in metadata.yaml is missing or not a regular file");
+  // Well-formed metadata still reads.
+  std::ofstream(meta, std::ios::trunc)
+      << "rosbag2_bagfile_information: {storage_identifier: sqlite3, relative_file_paths: "
+         "[bag_0.db3]}\n";
+  EXPECT_EQ(folder_error(dir), "no error");
+}
+
+TEST(Ros2BagHostile, TextThatIsNotUtf8IsEscapedInTheSummary) {
+  // An encoding name and a topic name with bytes that are not UTF-8: the summary (topics,
+  // notes, report) must still serialize to JSON, which requires UTF-8.
+  const std::string path = test::scratch_dir("ros2_hostile") + "/utf8.db3";
+  {
+    Db3Writer db(path);
+    const int events = db.topic("/dvs/events", "event_camera_msgs/msg/EventPacket");
+    const int imu = db.topic("/imu\xFE", "sensor_msgs/msg/Imu");
+    db.message(events, kT0,
+               event_packet(kT0, 64, 48, 0, std::string("li\xFF") + "caer", Bytes(8, 1)));
+    db.message(imu, kT0, cdr([&](Cdr& c) {
+                 header(c, kT0);
+                 zeros(c, 4 + 9 + 3 + 9 + 3 + 9);
+               }));
+  }
+  auto reader = open_ros2_bag(path);
+  read_events(*reader);
+  nlohmann::json j;
+  j["notes"] = reader->info().notes;
+  for (const auto& t : reader->info().topics) j["topics"].push_back({t.topic, t.type});
+  j["report"] = reader->report().to_json();
+  std::string text;
+  ASSERT_NO_THROW(text = j.dump());
+  EXPECT_NE(text.find("event encoding: li\\\\xFFcaer"), std::string::npos) << text;
+  EXPECT_NE(text.find("/imu\\\\xFE"), std::string::npos) << text;
+  // The escaped name is the topic's name for the options too.
+  ReaderOptions options;
+  options.imu_topic = "/imu\\xFE";
+  auto chosen = open_ros2_bag(path, options);
+  EXPECT_EQ(read_everything(*chosen).imu.size(), 1u);
+}
+
+TEST(Ros2BagHostile, AMessageBeyondTheLengthLimitIsNotAllocated) {
+  // A `data` column generated as a 300 MB zero blob: SQLite materializes it only when asked,
+  // and the reader's length limit (128 MiB) makes it refuse instead.
+  const std::string path = test::scratch_dir("ros2_hostile") + "/big.db3";
+  {
+    Db3Writer db(path);
+    db.exec(
+        "DROP TABLE messages; CREATE TABLE messages(id INTEGER PRIMARY KEY, topic_id INTEGER, "
+        "timestamp INTEGER, data BLOB GENERATED ALWAYS AS (zeroblob(300000000)) VIRTUAL);");
+    const int topic = db.topic("/dvs/events", "event_camera_msgs/msg/EventPacket");
+    db.exec("INSERT INTO messages(topic_id, timestamp) VALUES(" + std::to_string(topic) + ", 5)");
+  }
+  auto reader = open_ros2_bag(path);
+  EXPECT_TRUE(read_events(*reader).empty());
+  const auto& dropped = reader->report().dropped();
+  ASSERT_EQ(dropped.size(), 1u);
+  EXPECT_EQ(dropped.begin()->first,
+            "a message is larger than the reader's limit of 128 MiB, the rest of the file is not "
+            "read");
+}
+
+TEST(Ros2BagHostile, AVirtualBagTableIsAnInputError) {
+  // A virtual table runs a module's code (here FTS4's) over the file's own data; rosbag2 writes
+  // plain tables, so the reader refuses one before querying it.
+  const std::string path = test::scratch_dir("ros2_hostile") + "/virtual.db3";
+  {
+    Db3Writer db(path);
+    db.exec(
+        "DROP TABLE messages; CREATE VIRTUAL TABLE messages USING fts4(id, topic_id, timestamp, "
+        "data);");
+  }
+  EXPECT_EQ(error_of(path), "table messages | not a ROS 2 bag: `messages` is a virtual table");
+}
+
+TEST_F(Ros2SyntheticTest, BagFromMemoryReadsLikeTheFile) {
+  std::ifstream in(path_, std::ios::binary);
+  std::string bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  ReaderOptions options;
+  options.events_topic = "/caer/events";
+  auto from_file = open_ros2_bag(path_, options);
+  auto from_memory = open_ros2_bag_bytes(bytes, "memory.db3", options);
+  EXPECT_EQ(from_memory->info().path, "memory.db3");
+  EXPECT_EQ(from_memory->info().topics.size(), from_file->info().topics.size());
+  EXPECT_EQ(from_memory->info().notes, from_file->info().notes);
+  const SensorChunk a = read_everything(*from_file), b = read_everything(*from_memory);
+  EXPECT_EQ(a.events, b.events);
+  EXPECT_EQ(a.imu.size(), b.imu.size());
+  EXPECT_EQ(a.depth.size(), b.depth.size());
+  EXPECT_EQ(a.odometry.size(), b.odometry.size());
+  EXPECT_EQ(from_memory->report().dropped().size(), from_file->report().dropped().size());
+
+  try {
+    open_ros2_bag_bytes(std::string("SQLite format 3\0", 16) + std::string(200, 'x'), "junk.db3");
+    ADD_FAILURE() << "no InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), "junk.db3");
+  }
+  try {
+    open_ros2_bag_bytes("", "empty.db3");
+    ADD_FAILURE() << "no InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), "empty.db3");
+  }
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "fdv/core/error.h"
+#include "fdv/io/text_fields.h"
 
 namespace fdv::bag {
 namespace {
@@ -208,7 +209,7 @@ void BagReader::read_geometry() {
         if (!decode_event_packet(cursor, p)) {
           info_.width = static_cast<int>(p.width);
           info_.height = static_cast<int>(p.height);
-          info_.notes.push_back("event encoding: " + std::string(p.encoding));
+          info_.notes.push_back("event encoding: " + escape_non_utf8(p.encoding));
           if (p.encoding == "evt3" || p.encoding == "mono")
             info_.notes.push_back(
                 "event times: sensor clock moved onto the header-stamp clock by one constant "

@@ -19,7 +19,12 @@
 /// event). Intervals between events are therefore exactly the sensor's.
 ///
 /// Words are read with the byte order the packet's `is_bigendian` states. Unknown encodings and
-/// malformed buffers are dropped per packet and counted; the decoder never throws.
+/// malformed buffers are dropped per packet and counted; the decoder never throws. Time
+/// arithmetic is checked: an event whose time (time_base + ts, the offset) would leave the int64
+/// nanosecond range is dropped and counted, never wrapped.
+///
+/// It works on bytes alone (no bag needed): CdrCursor c(data, size); EventPacketView v;
+/// if (!decode_event_packet(c, v)) decoder.decode(v, events, report, "message 1").
 /// Not thread-safe; one decoder per topic (the evt3 state spans packets).
 #include <cstdint>
 #include <limits>
@@ -50,8 +55,9 @@ class EventPacketDecoder {
   void decode_evt3(const EventPacketView& p, std::vector<Event>& out, ReadReport& report,
                    const std::string& where);
   /// Moves out[first, end) from sensor time to the bag clock, anchoring on the first call that
-  /// has events.
-  void shift(const EventPacketView& p, std::vector<Event>& out, std::size_t first);
+  /// has events. Events whose time would leave the int64 range are dropped and counted.
+  void shift(const EventPacketView& p, std::vector<Event>& out, std::size_t first,
+             ReadReport& report, const std::string& where);
 
   bool anchored_ = false;
   TimeNs offset_ns_ = 0;

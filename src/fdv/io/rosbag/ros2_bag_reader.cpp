@@ -2,10 +2,15 @@
 // serialization_format, ...) and `messages` (id, topic_id, timestamp, data), one database per
 // bag file; a bag folder lists its files in metadata.yaml. Messages are read with SQLite in
 // timestamp order, one row at a time, and decoded from CDR here (ros_messages.h).
+//
+// A bag is untrusted input: SQLite opens it read-only with the settings SQLite recommends for
+// databases from an untrusted source (defensive mode, untrusted schema, cell size checks, a
+// value length limit), and every access of metadata.yaml is type-checked.
 #include <sqlite3.h>
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <cctype>
 #include <filesystem>
 #include <map>
 #include <utility>
@@ -13,20 +18,42 @@
 #include "fdv/core/error.h"
 #include "fdv/io/rosbag/bag_reader.h"
 #include "fdv/io/rosbag/rosbag_reader.h"
+#include "fdv/io/text_fields.h"
 
 namespace fdv {
 namespace fs = std::filesystem;
 namespace {
 
-/// Owns one sqlite3 connection, read-only.
+/// Largest message (blob) read: SQLite's length limit on the connection, so a damaged or
+/// generated value is refused by SQLite before it is allocated. Real messages (event packets,
+/// depth images) are at most a few MiB; an event message's decoded events take twice its size.
+constexpr int kMaxMessageBytes = 128 << 20;
+/// Largest metadata.yaml read (rosbag2 writes a few KiB); yaml-cpp's tree of a larger file would
+/// take many times its size.
+constexpr std::uintmax_t kMaxMetadataBytes = 4u << 20;
+/// Most .db3 files a metadata.yaml may list (rosbag2 splits a bag into files of at least a few
+/// MiB each); each one is opened.
+constexpr std::size_t kMaxBagFiles = 4096;
+
+/// Owns one sqlite3 connection, read-only: to a file, or to a database image in memory
+/// (`bytes`, which must outlive the connection; never written).
 class Database {
  public:
-  explicit Database(const std::string& path) : path_(path) {
-    if (sqlite3_open_v2(path.c_str(), &db_, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK) {
-      const std::string why = db_ ? sqlite3_errmsg(db_) : "out of memory";
-      sqlite3_close(db_);
-      db_ = nullptr;
-      throw InputError(path, "", "cannot open as an SQLite database: " + why);
+  Database(const std::string& path, const std::string* bytes) : path_(path) {
+    const int rc = bytes ? sqlite3_open_v2(":memory:", &db_, SQLITE_OPEN_READWRITE, nullptr)
+                         : sqlite3_open_v2(path.c_str(), &db_, SQLITE_OPEN_READONLY, nullptr);
+    if (rc != SQLITE_OK) fail_open();
+    // SQLite's advice for untrusted databases (sqlite.org/security.html).
+    sqlite3_limit(db_, SQLITE_LIMIT_LENGTH, kMaxMessageBytes);
+    sqlite3_db_config(db_, SQLITE_DBCONFIG_DEFENSIVE, 1, nullptr);
+    sqlite3_db_config(db_, SQLITE_DBCONFIG_TRUSTED_SCHEMA, 0, nullptr);
+    sqlite3_exec(db_, "PRAGMA cell_size_check = ON", nullptr, nullptr, nullptr);
+    if (bytes) {
+      auto* image = reinterpret_cast<unsigned char*>(const_cast<char*>(bytes->data()));
+      const auto size = static_cast<sqlite3_int64>(bytes->size());
+      if (sqlite3_deserialize(db_, "main", image, size, size, SQLITE_DESERIALIZE_READONLY) !=
+          SQLITE_OK)
+        fail_open();
     }
   }
   ~Database() { sqlite3_close(db_); }
@@ -37,6 +64,13 @@ class Database {
   std::string error() const { return sqlite3_errmsg(db_); }
 
  private:
+  [[noreturn]] void fail_open() {
+    const std::string why = db_ ? sqlite3_errmsg(db_) : "out of memory";
+    sqlite3_close(db_);
+    db_ = nullptr;
+    throw InputError(path_, "", "cannot open as an SQLite database: " + why);
+  }
+
   std::string path_;
   sqlite3* db_ = nullptr;
 };
@@ -66,9 +100,21 @@ class Statement {
   sqlite3_stmt* stmt_ = nullptr;
 };
 
+/// A text column as valid UTF-8 (topic names and types are printed and put into JSON).
 std::string column_text(sqlite3_stmt* s, int i) {
-  const unsigned char* t = sqlite3_column_text(s, i);
-  return t ? reinterpret_cast<const char*>(t) : "";
+  const auto* t = reinterpret_cast<const char*>(sqlite3_column_text(s, i));
+  return t ? escape_non_utf8(
+                 std::string_view(t, static_cast<std::size_t>(sqlite3_column_bytes(s, i))))
+           : "";
+}
+
+/// Whether a CREATE statement from sqlite_master makes a virtual table (any case and spacing).
+bool is_virtual(const std::string& sql) {
+  std::string words;
+  for (const char ch : sql.substr(0, 64))
+    if (!std::isspace(static_cast<unsigned char>(ch)))
+      words += static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  return words.rfind("createvirtual", 0) == 0;
 }
 
 struct FileTopic {
@@ -78,6 +124,7 @@ struct FileTopic {
 /// One .db3 file of the bag: its topics, checked layout.
 struct BagFile {
   std::string path;
+  const std::string* bytes = nullptr;            ///< the database image when read from memory
   std::map<std::int64_t, FileTopic> topics;      ///< topics.id -> topic
   std::map<std::int64_t, std::size_t> selected;  ///< topics.id -> selected topic index
 };
@@ -86,11 +133,17 @@ struct BagFile {
 void read_topics(const Database& db, BagFile& file, std::map<std::string, TopicInfo>& listing,
                  std::map<std::string, TimeNs>& first, std::map<std::string, TimeNs>& last) {
   {
-    Statement tables(db, "SELECT name FROM sqlite_master WHERE type = 'table'", "");
+    Statement tables(db, "SELECT name, sql FROM sqlite_master WHERE type = 'table'", "");
     bool has_topics = false, has_messages = false;
     int rc;
     while ((rc = sqlite3_step(tables.get())) == SQLITE_ROW) {
       const std::string name = column_text(tables.get(), 0);
+      const bool bag_table = name == "topics" || name == "messages";
+      // A virtual table runs a module's code over the file's data (SQLite's advice for untrusted
+      // databases): rosbag2 writes plain tables only.
+      if (bag_table && is_virtual(column_text(tables.get(), 1)))
+        throw InputError(db.path(), "table " + name,
+                         "not a ROS 2 bag: `" + name + "` is a virtual table");
       has_topics |= name == "topics";
       has_messages |= name == "messages";
     }
@@ -130,41 +183,82 @@ void read_topics(const Database& db, BagFile& file, std::map<std::string, TopicI
     throw InputError(db.path(), "table messages", "unreadable database: " + db.error());
 }
 
+/// What a bag folder's metadata.yaml lists (rosbag2_bagfile_information: storage_identifier,
+/// relative_file_paths), each access type-checked: an InputError naming metadata.yaml and the key,
+/// never a yaml-cpp exception. Empty when the file lists no files.
+std::vector<fs::path> metadata_files(const fs::path& dir, const std::string& meta) {
+  std::error_code ec;
+  const std::uintmax_t size = fs::file_size(meta, ec);
+  if (ec) throw InputError(meta, "", "cannot read: " + ec.message());
+  if (size > kMaxMetadataBytes)
+    throw InputError(meta, "",
+                     "is " + std::to_string(size) + " bytes; a rosbag2 metadata file is at most " +
+                         std::to_string(kMaxMetadataBytes >> 20) + " MiB");
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(meta);
+  } catch (const YAML::Exception& e) {
+    throw InputError(meta, e.mark.is_null() ? "" : "line " + std::to_string(e.mark.line + 1),
+                     "unreadable metadata: " + e.msg);
+  }
+  std::vector<fs::path> files;
+  std::string key = "rosbag2_bagfile_information";
+  try {
+    if (root.IsNull()) return files;
+    if (!root.IsMap()) throw InputError(meta, "", "not a YAML mapping (rosbag2 metadata is one)");
+    const YAML::Node info = root[key];
+    if (!info || info.IsNull()) return files;
+    if (!info.IsMap()) throw InputError(meta, "key " + key, "is not a mapping");
+    key = "storage_identifier";
+    if (const YAML::Node storage = info[key]) {
+      if (!storage.IsScalar()) throw InputError(meta, "key " + key, "is not a text value");
+      if (storage.Scalar() != "sqlite3")
+        throw InputError(meta, "key " + key,
+                         "storage '" + escape_non_utf8(storage.Scalar().substr(0, 64)) +
+                             "' is not supported: only sqlite3 (.db3) bags are read (Debian ships "
+                             "no MCAP library; `ros2 bag convert` can rewrite a bag as sqlite3)");
+    }
+    key = "relative_file_paths";
+    const YAML::Node paths = info[key];
+    if (!paths || paths.IsNull()) return files;
+    if (!paths.IsSequence()) throw InputError(meta, "key " + key, "is not a list");
+    if (paths.size() > kMaxBagFiles)
+      throw InputError(meta, "key " + key,
+                       "lists " + std::to_string(paths.size()) + " files; at most " +
+                           std::to_string(kMaxBagFiles) + " are read");
+    for (std::size_t i = 0; i < paths.size(); ++i) {
+      const YAML::Node f = paths[i];
+      if (!f.IsScalar() || f.Scalar().empty() || f.Scalar().find('\0') != std::string::npos)
+        throw InputError(meta, "key " + key + "[" + std::to_string(i) + "]", "is not a file name");
+      fs::path p = dir / f.Scalar();
+      if (!fs::exists(p, ec) && fs::exists(dir / p.filename(), ec)) p = dir / p.filename();
+      files.push_back(p);
+    }
+  } catch (const YAML::Exception& e) {  // not expected after the checks above
+    throw InputError(meta, "key " + key, "unreadable metadata: " + e.msg);
+  }
+  return files;
+}
+
 /// The .db3 files of a bag path (a file, or a folder with metadata.yaml), in reading order.
 std::vector<std::string> bag_files(const std::string& path) {
-  if (!fs::is_directory(path)) return {path};
+  std::error_code ec;
+  if (!fs::is_directory(path, ec)) return {path};
   const fs::path dir(path);
   const fs::path meta = dir / "metadata.yaml";
   std::vector<std::string> files;
-  if (fs::exists(meta)) {
-    YAML::Node info;
-    try {
-      info = YAML::LoadFile(meta.string())["rosbag2_bagfile_information"];
-    } catch (const YAML::Exception& e) {
-      throw InputError(meta.string(), "line " + std::to_string(e.mark.line + 1),
-                       "unreadable metadata: " + e.msg);
-    }
-    if (info && info["storage_identifier"] &&
-        info["storage_identifier"].as<std::string>("") != "sqlite3")
-      throw InputError(meta.string(), "key storage_identifier",
-                       "storage '" + info["storage_identifier"].as<std::string>("") +
-                           "' is not supported: only sqlite3 (.db3) bags are read (Debian ships "
-                           "no MCAP library; `ros2 bag convert` can rewrite a bag as sqlite3)");
-    if (info && info["relative_file_paths"] && info["relative_file_paths"].IsSequence())
-      for (const auto& f : info["relative_file_paths"]) {
-        fs::path p = dir / f.as<std::string>("");
-        if (!fs::exists(p) && fs::exists(dir / p.filename())) p = dir / p.filename();
-        files.push_back(p.string());
-      }
-  }
+  if (fs::exists(meta, ec))
+    for (const auto& p : metadata_files(dir, meta.string())) files.push_back(p.string());
   if (files.empty()) {
-    for (const auto& e : fs::directory_iterator(dir))
+    for (const auto& e : fs::directory_iterator(dir, ec))
       if (e.path().extension() == ".db3") files.push_back(e.path().string());
     std::sort(files.begin(), files.end());
   }
   if (files.empty()) throw InputError(path, "", "bag folder without .db3 files");
   for (const auto& f : files)
-    if (!fs::exists(f)) throw InputError(f, "", "bag file listed in metadata.yaml is missing");
+    if (!fs::is_regular_file(f, ec))  // not a FIFO or device either: SQLite would block on it
+      throw InputError(escape_non_utf8(f), "",
+                       "bag file listed in metadata.yaml is missing or not a regular file");
   return files;
 }
 
@@ -172,17 +266,36 @@ class Ros2BagReader final : public bag::BagReader {
  public:
   Ros2BagReader(const std::string& path, const ReaderOptions& options)
       : bag::BagReader(path, options, bag::Dialect::kCdr, "ros2_bag") {
+    for (const auto& f : bag_files(path)) files_.push_back({f, nullptr, {}, {}});
+    open_files();
+  }
+  /// One database image in memory, named `name` in messages.
+  Ros2BagReader(std::string bytes, const std::string& name, const ReaderOptions& options)
+      : bag::BagReader(name, options, bag::Dialect::kCdr, "ros2_bag"), bytes_(std::move(bytes)) {
+    files_.push_back({name, &bytes_, {}, {}});
+    open_files();
+  }
+
+ private:
+  void open_files() {
     std::map<std::string, TopicInfo> listing;
     std::map<std::string, TimeNs> first, last;
-    for (const auto& f : bag_files(path)) {
-      files_.push_back({f, {}, {}});
-      Database db(f);
-      read_topics(db, files_.back(), listing, first, last);
+    for (auto& f : files_) {
+      Database db(f.path, f.bytes);
+      read_topics(db, f, listing, first, last);
     }
     std::vector<TopicInfo> topics;
     for (auto& [name, t] : listing) {
-      const double span_s = t.count > 1 ? to_seconds(last[name] - first[name]) : 0.0;
-      if (span_s > 0) t.rate_hz = static_cast<double>(t.count - 1) / span_s;
+      if (t.count > 1) {
+        // Stamps are the file's: their difference may leave the int64 range.
+        if (const auto span = checked_sub(last[name], first[name])) {
+          if (*span > 0) t.rate_hz = static_cast<double>(t.count - 1) / to_seconds(*span);
+        } else {
+          info_.notes.push_back("topic " + name +
+                                ": message timestamps span more than the 64-bit nanosecond "
+                                "range (about 292 years); no rate given");
+        }
+      }
       topics.push_back(t);
     }
     setup(std::move(topics));
@@ -211,7 +324,7 @@ class Ros2BagReader final : public bag::BagReader {
       for (const auto& f : files_) {
         for (const auto& [id, t] : f.topics) {
           if (t.name != s.topic) continue;
-          Database db(f.path);
+          Database db(f.path, f.bytes);
           Statement q(db,
                       "SELECT data FROM messages WHERE topic_id = " + std::to_string(id) +
                           " ORDER BY timestamp, id LIMIT 1",
@@ -242,7 +355,12 @@ class Ros2BagReader final : public bag::BagReader {
         if (!m.data) m.size = 0;
         return true;
       }
-      if (rc != SQLITE_DONE)
+      if (rc == SQLITE_TOOBIG)
+        report_.drop("a message is larger than the reader's limit of " +
+                         std::to_string(kMaxMessageBytes >> 20) +
+                         " MiB, the rest of the file is not read",
+                     files_[file_ - 1].path + ": after messages.id " + std::to_string(last_id_));
+      else if (rc != SQLITE_DONE)
         report_.drop("bag database damaged, the rest of the file is unreadable: " + db_->error(),
                      files_[file_ - 1].path + ": after messages.id " + std::to_string(last_id_));
       stmt_ = Statement();
@@ -257,7 +375,7 @@ class Ros2BagReader final : public bag::BagReader {
       if (f.selected.empty()) continue;
       std::string ids;
       for (const auto& [id, _] : f.selected) ids += (ids.empty() ? "" : ",") + std::to_string(id);
-      db_ = std::make_unique<Database>(f.path);
+      db_ = std::make_unique<Database>(f.path, f.bytes);
       stmt_ = Statement(*db_,
                         "SELECT id, topic_id, timestamp, data FROM messages WHERE topic_id IN (" +
                             ids + ") ORDER BY timestamp, id",
@@ -267,6 +385,7 @@ class Ros2BagReader final : public bag::BagReader {
     return false;
   }
 
+  std::string bytes_;  ///< the database image of an in-memory bag (never moved once opened)
   std::vector<BagFile> files_;
   std::size_t file_ = 0;  ///< index of the next file to open
   std::unique_ptr<Database> db_;
@@ -281,9 +400,15 @@ std::unique_ptr<RecordingReader> open_ros2_bag(const std::string& path,
   return std::make_unique<Ros2BagReader>(path, options);
 }
 
+std::unique_ptr<RecordingReader> open_ros2_bag_bytes(std::string bytes, const std::string& name,
+                                                     const ReaderOptions& options) {
+  return std::make_unique<Ros2BagReader>(std::move(bytes), name, options);
+}
+
 bool is_ros2_bag_folder(const std::string& dir) {
-  if (!fs::is_directory(dir) || !fs::exists(fs::path(dir) / "metadata.yaml")) return false;
-  for (const auto& e : fs::directory_iterator(dir))
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec) || !fs::exists(fs::path(dir) / "metadata.yaml", ec)) return false;
+  for (const auto& e : fs::directory_iterator(dir, ec))
     if (e.path().extension() == ".db3" || e.path().extension() == ".mcap") return true;
   return false;
 }

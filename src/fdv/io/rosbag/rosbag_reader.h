@@ -45,6 +45,21 @@ std::unique_ptr<RecordingReader> open_ros1_bag(const std::string& path,
 std::unique_ptr<RecordingReader> open_ros2_bag(const std::string& path,
                                                const ReaderOptions& options = {});
 
+/// Opens a ROS 2 bag `.db3` file given as its bytes (for fuzzing and in-memory use): the same
+/// reader as open_ros2_bag on a file, with SQLite reading the image in place, read-only
+/// (sqlite3_deserialize). `name` stands for the file in errors and in info().path.
+std::unique_ptr<RecordingReader> open_ros2_bag_bytes(std::string bytes, const std::string& name,
+                                                     const ReaderOptions& options = {});
+
+/// Opens a ROS 1 bag given as its bytes: the same reader as open_ros1_bag. Debian's rosbag
+/// storage library opens bags by path only, so the bytes are written to an anonymous memory
+/// file (memfd_create) that the reader reads as /proc/self/fd/N and closes when destroyed; no
+/// disk file and no state is left between calls. `name` stands for the file in errors and in
+/// info().path.
+std::unique_ptr<RecordingReader> open_ros1_bag_bytes(const std::string& bytes,
+                                                     const std::string& name,
+                                                     const ReaderOptions& options = {});
+
 /// True when `dir` is a ROS 2 bag folder (metadata.yaml beside at least one .db3 or .mcap file).
 bool is_ros2_bag_folder(const std::string& dir);
 
