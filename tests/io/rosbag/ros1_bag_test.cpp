@@ -10,6 +10,7 @@
 #include <functional>
 #include <iterator>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <random>
 
 #include "fdv/core/error.h"
@@ -525,7 +526,8 @@ TEST_F(Ros1BagTest, ImplausibleChunkSizeIsAnErrorNotAnAllocation) {
   // library would allocate that; the reader stops at the chunk record instead.
   std::string b = file_string(bag_);
   const auto records = top_records(b);
-  const auto chunk = std::find_if(records.begin(), records.end(), [](const TopRecord& r) { return r.op == 5; });
+  const auto chunk =
+      std::find_if(records.begin(), records.end(), [](const TopRecord& r) { return r.op == 5; });
   ASSERT_NE(chunk, records.end());
   const std::size_t field = b.find("size=", chunk->pos);
   ASSERT_LT(field, chunk->data);
@@ -534,7 +536,8 @@ TEST_F(Ros1BagTest, ImplausibleChunkSizeIsAnErrorNotAnAllocation) {
   const std::string path = dir_ + "/huge_chunk.bag";
   write_string(path, b);
   const std::string what = expect_input_error([&] { open_ros1_bag(path); });
-  EXPECT_NE(what.find("byte " + std::to_string(chunk->pos) + ": chunk record: size 4294967280 is implausible"),
+  EXPECT_NE(what.find("byte " + std::to_string(chunk->pos) +
+                      ": chunk record: size 4294967280 is implausible"),
             std::string::npos)
       << what;
 }
@@ -575,6 +578,94 @@ TEST_F(Ros1BagTest, RandomCorruptionIsAnInputErrorOrAReadableStream) {
       }
     }
   }
+}
+
+TEST_F(Ros1BagTest, CompressedChunkSizeAboveTheLimitIsAnErrorNotAnAllocation) {
+  // An lz4 chunk whose `size` field (its records once decompressed) says 200 MiB: within what
+  // the format allows, but the check (and then the library) would allocate it however small the
+  // compressed data. Above kMaxChunkSize (128 MiB): an error at the chunk record.
+  const std::string path = dir_ + "/lz4.bag";
+  write_reference_bag(path, BagWriter::Compression::kLz4);
+  std::string b = file_string(path);
+  const auto records = top_records(b);
+  const auto chunk =
+      std::find_if(records.begin(), records.end(), [](const TopRecord& r) { return r.op == 5; });
+  ASSERT_NE(chunk, records.end());
+  const std::size_t field = b.find("size=", chunk->pos);
+  ASSERT_LT(field, chunk->data);
+  const std::uint32_t big = 200u << 20;
+  std::memcpy(b.data() + field + 5, &big, 4);
+  write_string(path, b);
+  const std::string what = expect_input_error([&] { open_ros1_bag(path); });
+  EXPECT_NE(what.find("byte " + std::to_string(chunk->pos) +
+                      ": chunk record: size 209715200 is implausible (> 128 MiB)"),
+            std::string::npos)
+      << what;
+}
+
+TEST_F(Ros1BagTest, TopicAndTypeThatAreNotUtf8AreEscapedInTheSummary) {
+  // Connection headers are the bag's text: a topic name with a byte that is not UTF-8 is listed
+  // escaped (the summary goes into JSON), and the escaped name selects it.
+  const std::string path = dir_ + "/utf8.bag";
+  {
+    BagWriter bag(path);
+    bag.imu("/imu\xFE", at_ns(100), at_ns(100), {0, 0, 1}, {0, 0, 9.81});
+    bag.raw("/other", at_ns(200), "pkg/T\xFF", "0123456789abcdef0123456789abcdef", {1, 2, 3});
+  }
+  auto reader = open_ros1_bag(path);
+  nlohmann::json j;
+  j["notes"] = reader->info().notes;
+  for (const auto& t : reader->info().topics) j["topics"].push_back({t.topic, t.type});
+  std::string text;
+  ASSERT_NO_THROW(text = j.dump());
+  EXPECT_NE(text.find("/imu\\\\xFE"), std::string::npos) << text;
+  EXPECT_NE(text.find("pkg/T\\\\xFF"), std::string::npos) << text;
+  EXPECT_EQ(read_all(*reader).all.imu.size(), 1u);  // chosen automatically, read by its raw name
+
+  ReaderOptions options;
+  options.imu_topic = "/imu\\xFE";
+  auto chosen = open_ros1_bag(path, options);
+  EXPECT_EQ(read_all(*chosen).all.imu.size(), 1u);
+}
+
+std::size_t open_descriptors() {
+  return static_cast<std::size_t>(
+      std::distance(fs::directory_iterator("/proc/self/fd"), fs::directory_iterator()));
+}
+
+TEST_F(Ros1BagTest, BagFromMemoryReadsLikeTheFileAndLeavesNothingBehind) {
+  const std::string bytes = file_string(bag_);
+  auto from_file = open_ros1_bag(bag_);
+  const Everything a = read_all(*from_file);
+  const std::size_t descriptors = open_descriptors();
+  for (int i = 0; i < 20; ++i) {
+    auto reader = open_ros1_bag_bytes(bytes, "memory.bag");
+    EXPECT_EQ(reader->info().path, "memory.bag");
+    EXPECT_EQ(reader->info().notes, from_file->info().notes);
+    const Everything b = read_all(*reader);
+    EXPECT_EQ(a.all.events, b.all.events);
+    EXPECT_EQ(a.all.imu.size(), b.all.imu.size());
+    EXPECT_EQ(a.all.depth.size(), b.all.depth.size());
+  }
+  EXPECT_EQ(open_descriptors(), descriptors);
+
+  // Errors name the given name, and the memory file is closed after them too.
+  std::string damaged = bytes;
+  const auto records = top_records(damaged);
+  const auto connection =
+      std::find_if(records.begin(), records.end(), [](const TopRecord& r) { return r.op == 7; });
+  ASSERT_NE(connection, records.end());
+  const std::uint32_t huge = 0xFFFFFF00u;
+  std::memcpy(damaged.data() + connection->pos, &huge, 4);
+  for (const std::string& input : {damaged, std::string("not a bag"), std::string()}) {
+    try {
+      open_ros1_bag_bytes(input, "memory.bag");
+      ADD_FAILURE() << "no InputError";
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.file(), "memory.bag") << e.what();
+    }
+  }
+  EXPECT_EQ(open_descriptors(), descriptors);
 }
 
 }  // namespace

@@ -5,7 +5,11 @@
 // records before the first message the view takes from it.
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
+#include <sys/mman.h>
+#include <unistd.h>
 
+#include <cerrno>
+#include <cstring>
 #include <fstream>
 #include <map>
 #include <optional>
@@ -15,6 +19,7 @@
 #include "fdv/io/rosbag/bag_reader.h"
 #include "fdv/io/rosbag/ros1_bag_structure.h"
 #include "fdv/io/rosbag/rosbag_reader.h"
+#include "fdv/io/text_fields.h"
 
 namespace fdv {
 namespace {
@@ -25,12 +30,14 @@ TimeNs to_ns(const ros::Time& t) { return static_cast<TimeNs>(t.toNSec()); }
 
 class Ros1BagReader final : public rosbag_impl_reader {
  public:
-  Ros1BagReader(const std::string& path, const ReaderOptions& options)
-      : rosbag_impl_reader(path, options, bag::Dialect::kRos1, "ros1_bag") {
-    check_magic(path);
-    structure_.emplace(path);  // InputError naming the byte when the index does not hold together
+  /// Reads the bag at `file`; messages name it `name` (the path when empty).
+  Ros1BagReader(const std::string& file, const std::string& name, const ReaderOptions& options)
+      : rosbag_impl_reader(name.empty() ? file : name, options, bag::Dialect::kRos1, "ros1_bag") {
+    const std::string& path = this->path();
+    check_magic(file, path);
+    structure_.emplace(file, path);  // InputError naming the byte when the index does not hold
     try {
-      bag_.open(path, ::rosbag::bagmode::Read);
+      bag_.open(file, ::rosbag::bagmode::Read);
     } catch (const ::rosbag::BagUnindexedException&) {
       throw InputError(path, "byte 13",
                        "the bag is unindexed (its recording was not closed): run `rosbag reindex " +
@@ -44,15 +51,18 @@ class Ros1BagReader final : public rosbag_impl_reader {
       setup(list_topics());
       std::vector<std::string> names;
       for (std::size_t i = 0; i < selected().size(); ++i) {
-        names.push_back(selected()[i].topic);
-        selected_index_[selected()[i].topic] = i;
+        const std::string& raw = raw_topic_.at(selected()[i].topic);
+        names.push_back(raw);
+        selected_index_[raw] = i;
       }
       ordinal_.assign(selected().size(), 0);
       view_ = std::make_unique<::rosbag::View>();
       if (!names.empty()) view_->addQuery(bag_, ::rosbag::TopicQuery(names));
       it_ = view_->begin();
       end_ = view_->end();
-    } catch (const ::rosbag::BagException& e) {
+    } catch (const InputError&) {
+      throw;
+    } catch (const std::exception& e) {  // rosbag's, ros::Time's range errors, std::bad_alloc
       throw InputError(path, "", std::string("cannot read the bag: ") + e.what());
     }
   }
@@ -64,14 +74,16 @@ class Ros1BagReader final : public rosbag_impl_reader {
     ::rosbag::View all(bag_);
     for (const auto* c : all.getConnections()) {
       for (const auto& s : selected()) {
-        if (c->topic != s.topic) continue;
-        if (c->datatype != s.type_name)
+        if (escape_non_utf8(c->topic) != s.topic) continue;
+        const std::string datatype = escape_non_utf8(c->datatype);
+        if (datatype != s.type_name)
           throw InputError(path(), "topic " + s.topic,
-                           "has messages of two types, " + s.type_name + " and " + c->datatype);
+                           "has messages of two types, " + s.type_name + " and " + datatype);
         const std::string expected = bag::type_info(s.type).ros1_md5;
         if (c->md5sum != expected)
           throw InputError(path(), "topic " + s.topic,
-                           "MD5 sum of " + c->datatype + " in the bag is " + c->md5sum +
+                           "MD5 sum of " + datatype + " in the bag is " +
+                               escape_non_utf8(c->md5sum) +
                                ", but this reader decodes the definition whose MD5 sum is " +
                                expected + ": the message layout differs");
       }
@@ -82,12 +94,12 @@ class Ros1BagReader final : public rosbag_impl_reader {
     for (const auto& s : selected()) {
       if (s.stream != StreamKind::kEvents) continue;
       try {
-        ::rosbag::View v(bag_, ::rosbag::TopicQuery(s.topic));
+        ::rosbag::View v(bag_, ::rosbag::TopicQuery(raw_topic_.at(s.topic)));
         auto it = v.begin();
         if (it == v.end() || damage_up_to(to_ns(it->getTime()))) return false;  // read() reports it
         copy_bytes(*it, bytes);
         return true;
-      } catch (const ::rosbag::BagException&) {
+      } catch (const std::exception&) {
         return false;  // read() meets the damage again and reports it
       }
     }
@@ -128,8 +140,8 @@ class Ros1BagReader final : public rosbag_impl_reader {
   }
 
  private:
-  static void check_magic(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
+  static void check_magic(const std::string& file, const std::string& path) {
+    std::ifstream in(file, std::ios::binary);
     std::string head(kRos1BagMagic.size(), '\0');
     in.read(head.data(), static_cast<std::streamsize>(head.size()));
     if (head.rfind("#ROSBAG V", 0) == 0 && head != kRos1BagMagic)
@@ -165,9 +177,12 @@ class Ros1BagReader final : public rosbag_impl_reader {
     for (const auto& [topic, type] : types) {
       ::rosbag::View v(bag_, ::rosbag::TopicQuery(topic));
       TopicInfo t;
-      t.topic = topic;
-      t.type = type;
+      // Names and types as valid UTF-8 (printed and put into JSON); the library keeps its own.
+      t.topic = escape_non_utf8(topic);
+      t.type = escape_non_utf8(type);
+      raw_topic_.emplace(t.topic, topic);
       t.count = v.size();
+      // ROS 1 times are uint32 seconds: the span fits in int64 nanoseconds.
       const double span_s = to_seconds(to_ns(v.getEndTime()) - to_ns(v.getBeginTime()));
       if (t.count > 1 && span_s > 0) t.rate_hz = static_cast<double>(t.count - 1) / span_s;
       topics.push_back(t);
@@ -188,7 +203,8 @@ class Ros1BagReader final : public rosbag_impl_reader {
   ::rosbag::View::iterator it_, end_;
   bool advance_ = false;
   bool done_ = false;
-  std::unordered_map<std::string, std::size_t> selected_index_;
+  std::unordered_map<std::string, std::size_t> selected_index_;  ///< by the library's topic name
+  std::map<std::string, std::string> raw_topic_;  ///< listed (escaped) topic -> library's name
   std::vector<std::uint64_t> ordinal_;
   std::vector<std::uint8_t> buffer_;
 };
@@ -197,7 +213,59 @@ class Ros1BagReader final : public rosbag_impl_reader {
 
 std::unique_ptr<RecordingReader> open_ros1_bag(const std::string& path,
                                                const ReaderOptions& options) {
-  return std::make_unique<Ros1BagReader>(path, options);
+  return std::make_unique<Ros1BagReader>(path, "", options);
+}
+
+namespace {
+
+/// The bytes of an in-memory ROS 1 bag as an anonymous memory file: Debian's rosbag storage
+/// opens bags by path only, and /proc/self/fd/N is one. Closed (and freed) with the reader.
+class MemoryFile {
+ public:
+  MemoryFile(const std::string& bytes, const std::string& name)
+      : fd_(memfd_create("fdv-ros1-bag", MFD_CLOEXEC)) {
+    if (fd_ < 0) throw InputError(name, "", std::string("memfd_create: ") + std::strerror(errno));
+    for (std::size_t done = 0; done < bytes.size();) {
+      const ssize_t n = ::write(fd_, bytes.data() + done, bytes.size() - done);
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) {
+        const int err = errno;
+        ::close(fd_);
+        throw InputError(name, "", std::string("writing the memory file: ") + std::strerror(err));
+      }
+      done += static_cast<std::size_t>(n);
+    }
+  }
+  ~MemoryFile() { ::close(fd_); }
+  MemoryFile(const MemoryFile&) = delete;
+  MemoryFile& operator=(const MemoryFile&) = delete;
+  std::string path() const { return "/proc/self/fd/" + std::to_string(fd_); }
+
+ private:
+  int fd_;
+};
+
+/// A Ros1BagReader over a MemoryFile it owns (declared first: it outlives the reader's bag).
+class MemoryRos1BagReader final : public RecordingReader {
+ public:
+  MemoryRos1BagReader(const std::string& bytes, const std::string& name,
+                      const ReaderOptions& options)
+      : file_(bytes, name), reader_(file_.path(), name, options) {}
+  const RecordingInfo& info() const override { return reader_.info(); }
+  const ReadReport& report() const override { return reader_.report(); }
+  bool read(SensorChunk& chunk) override { return reader_.read(chunk); }
+
+ private:
+  MemoryFile file_;
+  Ros1BagReader reader_;
+};
+
+}  // namespace
+
+std::unique_ptr<RecordingReader> open_ros1_bag_bytes(const std::string& bytes,
+                                                     const std::string& name,
+                                                     const ReaderOptions& options) {
+  return std::make_unique<MemoryRos1BagReader>(bytes, name, options);
 }
 
 }  // namespace fdv

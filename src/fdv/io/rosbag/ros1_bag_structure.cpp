@@ -20,10 +20,13 @@ constexpr std::uint64_t kMagicSize = 13;  // "#ROSBAG V2.0\n"
 /// length is damage, and is not allocated.
 constexpr std::uint32_t kMaxHeaderLength = 1u << 20;
 /// Likewise for a connection record's data (its connection header: type, MD5 sum, message
-/// definition) and for a chunk's records once decompressed (rosbag's default chunk is 768 KB): a
-/// damaged length above these is not allocated.
+/// definition): a damaged length above this is not allocated.
 constexpr std::uint32_t kMaxConnectionDataLength = 16u << 20;
-constexpr std::uint32_t kMaxChunkSize = 512u << 20;
+/// A chunk's records once decompressed. rosbag closes a chunk once it passes 768 KiB (its
+/// default), so a chunk is that plus one message; 128 MiB leaves room for large images while
+/// the check's buffer, the library's (it decompresses the chunk again) and one message copied
+/// out stay well under 1 GB however small the compressed chunk is.
+constexpr std::uint32_t kMaxChunkSize = 128u << 20;
 
 using Fields = std::map<std::string, std::string>;
 
@@ -120,8 +123,12 @@ std::string op_name(std::uint8_t op) {
 
 class BagFile {
  public:
-  explicit BagFile(const std::string& path)
-      : path_(path), in_(path, std::ios::binary), size_(std::filesystem::file_size(path)) {}
+  BagFile(const std::string& path, const std::string& name)
+      : path_(name), in_(path, std::ios::binary) {
+    std::error_code ec;
+    size_ = std::filesystem::file_size(path, ec);
+    if (ec || !in_) throw InputError(name, "", "cannot read the file: " + ec.message());
+  }
 
   std::uint64_t size() const { return size_; }
 
@@ -157,13 +164,14 @@ class BagFile {
  private:
   std::string path_;
   std::ifstream in_;
-  std::uint64_t size_;
+  std::uint64_t size_ = 0;
 };
 
 }  // namespace
 
-Ros1BagStructure::Ros1BagStructure(const std::string& path) : path_(path) {
-  BagFile f(path);
+Ros1BagStructure::Ros1BagStructure(const std::string& path, const std::string& name)
+    : path_(path), name_(name.empty() ? path : name) {
+  BagFile f(path, name_);
   const Record header = f.record(kMagicSize, kOpBagHeader, "bag header record");
   const auto index_pos =
       f.required<std::uint64_t>(header, kMagicSize, "index_pos", "bag header record");
@@ -244,7 +252,8 @@ Ros1BagStructure::Ros1BagStructure(const std::string& path) : path_(path) {
     c.compression = compression->second;
     c.size = f.required<std::uint32_t>(r, c.pos, "size", "chunk record");
     if (c.size > kMaxChunkSize)
-      f.fail(c.pos, "chunk record: size " + std::to_string(c.size) + " is implausible (> 512 MiB)");
+      f.fail(c.pos, "chunk record: size " + std::to_string(c.size) + " is implausible (> " +
+                        std::to_string(kMaxChunkSize >> 20) + " MiB)");
     if (c.compression == "none" && c.size != r.data_len)
       f.fail(c.pos, "chunk record: uncompressed, but its size field differs from its data length");
     c.data_pos = r.data_pos;
@@ -289,7 +298,7 @@ Ros1BagStructure::Ros1BagStructure(const std::string& path) : path_(path) {
 std::optional<InputError> Ros1BagStructure::check_records(std::size_t i) const {
   const Chunk& c = chunks_.at(i);
   const auto error = [&](std::uint64_t pos, const std::string& reason) {
-    return InputError(path_, "byte " + std::to_string(pos), reason);
+    return InputError(name_, "byte " + std::to_string(pos), reason);
   };
   std::vector<char> packed(c.data_len);
   {

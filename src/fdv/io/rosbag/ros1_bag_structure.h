@@ -35,8 +35,8 @@ class Ros1BagStructure {
   /// section (connection and chunk info records) and, for each chunk, its header and the index
   /// records that follow it. Throws InputError (file, byte, reason) on any length, field or
   /// reference that does not fit. An unindexed bag (index_pos 0) is left to the library, which
-  /// says so (no chunks listed).
-  explicit Ros1BagStructure(const std::string& path);
+  /// says so (no chunks listed). Errors name `name` (default: the path) as the file.
+  explicit Ros1BagStructure(const std::string& path, const std::string& name = "");
 
   /// Chunks by start time.
   const std::vector<Chunk>& chunks() const { return chunks_; }
@@ -47,7 +47,7 @@ class Ros1BagStructure {
   std::optional<InputError> check_records(std::size_t i) const;
 
  private:
-  std::string path_;
+  std::string path_, name_;
   std::vector<Chunk> chunks_;
 };
 
