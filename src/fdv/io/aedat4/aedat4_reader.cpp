@@ -3,6 +3,7 @@
 #include <lz4frame.h>
 #include <tinyxml2.h>
 #include <zstd.h>
+#include <zstd_errors.h>
 
 #include <algorithm>
 #include <charconv>
@@ -34,9 +35,18 @@ constexpr double kRadPerDeg = std::numbers::pi / 180.0;
 constexpr std::uint64_t kHeaderAt = kAedat4Magic.size();
 /// Packet header: int32 stream id, int32 payload size (little-endian).
 constexpr std::uint64_t kPacketHeaderBytes = 8;
-/// Bounds that keep a damaged size field from asking for absurd memory.
+/// Bound that keeps a damaged IOHeader size field from asking for absurd memory (a real header
+/// is a few KiB: the XML description of a handful of streams).
 constexpr std::uint32_t kMaxHeaderBytes = 64u << 20;
-constexpr std::size_t kMaxPacketBytes = std::size_t{1} << 30;
+/// Largest stored (compressed) payload read: LZ4 and Zstd expand incompressible data by less
+/// than 1/128 (LZ4 n/255 + 16 bytes per block, Zstd about n/256), so any packet that inflates
+/// to at most kAedat4MaxPacketBytes fits.
+constexpr std::size_t kMaxStoredPacketBytes = kAedat4MaxPacketBytes + kAedat4MaxPacketBytes / 128;
+/// Zstd window limit: log2(kAedat4MaxPacketBytes). A frame cannot need a window larger than its
+/// content, so a larger declared window is refused instead of allocated.
+constexpr int kMaxZstdWindowLog = 26;
+static_assert(std::size_t{1} << kMaxZstdWindowLog == kAedat4MaxPacketBytes);
+constexpr const char* kPacketTooLarge = "decompressed packet larger than the 64 MiB limit";
 /// IMU samples held back (waiting for the events to reach their time) before they are handed
 /// out anyway; bounds memory for files with few or no events.
 constexpr std::size_t kMaxPendingImu = 1 << 16;
@@ -114,7 +124,10 @@ std::map<std::int32_t, StreamDesc> parse_streams(const char* xml, std::size_t si
   tinyxml2::XMLDocument doc;
   if (doc.Parse(xml, size) != tinyxml2::XML_SUCCESS)
     fail(std::string("not valid XML (") + doc.ErrorStr() + ")");
-  const tinyxml2::XMLElement* out_info = child_node(doc.RootElement(), "outInfo");
+  // Parse() accepts a document of only comments, text or a declaration: no element at all.
+  const tinyxml2::XMLElement* root = doc.RootElement();
+  if (!root) fail("not valid XML (no root element)");
+  const tinyxml2::XMLElement* out_info = child_node(root, "outInfo");
   if (!out_info) fail("no <node name=\"outInfo\">");
   std::map<std::int32_t, StreamDesc> streams;
   for (auto* n = out_info->FirstChildElement("node"); n; n = n->NextSiblingElement("node")) {
@@ -142,13 +155,18 @@ std::map<std::int32_t, StreamDesc> parse_streams(const char* xml, std::size_t si
 
 // ---- decompression -----------------------------------------------------------------------
 
-/// Decodes one LZ4 or Zstd frame into a reusable, grow-only buffer.
+/// Decodes one LZ4 or Zstd frame into a reusable, grow-only buffer, never past
+/// kAedat4MaxPacketBytes. A frame that declares its content size gets a buffer of exactly that
+/// size (refused before allocating when above the limit); one that does not is decoded in steps
+/// into a buffer that doubles up to the limit.
 class Decompressor {
  public:
   Decompressor() {
     if (LZ4F_isError(LZ4F_createDecompressionContext(&lz4_, LZ4F_VERSION))) throw std::bad_alloc();
     zstd_ = ZSTD_createDCtx();
-    if (!zstd_) {
+    if (!zstd_ ||
+        ZSTD_isError(ZSTD_DCtx_setParameter(zstd_, ZSTD_d_windowLogMax, kMaxZstdWindowLog))) {
+      ZSTD_freeDCtx(zstd_);
       LZ4F_freeDecompressionContext(lz4_);
       throw std::bad_alloc();
     }
@@ -165,51 +183,91 @@ class Decompressor {
   const char* run(Compression c, const std::uint8_t* in, std::size_t in_len,
                   std::vector<std::uint8_t>& out, std::size_t& n) {
     n = 0;
-    if (out.size() < std::min(kMaxPacketBytes, std::max<std::size_t>(1 << 16, 4 * in_len)))
-      out.resize(std::min(kMaxPacketBytes, std::max<std::size_t>(1 << 16, 4 * in_len)));
-    return (c == Compression::kZstd || c == Compression::kZstdHigh) ? zstd(in, in_len, out, n)
-                                                                    : lz4(in, in_len, out, n);
+    if (c == Compression::kZstd || c == Compression::kZstdHigh) return zstd(in, in_len, out, n);
+    const char* why = lz4(in, in_len, out, n);
+    if (why) {
+      // A frame left unfinished leaves state that LZ4F_resetDecompressionContext does not clear
+      // (liblz4 1.9.4: the remaining content size of a frame that declared one, which then fails
+      // the next frame that does not): start the next packet from a new context.
+      LZ4F_freeDecompressionContext(lz4_);
+      lz4_ = nullptr;
+      if (LZ4F_isError(LZ4F_createDecompressionContext(&lz4_, LZ4F_VERSION))) throw std::bad_alloc();
+    }
+    return why;
   }
 
  private:
+  /// Makes out hold at least `size` bytes without copying what it held (nothing of it is kept).
+  static void fresh(std::vector<std::uint8_t>& out, std::size_t size) {
+    if (out.size() >= size) return;
+    out.clear();
+    out.resize(size);
+  }
+  /// Size to start with when the frame does not declare its content size.
+  static std::size_t first_guess(std::size_t in_len) {
+    return std::min(kAedat4MaxPacketBytes, std::max<std::size_t>(1 << 16, 4 * in_len));
+  }
+  /// Doubles out (keeping out[0, n)); false at the limit.
   static bool grow(std::vector<std::uint8_t>& out) {
-    if (out.size() >= kMaxPacketBytes) return false;
-    out.resize(std::min(kMaxPacketBytes, 2 * out.size()));
+    if (out.size() >= kAedat4MaxPacketBytes) return false;
+    out.resize(std::min(kAedat4MaxPacketBytes, 2 * out.size()));
     return true;
   }
 
   const char* lz4(const std::uint8_t* in, std::size_t in_len, std::vector<std::uint8_t>& out,
                   std::size_t& n) {
+    constexpr const char* kCorrupt = "corrupt compressed packet (LZ4 frame does not decode)";
     LZ4F_resetDecompressionContext(lz4_);
-    std::size_t consumed = 0;
+    LZ4F_frameInfo_t frame{};
+    std::size_t consumed = in_len;
+    if (LZ4F_isError(LZ4F_getFrameInfo(lz4_, &frame, in, &consumed))) return kCorrupt;
+    if (frame.contentSize > kAedat4MaxPacketBytes) return kPacketTooLarge;
+    fresh(out, frame.contentSize > 0 ? static_cast<std::size_t>(frame.contentSize)
+                                     : first_guess(in_len));
     for (;;) {
-      if (n == out.size() && !grow(out)) return "decompressed packet larger than 1 GiB";
       std::size_t produced = out.size() - n, taken = in_len - consumed;
       const std::size_t hint =
           LZ4F_decompress(lz4_, out.data() + n, &produced, in + consumed, &taken, nullptr);
-      if (LZ4F_isError(hint)) return "corrupt compressed packet (LZ4 frame does not decode)";
+      if (LZ4F_isError(hint)) return kCorrupt;
       n += produced;
       consumed += taken;
       if (hint == 0)
         return consumed == in_len ? nullptr
                                   : "corrupt compressed packet (bytes after the LZ4 frame)";
-      if (produced == 0 && taken == 0) return "corrupt compressed packet (LZ4 frame ends early)";
+      if (produced == 0 && taken == 0) {
+        if (n < out.size()) return "corrupt compressed packet (LZ4 frame ends early)";
+        if (!grow(out)) return kPacketTooLarge;
+      }
     }
   }
 
   const char* zstd(const std::uint8_t* in, std::size_t in_len, std::vector<std::uint8_t>& out,
                    std::size_t& n) {
+    constexpr const char* kCorrupt = "corrupt compressed packet (Zstd frame does not decode)";
+    const unsigned long long declared = ZSTD_getFrameContentSize(in, in_len);
+    if (declared == ZSTD_CONTENTSIZE_ERROR) return kCorrupt;
+    if (declared != ZSTD_CONTENTSIZE_UNKNOWN && declared > kAedat4MaxPacketBytes)
+      return kPacketTooLarge;
+    fresh(out, declared != ZSTD_CONTENTSIZE_UNKNOWN
+                   ? std::max<std::size_t>(1, static_cast<std::size_t>(declared))
+                   : first_guess(in_len));
     ZSTD_DCtx_reset(zstd_, ZSTD_reset_session_only);
     ZSTD_inBuffer src{in, in_len, 0};
     for (;;) {
-      if (n == out.size() && !grow(out)) return "decompressed packet larger than 1 GiB";
       ZSTD_outBuffer dst{out.data() + n, out.size() - n, 0};
+      const std::size_t before = src.pos;
       const std::size_t left = ZSTD_decompressStream(zstd_, &dst, &src);
-      if (ZSTD_isError(left)) return "corrupt compressed packet (Zstd frame does not decode)";
+      if (ZSTD_isError(left)) {
+        return ZSTD_getErrorCode(left) == ZSTD_error_frameParameter_windowTooLarge
+                   ? kPacketTooLarge
+                   : kCorrupt;
+      }
       n += dst.pos;
       if (left == 0 && src.pos == src.size) return nullptr;
-      if (src.pos == src.size && dst.pos < dst.size)
-        return "corrupt compressed packet (Zstd frame ends early)";
+      if (dst.pos == 0 && src.pos == before) {  // no progress: needs room, or more input
+        if (n < out.size()) return "corrupt compressed packet (Zstd frame ends early)";
+        if (!grow(out)) return kPacketTooLarge;
+      }
     }
   }
 
@@ -229,11 +287,15 @@ void compact(std::vector<T>& v, std::size_t& pos) {
 
 class Aedat4Reader final : public RecordingReader {
  public:
-  Aedat4Reader(const std::string& path, const ReaderOptions& options)
-      : path_(path), options_(options) {
-    in_.open(path, std::ios::binary);
-    if (!in_) throw InputError(path, "", "cannot open");
-    file_size_ = fs::file_size(path);
+  Aedat4Reader(std::unique_ptr<std::istream> in, const std::string& name,
+               const ReaderOptions& options)
+      : path_(name), options_(options), in_(std::move(in)) {
+    if (!in_ || !*in_) throw InputError(name, "", "cannot open");
+    in_->seekg(0, std::ios::end);
+    const std::streamoff end = in_->tellg();
+    in_->seekg(0);
+    if (!*in_ || end < 0) throw InputError(name, "", "cannot read (not a seekable file)");
+    file_size_ = static_cast<std::uint64_t>(end);
     read_header();
     refresh_notes();
   }
@@ -272,16 +334,16 @@ class Aedat4Reader final : public RecordingReader {
 
   void read_header() {
     char magic[kAedat4Magic.size()] = {};
-    in_.read(magic, sizeof magic);
-    const auto got = static_cast<std::size_t>(in_.gcount());
+    in_->read(magic, sizeof magic);
+    const auto got = static_cast<std::size_t>(in_->gcount());
     if (got < sizeof magic && std::memcmp(magic, kAedat4Magic.data(), got) == 0)
       throw InputError(path_, at_byte(got), "truncated header: the file ends inside the magic");
     if (std::memcmp(magic, kAedat4Magic.data(), sizeof magic) != 0)
       throw InputError(path_, at_byte(0), "wrong magic (expected \"#!AER-DAT4.0\\r\\n\")");
 
     char prefix[4];
-    in_.read(prefix, 4);
-    if (in_.gcount() != 4)
+    in_->read(prefix, 4);
+    if (in_->gcount() != 4)
       throw InputError(path_, at_byte(kHeaderAt),
                        "truncated header: the file ends before the IOHeader size");
     const std::uint32_t size = load_u32(prefix);
@@ -295,8 +357,8 @@ class Aedat4Reader final : public RecordingReader {
                            " bytes)");
     std::vector<std::uint8_t> header(4 + std::size_t{size});
     std::memcpy(header.data(), prefix, 4);
-    in_.read(reinterpret_cast<char*>(header.data() + 4), size);
-    if (in_.gcount() != static_cast<std::streamsize>(size))
+    in_->read(reinterpret_cast<char*>(header.data() + 4), size);
+    if (in_->gcount() != static_cast<std::streamsize>(size))
       throw InputError(path_, at_byte(kHeaderAt + 4), "read error in the IOHeader");
 
     flatbuffers::Verifier verifier(header.data(), header.size());
@@ -379,9 +441,14 @@ class Aedat4Reader final : public RecordingReader {
       return;
     }
     char head[kPacketHeaderBytes];
-    if (stream_at_ != at) in_.seekg(static_cast<std::streamoff>(at));  // after a skipped payload
-    in_.read(head, sizeof head);
+    if (stream_at_ != at) in_->seekg(static_cast<std::streamoff>(at));  // after a skipped payload
+    in_->read(head, sizeof head);
     stream_at_ = at + kPacketHeaderBytes;
+    if (in_->gcount() != static_cast<std::streamsize>(sizeof head)) {  // the file shrank under us
+      report_.drop("read error", at_byte(at));
+      eof_ = true;
+      return;
+    }
     std::int32_t id, size;
     std::memcpy(&id, head, 4);
     std::memcpy(&size, head + 4, 4);
@@ -410,10 +477,18 @@ class Aedat4Reader final : public RecordingReader {
       return;
     }
 
+    const std::size_t stored_limit =
+        compression_ == Compression::kNone ? kAedat4MaxPacketBytes : kMaxStoredPacketBytes;
+    if (static_cast<std::size_t>(size) > stored_limit) {  // skipped unread
+      report_.drop(compression_ == Compression::kNone ? "packet larger than the 64 MiB limit"
+                                                      : "stored packet larger than the 64 MiB limit",
+                   at_byte(at));
+      return;
+    }
     payload_.resize(static_cast<std::size_t>(size));
-    in_.read(reinterpret_cast<char*>(payload_.data()), size);
+    in_->read(reinterpret_cast<char*>(payload_.data()), size);
     stream_at_ += static_cast<std::uint64_t>(size);
-    if (in_.gcount() != size) {  // the file shrank under us
+    if (in_->gcount() != size) {  // the file shrank under us
       report_.drop("read error", at_byte(at));
       eof_ = true;
       return;
@@ -429,9 +504,6 @@ class Aedat4Reader final : public RecordingReader {
       }
       data = inflated_.data();
       len = inflated_len;
-    } else if (len > kMaxPacketBytes) {
-      report_.drop("packet larger than 1 GiB", at_byte(at));
-      return;
     }
     flatbuffers::Verifier verifier(data, len);
     if (id == events_id_) {
@@ -501,7 +573,7 @@ class Aedat4Reader final : public RecordingReader {
   RecordingInfo info_;
   std::vector<std::string> base_notes_;
   ReadReport report_;
-  std::ifstream in_;
+  std::unique_ptr<std::istream> in_;
   std::uint64_t file_size_ = 0;
   std::uint64_t offset_ = 0;     ///< next packet header
   std::uint64_t stream_at_ = 0;  ///< where in_ stands (saves a seek per packet)
@@ -525,9 +597,19 @@ class Aedat4Reader final : public RecordingReader {
 
 }  // namespace
 
+std::unique_ptr<RecordingReader> open_aedat4(std::unique_ptr<std::istream> in,
+                                             const std::string& name,
+                                             const ReaderOptions& options) {
+  return std::make_unique<Aedat4Reader>(std::move(in), name, options);
+}
+
 std::unique_ptr<RecordingReader> open_aedat4(const std::string& path,
                                              const ReaderOptions& options) {
-  return std::make_unique<Aedat4Reader>(path, options);
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) throw InputError(path, "", "is a folder, not a file");
+  auto in = std::make_unique<std::ifstream>(path, std::ios::binary);
+  if (!*in) throw InputError(path, "", "cannot open");
+  return open_aedat4(std::move(in), path, options);
 }
 
 }  // namespace fdv

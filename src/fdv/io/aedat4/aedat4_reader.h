@@ -21,6 +21,8 @@
 /// Pitfalls: only the first events stream and the first IMU stream of a file are read (a second
 /// camera's streams are noted as skipped). RecordingInfo::notes counts skipped packets so far;
 /// the counts are final once read() has returned false. Not thread-safe.
+#include <cstddef>
+#include <istream>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -32,10 +34,22 @@ namespace fdv {
 /// The first 14 bytes of every AEDAT 4.0 file.
 inline constexpr std::string_view kAedat4Magic{"#!AER-DAT4.0\r\n", 14};
 
+/// Largest events or IMU packet the reader decodes [bytes, after decompression]: about 370x the
+/// largest packet of the real recordings (172 KiB, 11,020 events), room for 4 M events (25 ms of
+/// a DVXplorer at its 165 Mev/s peak). A larger packet (a decompression bomb) is dropped and
+/// counted; its stored payload may exceed this by the codecs' worst-case expansion (1/128).
+inline constexpr std::size_t kAedat4MaxPacketBytes = std::size_t{64} << 20;
+
 /// Opens an AEDAT 4.0 file. Throws InputError (file, "byte N", reason) when the file cannot be
 /// opened, the magic is wrong, the header is truncated or not a valid IOHeader FlatBuffer, the
 /// compression is unknown, or the XML stream description is unusable.
 std::unique_ptr<RecordingReader> open_aedat4(const std::string& path,
+                                             const ReaderOptions& options = {});
+
+/// As above, reading from `in` (which must be seekable: the packets are walked by offset, from
+/// the stream's position 0); `name` stands for the file in errors and in info().path.
+std::unique_ptr<RecordingReader> open_aedat4(std::unique_ptr<std::istream> in,
+                                             const std::string& name,
                                              const ReaderOptions& options = {});
 
 }  // namespace fdv

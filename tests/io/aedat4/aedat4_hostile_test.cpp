@@ -1,0 +1,231 @@
+// AEDAT 4.0 reader on hostile input (issue #24): the in-memory entry point, an XML stream
+// description without a root element, decompression bombs (Zstd and LZ4, with and without a
+// declared content size) and packets above the size limit. Inputs are built in memory with the
+// test's own writer, or are the fuzzer's findings in ../shared/fuzz-findings.
+#include <gtest/gtest.h>
+#include <zstd.h>
+
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "aedat4_test_util.h"
+#include "fdv/core/error.h"
+#include "fdv/io/aedat4/aedat4_reader.h"
+#include "fdv/io/recording.h"
+#include "test_support.h"
+
+namespace fdv {
+namespace {
+
+using namespace test::aedat4;
+
+struct Result {
+  std::vector<Event> events;
+  std::vector<ImuSample> imu;
+  ReadReport report;
+  RecordingInfo info;
+};
+
+Result read_all(std::unique_ptr<RecordingReader> reader) {
+  Result r;
+  SensorChunk chunk;
+  while (reader->read(chunk)) {
+    r.events.insert(r.events.end(), chunk.events.begin(), chunk.events.end());
+    r.imu.insert(r.imu.end(), chunk.imu.begin(), chunk.imu.end());
+  }
+  r.report = reader->report();
+  r.info = reader->info();
+  return r;
+}
+
+std::unique_ptr<RecordingReader> open_bytes(const Bytes& b, const std::string& name) {
+  return open_aedat4(std::make_unique<std::istringstream>(std::string(b.begin(), b.end())), name);
+}
+
+std::uint64_t dropped(const ReadReport& r, const std::string& reason) {
+  const auto it = r.dropped().find(reason);
+  return it == r.dropped().end() ? 0 : it->second.count;
+}
+std::string first_where(const ReadReport& r, const std::string& reason) {
+  const auto it = r.dropped().find(reason);
+  return it == r.dropped().end() ? "" : it->second.first_where;
+}
+
+const std::vector<TestEvent> kTwo = {{1'000'000, 1, 2, 1}, {1'000'010, 3, 4, 0}};
+const std::string kTooLarge = "decompressed packet larger than the 64 MiB limit";
+
+// ---- in-memory entry point ------------------------------------------------------------------
+
+TEST(Aedat4Hostile, StreamEntryPointReadsLikeThePath) {
+  for (const char* name : {"davis346_ball_throw_person.aedat4", "dvxplorer_person_static.aedat4",
+                           "davis346_flicker_noise.aedat4"}) {
+    const std::string path = test::real_data(name);
+    FDV_REQUIRE_REAL_FILE(path);
+    const Result by_path = read_all(open_aedat4(path));
+    const Result by_stream = read_all(open_bytes(read_bytes(path), "in-memory copy"));
+    ASSERT_EQ(by_stream.events.size(), by_path.events.size()) << name;
+    EXPECT_EQ(by_stream.events, by_path.events) << name;
+    ASSERT_EQ(by_stream.imu.size(), by_path.imu.size()) << name;
+    for (std::size_t i = 0; i < by_path.imu.size(); ++i)
+      ASSERT_EQ(by_stream.imu[i].t, by_path.imu[i].t) << name;
+    EXPECT_EQ(by_stream.info.notes, by_path.info.notes) << name;
+    EXPECT_EQ(by_stream.info.path, "in-memory copy");
+  }
+}
+
+TEST(Aedat4Hostile, StreamErrorsNameTheGivenName) {
+  try {
+    open_bytes(Bytes{'#', '!', 'A', 'E', 'R'}, "fuzz-input-3");
+    ADD_FAILURE() << "no InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), "fuzz-input-3");
+    EXPECT_EQ(e.where(), "byte 5");
+  }
+}
+
+TEST(Aedat4Hostile, FolderIsAnInputError) {
+  // It used to escape as std::filesystem::filesystem_error (file_size of a folder).
+  const std::string dir = test::scratch_dir("aedat4_folder");
+  try {
+    open_aedat4(dir);
+    ADD_FAILURE() << "no InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), dir);
+  }
+}
+
+// ---- f1: a stream description without a root element -------------------------------------------
+
+Bytes file_with_xml(const std::string& xml) {
+  Bytes f = {'#', '!', 'A', 'E', 'R', '-', 'D', 'A', 'T', '4', '.', '0', '\r', '\n'};
+  const Bytes h = io_header(0, -1, xml);
+  f.insert(f.end(), h.begin(), h.end());
+  return f;
+}
+
+TEST(Aedat4Hostile, XmlWithoutRootElementIsAnInputError) {
+  for (const std::string xml : {"<!-- only a comment -->", "", "<?xml version=\"1.0\"?>", "  "}) {
+    try {
+      open_bytes(file_with_xml(xml), "no_root.aedat4");
+      ADD_FAILURE() << "no InputError for '" << xml << "'";
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.file(), "no_root.aedat4");
+      EXPECT_EQ(e.where(), "byte 14");
+      EXPECT_NE(e.reason().find("not valid XML"), std::string::npos) << e.what();
+    }
+  }
+}
+
+TEST(Aedat4Hostile, XmlWithoutRootElementFindings) {
+  for (const char* name :
+       {"aedat4/f1-header-xml-no-root.aedat4", "aedat4/f1-header-xml-comment-only.aedat4"}) {
+    const std::string path = test::fuzz_finding(name);
+    FDV_REQUIRE_REAL_FILE(path);
+    try {
+      open_aedat4(path);
+      ADD_FAILURE() << "no InputError for " << path;
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.file(), path);
+      EXPECT_EQ(e.reason(), "IOHeader stream description: not valid XML (no root element)");
+    }
+  }
+}
+
+// ---- f7: decompression bombs ---------------------------------------------------------------------
+
+/// One byte more than the limit, all zero (compresses to a few hundred KiB at most).
+const Bytes& just_too_large() {
+  static const Bytes b(kAedat4MaxPacketBytes + 1, 0);
+  return b;
+}
+
+Bytes zstd_frame(const Bytes& in, bool declare_size) {
+  ZSTD_CCtx* cctx = ZSTD_createCCtx();
+  ZSTD_CCtx_setParameter(cctx, ZSTD_c_contentSizeFlag, declare_size ? 1 : 0);
+  Bytes out(ZSTD_compressBound(in.size()));
+  const std::size_t n = ZSTD_compress2(cctx, out.data(), out.size(), in.data(), in.size());
+  ZSTD_freeCCtx(cctx);
+  if (ZSTD_isError(n)) throw std::runtime_error("test: Zstd error");
+  out.resize(n);
+  return out;
+}
+
+Bytes lz4_frame(const Bytes& in, bool declare_size) {
+  LZ4F_preferences_t prefs{};
+  if (declare_size) prefs.frameInfo.contentSize = in.size();
+  Bytes out(LZ4F_compressFrameBound(in.size(), &prefs));
+  const std::size_t n = LZ4F_compressFrame(out.data(), out.size(), in.data(), in.size(), &prefs);
+  if (LZ4F_isError(n)) throw std::runtime_error("test: LZ4 error");
+  out.resize(n);
+  return out;
+}
+
+/// A file of three events packets: valid, `bomb`, valid. The bomb is dropped and counted, the
+/// others read.
+void expect_bomb_dropped(int compression, const Bytes& bomb, const std::string& name) {
+  Aedat4Writer w(compression, {{0, "EVTS", 346, 260}});
+  w.packet(0, events_payload({kTwo[0]}));
+  const std::size_t bad = w.raw_packet(0, bomb);
+  w.packet(0, events_payload({kTwo[1]}));
+  const Result r = read_all(open_bytes(w.file(), name));
+  EXPECT_EQ(r.events.size(), 2u) << name;
+  EXPECT_EQ(dropped(r.report, kTooLarge), 1u) << name;
+  EXPECT_EQ(first_where(r.report, kTooLarge), "byte " + std::to_string(w.header_end() + bad))
+      << name;
+}
+
+TEST(Aedat4Hostile, ZstdBombDeclaringItsSizeIsDroppedUnopened) {
+  expect_bomb_dropped(3, zstd_frame(just_too_large(), true), "zstd_declared");
+}
+
+TEST(Aedat4Hostile, ZstdBombOfUnknownSizeStopsAtTheLimit) {
+  expect_bomb_dropped(3, zstd_frame(just_too_large(), false), "zstd_unknown");
+}
+
+TEST(Aedat4Hostile, Lz4BombDeclaringItsSizeIsDroppedUnopened) {
+  expect_bomb_dropped(1, lz4_frame(just_too_large(), true), "lz4_declared");
+}
+
+TEST(Aedat4Hostile, Lz4BombOfUnknownSizeStopsAtTheLimit) {
+  expect_bomb_dropped(1, lz4_frame(just_too_large(), false), "lz4_unknown");
+}
+
+TEST(Aedat4Hostile, FramesOfUnknownAndDeclaredSizeStillDecode) {
+  for (const bool declare : {false, true}) {
+    Aedat4Writer zw(3, {{0, "EVTS", 346, 260}});
+    zw.raw_packet(0, zstd_frame(events_payload(kTwo), declare));
+    const Result z = read_all(open_bytes(zw.file(), "zstd"));
+    EXPECT_EQ(z.events.size(), 2u) << declare;
+    EXPECT_TRUE(z.report.dropped().empty()) << declare;
+    Aedat4Writer lw(1, {{0, "EVTS", 346, 260}});
+    lw.raw_packet(0, lz4_frame(events_payload(kTwo), declare));
+    const Result l = read_all(open_bytes(lw.file(), "lz4"));
+    EXPECT_EQ(l.events.size(), 2u) << declare;
+    EXPECT_TRUE(l.report.dropped().empty()) << declare;
+  }
+}
+
+TEST(Aedat4Hostile, UncompressedPacketAboveTheLimitIsSkippedUnread) {
+  Aedat4Writer w(0, {{0, "EVTS", 346, 260}});
+  w.packet(0, events_payload({kTwo[0]}));
+  const std::size_t bad = w.raw_packet(0, just_too_large());
+  w.packet(0, events_payload({kTwo[1]}));
+  const Result r = read_all(open_bytes(w.file(), "big"));
+  EXPECT_EQ(r.events.size(), 2u);
+  const std::string reason = "packet larger than the 64 MiB limit";
+  EXPECT_EQ(dropped(r.report, reason), 1u);
+  EXPECT_EQ(first_where(r.report, reason), "byte " + std::to_string(w.header_end() + bad));
+}
+
+TEST(Aedat4Hostile, ZstdBombFinding) {
+  const std::string path = test::fuzz_finding("aedat4/f7-zstd-bomb.aedat4");
+  FDV_REQUIRE_REAL_FILE(path);
+  const Result r = read_all(open_aedat4(path));
+  EXPECT_EQ(dropped(r.report, kTooLarge), 1u);
+  EXPECT_EQ(first_where(r.report, kTooLarge), "byte 3126");
+}
+
+}  // namespace
+}  // namespace fdv
