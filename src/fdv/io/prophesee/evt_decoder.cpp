@@ -1,6 +1,10 @@
 #include "fdv/io/prophesee/evt_decoder.h"
 
 #include <bit>
+#include <limits>
+#include <optional>
+
+#include "fdv/core/time.h"
 
 namespace fdv {
 namespace {
@@ -22,6 +26,30 @@ constexpr std::uint32_t kAddrY = 0x0, kAddrX = 0x2, kVectBaseX = 0x3, kVect12 = 
                          std::uint64_t how_many = 1) {
   if (n == 0) first = index;
   n += how_many;
+}
+
+/// Whether every time of the counter period starting at `epoch_us` fits int64 nanoseconds.
+bool period_fits(std::int64_t epoch_us, std::int64_t period_us) {
+  const std::optional<TimeNs> last_us = checked_add(epoch_us, period_us - 1);
+  return last_us && checked_mul(*last_us, kNsPerUs);
+}
+
+/// Moves `epoch_us` to the next period of `period_us`; false (epoch unchanged) when a time of
+/// that period would not fit int64 nanoseconds.
+[[gnu::cold]] bool next_epoch(std::int64_t& epoch_us, std::int64_t period_us) {
+  const std::optional<TimeNs> next = checked_add(epoch_us, period_us);
+  if (!next || !period_fits(*next, period_us)) return false;
+  epoch_us = *next;
+  return true;
+}
+
+/// epoch_us = wraps x period_us, when every time of that period fits int64 nanoseconds.
+bool epoch_after(std::uint64_t wraps, std::int64_t period_us, std::int64_t& epoch_us) {
+  if (wraps > static_cast<std::uint64_t>(std::numeric_limits<std::int64_t>::max())) return false;
+  const std::optional<TimeNs> start = checked_mul(static_cast<std::int64_t>(wraps), period_us);
+  if (!start || !period_fits(*start, period_us)) return false;
+  epoch_us = *start;
+  return true;
 }
 
 // TIME_HIGH steps, values in [0, range): b is behind a when smaller by at most half the range
@@ -67,6 +95,14 @@ TimeHighStep on_time_high(bool have_time, std::uint32_t current, std::uint32_t h
 
 }  // namespace
 
+bool Evt2Decoder::start_after_wraps(std::uint64_t wraps) {
+  return epoch_after(wraps, static_cast<std::int64_t>(kTimeHighRange) << 6, epoch_us_);
+}
+
+bool Evt3Decoder::start_after_wraps(std::uint64_t wraps) {
+  return epoch_after(wraps, std::int64_t{1} << 24, epoch_us_);
+}
+
 std::size_t Evt2Decoder::decode(const Word* words, std::size_t n, Event* out,
                                 std::size_t max_events, std::size_t& consumed,
                                 DecodeCounts& counts) {
@@ -74,12 +110,16 @@ std::size_t Evt2Decoder::decode(const Word* words, std::size_t n, Event* out,
   std::size_t i = 0;
   TimeNs high_ns = high_ns_;
   bool have_time = have_time_;
-  bool emitting = have_time && !suspect_;  // a known, trusted time base
+  bool emitting = have_time && !suspect_ && !overflow_;  // a known, trusted time base
   constexpr std::uint64_t kMaxStep = kMaxTimeHighJumpUs >> 6;
   const auto set_high = [&](std::uint32_t h) {
+    if (overflow_) return;
     if (have_time && h < time_high_) {
       if (time_high_ - h > kTimeHighRange / 2) {
-        epoch_us_ += static_cast<std::int64_t>(kTimeHighRange) << 6;
+        if (!next_epoch(epoch_us_, static_cast<std::int64_t>(kTimeHighRange) << 6)) {
+          overflow_ = true;
+          return;
+        }
         count(counts.wraps, counts.first_wrap, i);
       } else {
         ++counts.time_high_backwards;
@@ -100,6 +140,8 @@ std::size_t Evt2Decoder::decode(const Word* words, std::size_t n, Event* out,
                          static_cast<std::uint16_t>(w & 0x7FF), type == evt2::kCdOn};
       } else if (!have_time) {
         count(counts.before_time, counts.first_before_time, i);
+      } else if (overflow_) {
+        count(counts.time_overflow, counts.first_time_overflow, i);
       } else {
         count(counts.glitch_events, counts.first_glitch_event, i);
       }
@@ -110,7 +152,7 @@ std::size_t Evt2Decoder::decode(const Word* words, std::size_t n, Event* out,
         const TimeHighStep step = on_time_high(have_time, time_high_, w & 0x0FFFFFFF, suspect_,
                                                suspect_high_, kTimeHighRange, kMaxStep, counts);
         for (int j = 0; j < step.n; ++j) set_high(step.values[j]);
-        emitting = have_time && !suspect_;
+        emitting = have_time && !suspect_ && !overflow_;
         break;
       }
       case evt2::kExtTrigger:
@@ -141,13 +183,15 @@ std::size_t Evt3Decoder::decode(const Word* words, std::size_t n, Event* out,
   std::uint16_t y = y_;
   std::uint16_t base_x = base_x_;
   bool base_polarity = base_polarity_;
-  bool ready = have_time_ && have_y_ && !suspect_;  // single events can be output
+  bool ready = have_time_ && have_y_ && !suspect_ && !overflow_;  // single events can be output
   bool vector_ready = ready && have_base_;          // vector events can be output
   constexpr std::uint64_t kMaxStep = kMaxTimeHighJumpUs >> 12;
   // Events that cannot be output, by reason.
   const auto not_ready = [&](std::size_t index, std::uint64_t how_many) {
     if (!have_time_) {
       count(counts.before_time, counts.first_before_time, index, how_many);
+    } else if (overflow_) {
+      count(counts.time_overflow, counts.first_time_overflow, index, how_many);
     } else if (suspect_) {
       count(counts.glitch_events, counts.first_glitch_event, index, how_many);
     } else {
@@ -169,7 +213,7 @@ std::size_t Evt3Decoder::decode(const Word* words, std::size_t n, Event* out,
       case evt3::kAddrY:  // [11] system type (ignored), [10:0] y
         y = static_cast<std::uint16_t>(w & 0x7FF);
         have_y_ = true;
-        ready = have_time_ && !suspect_;
+        ready = have_time_ && !suspect_ && !overflow_;
         vector_ready = ready && have_base_;
         break;
       case evt3::kVectBaseX:  // [11] polarity, [10:0] x of the next vector's bit 0
@@ -203,10 +247,14 @@ std::size_t Evt3Decoder::decode(const Word* words, std::size_t n, Event* out,
       case evt3::kTimeHigh: {  // [11:0] bits 23..12 of the time in us
         const std::uint32_t h = w & 0xFFF;
         const auto set_high = [&](std::uint32_t v) {
+          if (overflow_) return;
           if (!have_time_ || v != time_high_) {
             if (have_time_ && v < time_high_) {
               if (time_high_ - v > kTimeHighRange / 2) {
-                epoch_us_ += std::int64_t{1} << 24;
+                if (!next_epoch(epoch_us_, std::int64_t{1} << 24)) {
+                  overflow_ = true;
+                  return;
+                }
                 count(counts.wraps, counts.first_wrap, i);
               } else {
                 ++counts.time_high_backwards;
@@ -224,7 +272,7 @@ std::size_t Evt3Decoder::decode(const Word* words, std::size_t n, Event* out,
         const TimeHighStep step = on_time_high(have_time_, time_high_, h, suspect_, suspect_high_,
                                                kTimeHighRange, kMaxStep, counts);
         for (int j = 0; j < step.n; ++j) set_high(step.values[j]);
-        ready = have_time_ && have_y_ && !suspect_;
+        ready = have_time_ && have_y_ && !suspect_ && !overflow_;
         vector_ready = ready && have_base_;
         break;
       }

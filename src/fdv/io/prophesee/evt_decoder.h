@@ -25,6 +25,11 @@
 ///    under it are not output (counted in `glitch_events`). The next TIME_HIGH decides: if it
 ///    follows the time before the suspect, the suspect was a glitch (`time_high_glitches`); if
 ///    it follows the suspect, the jump was real and decoding goes on from there;
+///  - a wrap that would start a period whose times do not all fit int64 ns (after 536,869 EVT 2.0
+///    or about 550 million EVT 3.0 wraps: 292 years on the sensor clock, only a corrupt or forged
+///    stream gets there) is not applied: no later time can be represented, so every CD event
+///    from there on is not output and is counted in `time_overflow` (checked arithmetic, no
+///    undefined behaviour; the events before stay valid);
 ///  - EXT_TRIGGER, OTHERS and CONTINUED words are skipped and counted; words of a reserved type
 ///    are skipped and counted as unknown.
 /// Events are not checked against the sensor size (the reader does that). No allocation; words
@@ -61,6 +66,8 @@ struct DecodeCounts {
   std::uint64_t time_high_glitches = 0;   ///< TIME_HIGH far ahead that the next one contradicted
   std::uint64_t glitch_events = 0;        ///< CD events under a suspect TIME_HIGH (dropped)
   std::size_t first_glitch_event = kNone;
+  std::uint64_t time_overflow = 0;        ///< CD events after the time left int64 ns (dropped)
+  std::size_t first_time_overflow = kNone;
   std::uint64_t triggers = 0;             ///< EXT_TRIGGER words (skipped)
   std::uint64_t vendor = 0;               ///< OTHERS / CONTINUED words (skipped)
 };
@@ -77,6 +84,11 @@ class Evt2Decoder {
   std::size_t decode(const Word* words, std::size_t n, Event* out, std::size_t max_events,
                      std::size_t& consumed, DecodeCounts& counts);
 
+  /// Before the first decode(): starts the time base `wraps` counter periods (2^34 us) late, for
+  /// a stream that continues one already decoded that far. False (nothing changed) when a time
+  /// of that period would not fit int64 ns.
+  bool start_after_wraps(std::uint64_t wraps);
+
  private:
   bool have_time_ = false;
   std::uint32_t time_high_ = 0;  ///< last TIME_HIGH payload (bits 33..6 of the time in us)
@@ -84,6 +96,7 @@ class Evt2Decoder {
   TimeNs high_ns_ = 0;           ///< (epoch + time_high << 6) in ns
   bool suspect_ = false;         ///< a TIME_HIGH far ahead waits for the next one
   std::uint32_t suspect_high_ = 0;
+  bool overflow_ = false;  ///< a wrap would have left int64 ns: no time from here on
 };
 
 class Evt3Decoder {
@@ -96,7 +109,11 @@ class Evt3Decoder {
   std::size_t decode(const Word* words, std::size_t n, Event* out, std::size_t max_events,
                      std::size_t& consumed, DecodeCounts& counts);
 
+  /// As Evt2Decoder::start_after_wraps (periods of 2^24 us).
+  bool start_after_wraps(std::uint64_t wraps);
+
  private:
+  // Cannot overflow: a wrap is only applied when every time of the new period fits int64 ns.
   void update_time() {
     t_ns_ = (epoch_us_ + (static_cast<std::int64_t>(time_high_) << 12) + time_low_) * kNsPerUs;
   }
@@ -110,6 +127,7 @@ class Evt3Decoder {
   TimeNs t_ns_ = 0;              ///< current time base in ns
   bool suspect_ = false;         ///< a TIME_HIGH far ahead waits for the next one
   std::uint32_t suspect_high_ = 0;
+  bool overflow_ = false;  ///< a wrap would have left int64 ns: no time from here on
   std::uint16_t y_ = 0;
   std::uint16_t base_x_ = 0;
   bool base_polarity_ = false;

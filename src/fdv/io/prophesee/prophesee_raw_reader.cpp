@@ -10,6 +10,7 @@
 
 #include "fdv/core/error.h"
 #include "fdv/io/prophesee/evt_decoder.h"
+#include "fdv/io/text_fields.h"
 
 namespace fdv {
 namespace fs = std::filesystem;
@@ -61,7 +62,8 @@ void decide_encoding(const std::string& path, RawHeader& h) {
     else if (*evt == "3.0")
       h.encoding = "evt3";
     else
-      throw InputError(path, "key evt", "EVT " + *evt + " is not supported (only EVT 2.0 and 3.0)");
+      throw InputError(path, "key evt",
+                       "EVT " + escape_non_utf8(*evt) + " is not supported (only EVT 2.0 and 3.0)");
     h.encoding_source = "`evt` header line";
     return;
   }
@@ -73,7 +75,8 @@ void decide_encoding(const std::string& path, RawHeader& h) {
       h.encoding = "evt3";
     else
       throw InputError(path, "key format",
-                       "encoding '" + name + "' is not supported (only EVT2 and EVT3)");
+                       "encoding '" + escape_non_utf8(name) +
+                           "' is not supported (only EVT2 and EVT3)");
     h.encoding_source = "`format` header line";
     return;
   }
@@ -85,7 +88,7 @@ void decide_encoding(const std::string& path, RawHeader& h) {
     else if (p.find("gen4") != std::string::npos || p.find("imx636") != std::string::npos)
       h.encoding = "evt3";
     if (!h.encoding.empty()) {
-      h.encoding_source = "plugin_name '" + *plugin + "' (no `evt` header line)";
+      h.encoding_source = "plugin_name '" + escape_non_utf8(*plugin) + "' (no `evt` header line)";
       return;
     }
   }
@@ -105,7 +108,8 @@ void decide_geometry(const std::string& path, RawHeader& h) {
     if (x == std::string::npos || !parse_int(std::string_view(*g).substr(0, x), w) ||
         !parse_int(std::string_view(*g).substr(x + 1), ht) || !valid_side(w) || !valid_side(ht))
       throw InputError(path, "key geometry",
-                       "expected WIDTHxHEIGHT with sides in 1..2048, got '" + *g + "'");
+                       "expected WIDTHxHEIGHT with sides in 1..2048, got '" +
+                           escape_non_utf8(*g) + "'");
     h.width = w;
     h.height = ht;
     h.geometry_source = "`geometry` header line";
@@ -118,7 +122,8 @@ void decide_geometry(const std::string& path, RawHeader& h) {
       if (!w || !ht || !parse_int(*w, h.width) || !parse_int(*ht, h.height) ||
           !valid_side(h.width) || !valid_side(h.height))
         throw InputError(path, "key format",
-                         "width/height fields missing or not in 1..2048: '" + *format + "'");
+                         "width/height fields missing or not in 1..2048: '" +
+                             escape_non_utf8(*format) + "'");
       h.geometry_source = "`format` header line";
       return;
     }
@@ -148,14 +153,16 @@ void decide_geometry(const std::string& path, RawHeader& h) {
       h.height = 320;
     }
     if (h.width > 0) {
-      h.geometry_source = "plugin_name '" + *plugin + "' (no `geometry` header line)";
+      h.geometry_source =
+          "plugin_name '" + escape_non_utf8(*plugin) + "' (no `geometry` header line)";
       return;
     }
   }
   throw InputError(path, "key geometry",
                    "header gives no sensor size (no `geometry`, `format` or `width`/`height` "
                    "line) and plugin_name '" +
-                       (plugin ? *plugin : std::string("(none)")) + "' is not a known sensor");
+                       (plugin ? escape_non_utf8(*plugin) : std::string("(none)")) +
+                       "' is not a known sensor");
 }
 
 template <typename Decoder>
@@ -163,16 +170,20 @@ class RawReader final : public RecordingReader {
  public:
   using Word = typename Decoder::Word;
 
-  RawReader(const std::string& path, const RawHeader& header, const ReaderOptions& options,
-            const PropheseeRawOptions& raw_options)
+  RawReader(std::unique_ptr<std::istream> in, const std::string& path, const RawHeader& header,
+            const ReaderOptions& options, const PropheseeRawOptions& raw_options)
       : path_(path),
         chunk_events_(std::max<std::size_t>(1, options.chunk_events)),
-        sanitizer_(header.width, header.height) {
-    in_.open(path, std::ios::binary);
-    if (!in_) throw InputError(path, "", "cannot open file");
-    in_.seekg(static_cast<std::streamoff>(header.data_offset));
+        sanitizer_(header.width, header.height),
+        in_(std::move(in)) {
+    in_->clear();  // the header read may have hit the end of a short file
+    in_->seekg(0, std::ios::end);
+    const std::streamoff end = in_->tellg();
+    in_->seekg(static_cast<std::streamoff>(header.data_offset));
+    if (!*in_ || end < 0 || static_cast<std::uint64_t>(end) < header.data_offset)
+      throw InputError(path, "", "cannot read (not a seekable file)");
     next_byte_ = header.data_offset;
-    bytes_left_ = fs::file_size(path) - header.data_offset;
+    bytes_left_ = static_cast<std::uint64_t>(end) - header.data_offset;
     buffer_.resize(raw_options.read_buffer_bytes / sizeof(Word));
     raw_.resize(kSliceEvents + Decoder::kMaxEventsPerWord - 1);
 
@@ -187,7 +198,7 @@ class RawReader final : public RecordingReader {
                           std::to_string(header.height) + ", from the " + header.geometry_source);
     for (const char* key : {"plugin_name", "serial_number", "date"})
       if (const auto* v = find_key(header, key))
-        info_.notes.push_back(std::string(key) + ": " + *v);
+        info_.notes.push_back(std::string(key) + ": " + escape_non_utf8(*v));
     info_.notes.push_back(
         "CD events before the first TIME_HIGH have no known time: dropped and counted");
   }
@@ -226,9 +237,9 @@ class RawReader final : public RecordingReader {
     const std::size_t want = static_cast<std::size_t>(
         std::min<std::uint64_t>(bytes_left_, buffer_.size() * sizeof(Word)));
     buffer_byte_ = next_byte_;
-    in_.read(reinterpret_cast<char*>(buffer_.data()), static_cast<std::streamsize>(want));
-    if (static_cast<std::size_t>(in_.gcount()) != want)
-      throw InputError(path_, "byte " + std::to_string(next_byte_ + in_.gcount()),
+    in_->read(reinterpret_cast<char*>(buffer_.data()), static_cast<std::streamsize>(want));
+    if (static_cast<std::size_t>(in_->gcount()) != want)
+      throw InputError(path_, "byte " + std::to_string(next_byte_ + in_->gcount()),
                        "read failed (file shrank or I/O error)");
     next_byte_ += want;
     bytes_left_ -= want;
@@ -253,6 +264,9 @@ class RawReader final : public RecordingReader {
           std::string("unknown ") + (sizeof(Word) == 4 ? "EVT 2.0" : "EVT 3.0") + " word type",
           at(c.first_unknown), c.unknown);
     if (c.wraps) report_.repair("time counter wrapped", at(c.first_wrap), c.wraps);
+    if (c.time_overflow)
+      report_.drop("event time beyond the int64 nanosecond range (time counter wrapped too often)",
+                   at(c.first_time_overflow), c.time_overflow);
     if (c.glitch_events)
       report_.drop("event under a TIME_HIGH far ahead of the stream (held until the next TIME_HIGH)",
                    at(c.first_glitch_event), c.glitch_events);
@@ -281,7 +295,7 @@ class RawReader final : public RecordingReader {
   ReadReport report_;
   EventSanitizer sanitizer_;
   Decoder decoder_;
-  std::ifstream in_;
+  std::unique_ptr<std::istream> in_;
   std::uint64_t next_byte_ = 0;    ///< file offset of the next read
   std::uint64_t bytes_left_ = 0;   ///< data bytes not yet read
   std::uint64_t buffer_byte_ = 0;  ///< file offset of buffer_[0]
@@ -308,6 +322,10 @@ bool looks_like_prophesee_raw(std::string_view head) {
 RawHeader read_prophesee_raw_header(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path, "", "cannot open file");
+  return read_prophesee_raw_header(in, path);
+}
+
+RawHeader read_prophesee_raw_header(std::istream& in, const std::string& path) {
   std::string buf(kMaxHeaderBytes, '\0');
   in.read(buf.data(), static_cast<std::streamsize>(buf.size()));
   buf.resize(static_cast<std::size_t>(in.gcount()));
@@ -340,15 +358,31 @@ RawHeader read_prophesee_raw_header(const std::string& path) {
   return h;
 }
 
+std::unique_ptr<RecordingReader> open_prophesee_raw(std::unique_ptr<std::istream> in,
+                                                    const std::string& name,
+                                                    const ReaderOptions& options,
+                                                    const PropheseeRawOptions& raw_options) {
+  if (const std::string why = raw_options.validate(); !why.empty())
+    throw ConfigError("PropheseeRawOptions: " + why);
+  if (!in || !*in) throw InputError(name, "", "cannot open file");
+  const RawHeader header = read_prophesee_raw_header(*in, name);
+  if (header.encoding == "evt2")
+    return std::make_unique<RawReader<Evt2Decoder>>(std::move(in), name, header, options,
+                                                    raw_options);
+  return std::make_unique<RawReader<Evt3Decoder>>(std::move(in), name, header, options,
+                                                  raw_options);
+}
+
 std::unique_ptr<RecordingReader> open_prophesee_raw(const std::string& path,
                                                     const ReaderOptions& options,
                                                     const PropheseeRawOptions& raw_options) {
   if (const std::string why = raw_options.validate(); !why.empty())
     throw ConfigError("PropheseeRawOptions: " + why);
-  const RawHeader header = read_prophesee_raw_header(path);
-  if (header.encoding == "evt2")
-    return std::make_unique<RawReader<Evt2Decoder>>(path, header, options, raw_options);
-  return std::make_unique<RawReader<Evt3Decoder>>(path, header, options, raw_options);
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) throw InputError(path, "", "is a folder, not a file");
+  auto in = std::make_unique<std::ifstream>(path, std::ios::binary);
+  if (!*in) throw InputError(path, "", "cannot open file");
+  return open_prophesee_raw(std::move(in), path, options, raw_options);
 }
 
 }  // namespace fdv

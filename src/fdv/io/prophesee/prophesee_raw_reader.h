@@ -15,6 +15,7 @@
 /// and counted in info().notes, which is complete once read() has returned false.
 /// Not thread-safe.
 #include <cstddef>
+#include <istream>
 #include <map>
 #include <memory>
 #include <string>
@@ -49,9 +50,20 @@ bool looks_like_prophesee_raw(std::string_view head);
 /// Reads and interprets the header of `path`. Throws InputError (file, "byte N" or "key K",
 /// reason) for an unterminated header, an unsupported encoding (EVT 2.1, a DAT file), or when
 /// neither the encoding nor the sensor size can be determined.
+/// Header values are kept as written (any bytes); escape them (escape_non_utf8) before printing.
 RawHeader read_prophesee_raw_header(const std::string& path);
+/// As above, reading `in` from its current position (the file's first byte); `name` stands for
+/// the file in errors.
+RawHeader read_prophesee_raw_header(std::istream& in, const std::string& name);
 
+/// Header values that reach info().notes are passed through escape_non_utf8 (valid UTF-8).
 std::unique_ptr<RecordingReader> open_prophesee_raw(const std::string& path,
+                                                    const ReaderOptions& options = {},
+                                                    const PropheseeRawOptions& raw_options = {});
+/// As above, reading from `in` (which must be seekable, the file's first byte at position 0);
+/// `name` stands for the file in errors and in info().path.
+std::unique_ptr<RecordingReader> open_prophesee_raw(std::unique_ptr<std::istream> in,
+                                                    const std::string& name,
                                                     const ReaderOptions& options = {},
                                                     const PropheseeRawOptions& raw_options = {});
 
