@@ -1,12 +1,19 @@
 #include "fdv/core/calibration.h"
 
+#include <tinyxml2.h>
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
-#include <opencv2/core.hpp>
+#include <optional>
 #include <sstream>
+#include <tuple>
+#include <vector>
 
+#include "fdv/core/config_text.h"
 #include "fdv/core/error.h"
 
 namespace fdv {
@@ -98,73 +105,251 @@ Eigen::Isometry3d read_transform(const YAML::Node& node, const std::string& file
   return T;
 }
 
-Calibration load_project_yaml(const std::string& path) {
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(path);
-  } catch (const YAML::ParserException& e) {
-    throw InputError(path, "line " + std::to_string(e.mark.line + 1), e.msg);
-  }
+Calibration read_project_yaml(const YAML::Node& root, const std::string& file) {
+  if (root && !root.IsNull() && !root.IsMap())
+    throw InputError(file, "", "expected a map of keys (event_camera, T_B_E, ...) at the top level");
   Calibration c;
-  c.event_camera = read_camera(root["event_camera"], path, "event_camera");
-  if (root["depth_camera"]) c.depth_camera = read_camera(root["depth_camera"], path, "depth_camera");
-  c.T_B_E = read_transform(root["T_B_E"], path, "T_B_E");
-  c.T_B_D = read_transform(root["T_B_D"], path, "T_B_D");
-  if (root["R_B_I"]) c.R_B_I = read_rotation(root["R_B_I"], path, "R_B_I");
+  c.event_camera = read_camera(root["event_camera"], file, "event_camera");
+  if (root["depth_camera"]) c.depth_camera = read_camera(root["depth_camera"], file, "depth_camera");
+  c.T_B_E = read_transform(root["T_B_E"], file, "T_B_E");
+  c.T_B_D = read_transform(root["T_B_D"], file, "T_B_D");
+  if (root["R_B_I"]) c.R_B_I = read_rotation(root["R_B_I"], file, "R_B_I");
   return c;
 }
 
-// OpenCV FileStorage layout (XML or "%YAML:1.0"), optionally nested one level under a camera name.
-Calibration load_opencv_storage(const std::string& path) {
-  cv::FileStorage fs;
+Calibration load_project_yaml(std::string_view text, const std::string& file) {
+  const YAML::Node root = parse_config_yaml(text, file);
   try {
-    fs.open(path, cv::FileStorage::READ);
-  } catch (const cv::Exception& e) {
-    throw InputError(path, "", "not a readable OpenCV calibration file: " + e.msg);
+    return read_project_yaml(root, file);
+  } catch (const YAML::Exception& e) {
+    // A safety net: the readers above check node kinds before converting.
+    throw InputError(file, yaml_position(e.mark), yaml_reason(e));
   }
-  if (!fs.isOpened()) throw InputError(path, "", "cannot open as an OpenCV calibration file");
-  cv::FileNode node = fs.root();
-  if (node["camera_matrix"].empty()) {
-    const cv::FileNode root = fs.root();
-    for (auto it = root.begin(); it != root.end(); ++it)
-      if ((*it).isMap() && !(*it)["camera_matrix"].empty()) {
-        node = *it;
-        break;
-      }
+}
+
+// ---- OpenCV FileStorage layout, read without OpenCV (its parser hangs and overflows the stack
+// on hostile text): YAML via yaml-cpp, XML via tinyxml2. The calibration sits at the top level or
+// inside one named map (the DV software writes <opencv_storage><DAVIS346_...>).
+
+/// Largest matrix a calibration holds [elements]: OpenCV's richest distortion model has 14
+/// coefficients, the camera matrix 9. Checked on rows and cols before the data is read.
+constexpr long long kMaxCalibrationMatrixElements = 14;
+
+/// A matrix as declared by an `opencv-matrix` node, single channel, row-major.
+struct CvMatrix {
+  long long rows = 0, cols = 0;
+  std::vector<double> data;
+};
+
+/// OpenCV element type of `dt` ("d", "f", "i", ...; a leading "1" allowed): 0 when unsupported.
+char matrix_type(std::string dt) {
+  if (dt.size() == 2 && dt[0] == '1') dt.erase(0, 1);
+  if (dt.size() == 1 && std::string_view("ucwsifd").find(dt[0]) != std::string_view::npos) return dt[0];
+  return 0;
+}
+
+/// What OpenCV stores for `x` in an element of type `t` (integers rounded and saturated).
+double as_element(double x, char t) {
+  auto sat = [x](double lo, double hi) { return std::clamp(std::nearbyint(x), lo, hi); };
+  switch (t) {
+    case 'u': return sat(0, 255);
+    case 'c': return sat(-128, 127);
+    case 'w': return sat(0, 65535);
+    case 's': return sat(-32768, 32767);
+    case 'i': return sat(-2147483648.0, 2147483647.0);
+    case 'f': return static_cast<double>(static_cast<float>(x));
+    default: return x;
   }
-  if (node["camera_matrix"].empty()) throw InputError(path, "key camera_matrix", "not found");
-  cv::Mat K, D;
-  node["camera_matrix"] >> K;
-  node["distortion_coefficients"] >> D;
-  if (K.rows != 3 || K.cols != 3) throw InputError(path, "key camera_matrix", "must be 3x3");
-  K.convertTo(K, CV_64F);
+}
+
+/// Checks a declared shape and type before anything is allocated for the data.
+char check_matrix_header(long long rows, long long cols, const std::string& dt,
+                         const std::string& file, const std::string& key) {
+  if (rows < 0 || cols < 0 || rows > kMaxCalibrationMatrixElements ||
+      cols > kMaxCalibrationMatrixElements || rows * cols > kMaxCalibrationMatrixElements)
+    throw InputError(file, "key " + key,
+                     "declares " + std::to_string(rows) + "x" + std::to_string(cols) +
+                         ": a calibration matrix has at most " +
+                         std::to_string(kMaxCalibrationMatrixElements) + " elements");
+  const char t = matrix_type(dt);
+  if (t == 0)
+    throw InputError(file, "key " + key + ".dt",
+                     "'" + dt.substr(0, 16) + "' is not a single-channel element type (u c w s i f d)");
+  return t;
+}
+
+std::optional<double> finite_number(const char* s) {
+  if (s == nullptr) return std::nullopt;
+  while (std::isspace(static_cast<unsigned char>(*s))) ++s;
+  if (*s == '\0') return std::nullopt;
+  char* end = nullptr;
+  const double v = std::strtod(s, &end);
+  while (std::isspace(static_cast<unsigned char>(*end))) ++end;
+  if (*end != '\0' || !std::isfinite(v)) return std::nullopt;
+  return v;
+}
+
+/// An integer in [-2^31, 2^31) given as a number (OpenCV rounds a real one).
+std::optional<long long> integer_value(std::optional<double> v) {
+  if (!v || *v < -2147483648.0 || *v > 2147483647.0) return std::nullopt;
+  return std::llround(*v);
+}
+
+std::optional<double> yaml_number(const YAML::Node& n) {
+  if (!n || !n.IsScalar()) return std::nullopt;
+  return finite_number(n.Scalar().c_str());
+}
+
+CvMatrix read_yaml_matrix(const YAML::Node& n, const std::string& file, const std::string& key) {
+  if (!n.IsMap()) throw InputError(file, "key " + key, "expected an opencv-matrix {rows, cols, dt, data}");
+  const auto rows = integer_value(yaml_number(n["rows"]));
+  const auto cols = integer_value(yaml_number(n["cols"]));
+  if (!rows || !cols) throw InputError(file, "key " + key, "rows and cols must be integers");
+  const YAML::Node dt_node = n["dt"];
+  const std::string dt = dt_node && dt_node.IsScalar() ? dt_node.Scalar() : "";
+  const char t = check_matrix_header(*rows, *cols, dt, file, key);
+  CvMatrix m{*rows, *cols, {}};
+  const std::size_t expected = static_cast<std::size_t>(*rows * *cols);
+  const YAML::Node data = n["data"];
+  if (expected == 0 && (!data || data.IsNull())) return m;
+  if (!data || !data.IsSequence() || data.size() != expected)
+    throw InputError(file, "key " + key + ".data",
+                     "expected a list of " + std::to_string(expected) + " numbers (rows x cols)");
+  for (std::size_t i = 0; i < expected; ++i) {
+    const auto v = yaml_number(data[i]);
+    if (!v) throw InputError(file, "key " + key + ".data", "element " + std::to_string(i) + " is not a finite number");
+    m.data.push_back(as_element(*v, t));
+  }
+  return m;
+}
+
+const char* xml_text(const tinyxml2::XMLElement* e, const char* name) {
+  const tinyxml2::XMLElement* c = e->FirstChildElement(name);
+  return c == nullptr ? nullptr : c->GetText();
+}
+
+CvMatrix read_xml_matrix(const tinyxml2::XMLElement* e, const std::string& file, const std::string& key) {
+  const auto rows = integer_value(finite_number(xml_text(e, "rows")));
+  const auto cols = integer_value(finite_number(xml_text(e, "cols")));
+  if (!rows || !cols) throw InputError(file, "key " + key, "rows and cols must be integers");
+  const char* dt_text = xml_text(e, "dt");
+  std::string dt = dt_text == nullptr ? "" : dt_text;
+  dt.erase(0, dt.find_first_not_of(" \t\r\n"));
+  dt.erase(dt.find_last_not_of(" \t\r\n") + 1);
+  const char t = check_matrix_header(*rows, *cols, dt, file, key);
+  CvMatrix m{*rows, *cols, {}};
+  const std::size_t expected = static_cast<std::size_t>(*rows * *cols);
+  // Whitespace-separated numbers; at most `expected` are kept, one more is an error.
+  std::istringstream in(xml_text(e, "data") == nullptr ? "" : xml_text(e, "data"));
+  std::string token;
+  while (in >> token) {
+    const auto v = finite_number(token.c_str());
+    if (!v) throw InputError(file, "key " + key + ".data", "'" + token.substr(0, 40) + "' is not a finite number");
+    if (m.data.size() == expected)
+      throw InputError(file, "key " + key + ".data", "more than " + std::to_string(expected) + " numbers (rows x cols)");
+    m.data.push_back(as_element(*v, t));
+  }
+  if (m.data.size() != expected)
+    throw InputError(file, "key " + key + ".data",
+                     "expected " + std::to_string(expected) + " numbers (rows x cols), got " +
+                         std::to_string(m.data.size()));
+  return m;
+}
+
+/// The calibration's entries as found in either encoding; `prefix` is "" or "NAME.".
+struct OpenCvEntries {
+  std::string prefix;
+  CvMatrix K;
+  std::optional<CvMatrix> D;
+  std::optional<long long> width, height;
+};
+
+Calibration from_opencv_entries(const OpenCvEntries& in, const std::string& file) {
+  const std::string K_key = in.prefix + "camera_matrix";
+  if (in.K.rows != 3 || in.K.cols != 3) throw InputError(file, "key " + K_key, "must be 3x3");
   Calibration c;
   auto& cam = c.event_camera;
-  cam.fx = K.at<double>(0, 0), cam.fy = K.at<double>(1, 1);
-  cam.cx = K.at<double>(0, 2), cam.cy = K.at<double>(1, 2);
-  if (!D.empty()) {
-    D.convertTo(D, CV_64F);
-    if (D.total() != 4 && D.total() != 5)
-      throw InputError(path, "key distortion_coefficients",
-                       "expected 4 or 5 coefficients (k1 k2 p1 p2 [k3]), got " +
-                           std::to_string(D.total()));
-    const double* d = D.ptr<double>();
-    cam.distortion = {d[0], d[1], d[2], d[3], D.total() == 5 ? d[4] : 0.0};
+  const auto& k = in.K.data;
+  cam.fx = k[0], cam.fy = k[4], cam.cx = k[2], cam.cy = k[5];
+  if (in.D && !in.D->data.empty()) {
+    const auto& d = in.D->data;
+    if (d.size() != 4 && d.size() != 5)
+      throw InputError(file, "key " + in.prefix + "distortion_coefficients",
+                       "expected 4 or 5 coefficients (k1 k2 p1 p2 [k3]), got " + std::to_string(d.size()));
+    cam.distortion = {d[0], d[1], d[2], d[3], d.size() == 5 ? d[4] : 0.0};
   }
-  cam.width = static_cast<int>(node["image_width"].empty() ? 0 : static_cast<int>(node["image_width"]));
-  cam.height = static_cast<int>(node["image_height"].empty() ? 0 : static_cast<int>(node["image_height"]));
-  if (cam.width == 0 || cam.height == 0)
-    throw InputError(path, "key image_width/image_height", "missing image size");
-  if (const auto why = cam.validate(); !why.empty()) throw InputError(path, "key camera_matrix", why);
+  for (auto [name, value, field] : {std::tuple{"image_width", in.width, &cam.width},
+                                    std::tuple{"image_height", in.height, &cam.height}}) {
+    if (!value || *value == 0) throw InputError(file, "key " + in.prefix + name, "missing image size");
+    *field = static_cast<int>(*value);
+  }
+  if (const auto why = cam.validate(); !why.empty()) throw InputError(file, "key " + K_key, why);
   return c;
 }
 
-bool looks_like_opencv_storage(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path, "", "cannot open calibration file");
-  std::string first;
-  std::getline(in, first);
-  return first.rfind("<?xml", 0) == 0 || first.rfind("%YAML:1.", 0) == 0;
+bool present(const YAML::Node& n) { return n && !n.IsNull(); }
+
+Calibration load_opencv_yaml(std::string_view text, const std::string& file) {
+  const YAML::Node root = parse_config_yaml(text, file);
+  try {
+    if (!root.IsMap()) throw InputError(file, "", "expected a map of keys at the top level");
+    OpenCvEntries e;
+    // Built, not assigned: a YAML::Node assignment would write into the tree it refers to.
+    const YAML::Node node = [&]() -> YAML::Node {
+      if (present(root["camera_matrix"])) return root;
+      for (const auto& kv : root)
+        if (kv.second.IsMap() && present(kv.second["camera_matrix"])) {
+          e.prefix = (kv.first.IsScalar() ? kv.first.Scalar() : "?") + ".";
+          return kv.second;
+        }
+      return root;
+    }();
+    if (!present(node["camera_matrix"])) throw InputError(file, "key camera_matrix", "not found");
+    e.K = read_yaml_matrix(node["camera_matrix"], file, e.prefix + "camera_matrix");
+    if (present(node["distortion_coefficients"]))
+      e.D = read_yaml_matrix(node["distortion_coefficients"], file, e.prefix + "distortion_coefficients");
+    e.width = integer_value(yaml_number(node["image_width"]));
+    e.height = integer_value(yaml_number(node["image_height"]));
+    return from_opencv_entries(e, file);
+  } catch (const YAML::Exception& e) {
+    throw InputError(file, yaml_position(e.mark), yaml_reason(e));
+  }
+}
+
+Calibration load_opencv_xml(std::string_view text, const std::string& file) {
+  check_config_text(text, file);
+  tinyxml2::XMLDocument doc;
+  if (doc.Parse(text.data(), text.size()) != tinyxml2::XML_SUCCESS)
+    throw InputError(file, "line " + std::to_string(doc.ErrorLineNum()),
+                     std::string("not valid XML: ") + doc.ErrorName());
+  const tinyxml2::XMLElement* root = doc.RootElement();
+  if (root == nullptr || std::string_view(root->Name()) != "opencv_storage")
+    throw InputError(file, "", "not an OpenCV storage file (no <opencv_storage> root element)");
+  const tinyxml2::XMLElement* node = root;
+  OpenCvEntries e;
+  if (root->FirstChildElement("camera_matrix") == nullptr)
+    for (const auto* child = root->FirstChildElement(); child != nullptr; child = child->NextSiblingElement())
+      if (child->FirstChildElement("camera_matrix") != nullptr) {
+        node = child;
+        e.prefix = std::string(child->Name()) + ".";
+        break;
+      }
+  const auto* K = node->FirstChildElement("camera_matrix");
+  if (K == nullptr) throw InputError(file, "key camera_matrix", "not found");
+  e.K = read_xml_matrix(K, file, e.prefix + "camera_matrix");
+  if (const auto* D = node->FirstChildElement("distortion_coefficients"); D != nullptr && !D->NoChildren())
+    e.D = read_xml_matrix(D, file, e.prefix + "distortion_coefficients");
+  e.width = integer_value(finite_number(xml_text(node, "image_width")));
+  e.height = integer_value(finite_number(xml_text(node, "image_height")));
+  return from_opencv_entries(e, file);
+}
+
+/// The OpenCV layouts announce themselves on the first line, as OpenCV requires.
+enum class CalibrationFormat { kProjectYaml, kOpenCvYaml, kOpenCvXml };
+CalibrationFormat detect_format(std::string_view text) {
+  if (text.rfind("<?xml", 0) == 0) return CalibrationFormat::kOpenCvXml;
+  if (text.rfind("%YAML:1.", 0) == 0) return CalibrationFormat::kOpenCvYaml;
+  return CalibrationFormat::kProjectYaml;
 }
 
 void write_transform(YAML::Emitter& out, const std::string& key, const Eigen::Isometry3d& T) {
@@ -201,10 +386,19 @@ std::string Calibration::validate() const {
   return {};
 }
 
-Calibration load_calibration(const std::string& path) {
-  Calibration c = looks_like_opencv_storage(path) ? load_opencv_storage(path) : load_project_yaml(path);
-  if (auto why = c.validate(); !why.empty()) throw InputError(path, "", why);
+Calibration load_calibration_text(std::string_view text, const std::string& name) {
+  Calibration c;
+  switch (detect_format(text)) {
+    case CalibrationFormat::kOpenCvXml: c = load_opencv_xml(text, name); break;
+    case CalibrationFormat::kOpenCvYaml: c = load_opencv_yaml(text, name); break;
+    case CalibrationFormat::kProjectYaml: c = load_project_yaml(text, name); break;
+  }
+  if (auto why = c.validate(); !why.empty()) throw InputError(name, "", why);
   return c;
+}
+
+Calibration load_calibration(const std::string& path) {
+  return load_calibration_text(read_config_file(path), path);
 }
 
 void save_calibration(const Calibration& calib, const std::string& path) {

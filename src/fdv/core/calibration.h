@@ -4,6 +4,7 @@
 #include <Eigen/Geometry>
 #include <optional>
 #include <string>
+#include <string_view>
 
 #include "fdv/core/camera.h"
 
@@ -25,11 +26,20 @@ struct Calibration {
 /// Reads a calibration file. Two layouts are recognised:
 ///  - the project's YAML (docs/FORMATS.md: `event_camera`, optional `depth_camera`, `T_B_E`,
 ///    `T_B_D`, `R_B_I`), parsed with yaml-cpp;
-///  - an OpenCV FileStorage file (XML or YAML) with `camera_matrix`, `distortion_coefficients`,
-///    `image_width`, `image_height`, at the top level or inside one named node (as written by
-///    the DV software and OpenCV's calibration sample). Extrinsics are identity then.
-/// Throws InputError naming the file, the key and the reason.
+///  - OpenCV's FileStorage layout, XML (first line `<?xml`, root `<opencv_storage>`) or YAML
+///    (first line `%YAML:1.x`), with `camera_matrix` and `distortion_coefficients`
+///    (`opencv-matrix`: rows, cols, dt, data), `image_width`, `image_height`, at the top level or
+///    inside one named node (as written by the DV software and OpenCV's calibration sample).
+///    Extrinsics are identity then. Read with yaml-cpp / tinyxml2, not OpenCV (whose parser
+///    hangs or overflows the stack on some malformed text); a matrix may declare at most 14
+///    elements.
+/// The file may hold at most kMaxConfigFileBytes (fdv/core/config_text.h). Throws InputError
+/// naming the file, the key (or line) and the reason; nothing else.
 Calibration load_calibration(const std::string& path);
+
+/// Same as load_calibration on text in memory; `name` stands for the file in errors. The layout
+/// is detected from the text's first line.
+Calibration load_calibration_text(std::string_view text, const std::string& name);
 
 /// Writes the project's YAML layout (round-trips through load_calibration).
 void save_calibration(const Calibration& calib, const std::string& path);
