@@ -39,17 +39,7 @@ Calibration pixel_only_calibration(int width, int height) {
 
 PerceptionOptions load_options(const RunArgs& args) {
   PerceptionOptions o;
-  if (!args.config.empty()) {
-    YAML::Node root;
-    try {
-      root = YAML::LoadFile(args.config);
-    } catch (const YAML::BadFile&) {
-      throw InputError(args.config, "", "cannot open the file");
-    } catch (const YAML::Exception& e) {
-      throw InputError(args.config, "line " + std::to_string(e.mark.line + 1), e.msg);
-    }
-    o = load_perception_options(root, args.config);
-  }
+  if (!args.config.empty()) o = load_perception_options_file(args.config);
   // Command-line flags override the file.
   if (!args.method.empty()) {
     if (!parse_compensation_method(args.method))

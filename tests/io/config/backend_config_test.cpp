@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "fdv/core/config_text.h"
 #include "fdv/core/error.h"
 #include "test_support.h"
 
@@ -420,6 +421,65 @@ TEST(BackendConfig, ErrorsFromAFileNameThatFile) {
     ADD_FAILURE() << "no error";
   } catch (const InputError& e) {
     EXPECT_EQ(std::string(e.what()), path + ":key tracking: gate_chi2 must be > 0");
+  }
+}
+
+/// "where | reason" of load_perception_options_text on `yaml` (named "cfg.yaml").
+std::string text_error_of(const std::string& yaml) {
+  try {
+    load_perception_options_text(yaml, "cfg.yaml");
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), "cfg.yaml");
+    return e.where() + " | " + e.reason();
+  }
+  return "no error";
+}
+
+TEST(BackendConfig, MalformedStructureNamesFileAndKey) {
+  // f9: a non-scalar key let yaml-cpp's "bad conversion" out, naming no file.
+  EXPECT_EQ(text_error_of("? [a]\n: 1\n"), "key ? | a key must be a plain name, not a list or map (line 1)");
+  EXPECT_EQ(text_error_of("tracking:\n  {a: 1}: 2\n"),
+            "key tracking.? | a key must be a plain name, not a list or map (line 2)");
+  EXPECT_EQ(text_error_of("compensation:\n  contrast_max:\n    [x]: 1\n"),
+            "key compensation.contrast_max.? | a key must be a plain name, not a list or map (line 3)");
+  EXPECT_EQ(text_error_of("7\n"), " | expected a map of options");
+  EXPECT_EQ(text_error_of("- tracking\n"), " | expected a map of options");
+  EXPECT_EQ(text_error_of("tracking: [1, 2]\n"), "key tracking | expected a map of options");
+  EXPECT_EQ(text_error_of("tracking: {gate_chi2: [1]}\n"),
+            "key tracking.gate_chi2 | expected a number, got '(not a scalar)'");
+  EXPECT_EQ(text_error_of("window_ms: {a: 1}\n"),
+            "key window_ms | expected a number, got '(not a scalar)'");
+  EXPECT_EQ(text_error_of("tracking: {gate_chi2: [1\n").substr(0, 7), "line 2,");
+  EXPECT_NE(text_error_of("tracking: " + std::string(60000, '{')).find("| nested deeper than"),
+            std::string::npos);
+  EXPECT_EQ(text_error_of(std::string(kMaxConfigFileBytes + 1, ' ')),
+            " | larger than 1048576 bytes: not a configuration file");
+  EXPECT_EQ(text_error_of(""), "no error");
+}
+
+TEST(BackendConfig, FuzzFindingNonScalarKey) {
+  const auto path = test::fuzz_finding("options/f9-non-scalar-key.yaml");
+  FDV_REQUIRE_REAL_FILE(path);
+  try {
+    load_perception_options_file(path);
+    ADD_FAILURE() << "accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), path);
+    EXPECT_EQ(e.where(), "key ?");
+    EXPECT_EQ(e.reason(), "a key must be a plain name, not a list or map (line 1)");
+  }
+}
+
+TEST(BackendConfig, FileLoaderReadsWhatTheTextLoaderReads) {
+  const std::string dir = test::scratch_dir("backend_config_file_loader");
+  const std::string path = dir + "/ok.yaml";
+  std::ofstream(path) << "tracking:\n  max_tracks: 3\n";
+  EXPECT_EQ(load_perception_options_file(path).tracking.max_tracks, 3);
+  try {
+    load_perception_options_file(dir + "/missing.yaml");
+    ADD_FAILURE() << "accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.reason(), "cannot open the file");
   }
 }
 

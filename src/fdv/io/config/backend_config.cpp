@@ -2,6 +2,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "fdv/core/config_text.h"
 #include "fdv/core/error.h"
 #include "fdv/io/config/frontend_config.h"
 #include "fdv/io/config/yaml_section.h"
@@ -173,6 +174,20 @@ PerceptionOptions load_perception_options(const YAML::Node& root, const std::str
   // A safety net: every section and scalar was validated above.
   s.check(o.validate());
   return o;
+}
+
+PerceptionOptions load_perception_options_text(std::string_view text, const std::string& file) {
+  const YAML::Node root = parse_config_yaml(text, file);
+  try {
+    return load_perception_options(root, file);
+  } catch (const YAML::Exception& e) {
+    // A safety net: Section turns yaml-cpp errors into key-naming ones already.
+    throw InputError(file, yaml_position(e.mark), yaml_reason(e));
+  }
+}
+
+PerceptionOptions load_perception_options_file(const std::string& path) {
+  return load_perception_options_text(read_config_file(path), path);
 }
 
 }  // namespace fdv

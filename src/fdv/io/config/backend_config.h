@@ -2,8 +2,8 @@
 /// YAML loading of the back end's options (tracking, depth segmentation, estimation, prediction)
 /// and of the whole pipeline's PerceptionOptions from one file (what `fdv run --config` reads).
 ///
+///   PerceptionOptions o = load_perception_options_file(path);       // every section
 ///   YAML::Node root = YAML::LoadFile(path);
-///   PerceptionOptions o = load_perception_options(root, path);      // every section
 ///   TrackerOptions t = load_tracker_options(root["tracking"], path);  // or one section
 ///
 /// Same rules as frontend_config.h: a missing (undefined or null) section or key keeps its
@@ -16,6 +16,7 @@
 /// beside it when `monocular_baseline` is true); `gravity` is a list [x, y, z] in W [m/s²];
 /// `event_focal_px` 0 (the default) means "from the calibration", which Perception fills in.
 #include <string>
+#include <string_view>
 
 #include "fdv/depth/depth_segmentation.h"
 #include "fdv/estimation/collision.h"
@@ -44,5 +45,12 @@ PredictionOptions load_prediction_options(const YAML::Node& node, const std::str
 /// monocular_baseline, max_lateness_ms, odometry_max_extrapolation_ms. An unknown top-level key
 /// is an InputError listing the valid ones. An empty file (null root) gives PerceptionOptions{}.
 PerceptionOptions load_perception_options(const YAML::Node& root, const std::string& file);
+
+/// load_perception_options on YAML text in memory (what `fdv run --config` reads); `file` names
+/// it in errors. At most kMaxConfigFileBytes (fdv/core/config_text.h). Throws InputError naming
+/// the file and the key (or the line, for a syntax error); no yaml-cpp exception escapes.
+PerceptionOptions load_perception_options_text(std::string_view text, const std::string& file);
+/// Reads `path` (size-checked) and calls load_perception_options_text.
+PerceptionOptions load_perception_options_file(const std::string& path);
 
 }  // namespace fdv

@@ -7,7 +7,8 @@
 ///   s.apply();                                     // unknown key -> InputError
 ///   s.check(o.validate());                         // invalid values -> InputError
 ///
-/// Every error is InputError(file, "key <section>.<key>", reason). An undefined or null node is
+/// Every error is InputError(file, "key <section>.<key>", reason), also for a yaml-cpp exception
+/// inside a setter; a non-scalar key is "key <section>.?". An undefined or null node is
 /// an empty section (defaults kept). Setters run in the file's order. Not for use outside the
 /// config loaders: the public API is frontend_config.h and backend_config.h.
 #include <yaml-cpp/yaml.h>
@@ -21,6 +22,7 @@
 #include <map>
 #include <string>
 
+#include "fdv/core/config_text.h"
 #include "fdv/core/error.h"
 #include "fdv/core/time.h"
 
@@ -58,10 +60,18 @@ class Section {
   void apply() const {
     if (!node_ || node_.IsNull()) return;
     for (const auto& kv : node_) {
-      const std::string key = kv.first.as<std::string>();
+      if (!kv.first.IsScalar())
+        throw InputError(file_, where(path("?")),
+                         "a key must be a plain name, not a list or map" + at(kv.first.Mark()));
+      const std::string key = kv.first.Scalar();
       const auto it = setters_.find(key);
       if (it == setters_.end()) throw InputError(file_, where(path(key)), unknown_reason());
-      it->second(kv.second, path(key));
+      try {
+        it->second(kv.second, path(key));
+      } catch (const YAML::Exception& e) {
+        // A safety net: the value readers check node kinds before converting.
+        throw InputError(file_, where(path(key)), yaml_reason(e) + at(e.mark));
+      }
     }
   }
 
@@ -134,6 +144,9 @@ class Section {
  private:
   std::string path(const std::string& key) const { return name_.empty() ? key : name_ + "." + key; }
   static std::string where(const std::string& key) { return key.empty() ? "" : "key " + key; }
+  static std::string at(const YAML::Mark& m) {
+    return m.is_null() ? "" : " (line " + std::to_string(m.line + 1) + ")";
+  }
   static std::string scalar(const YAML::Node& n) {
     return n.IsScalar() ? n.Scalar() : "(not a scalar)";
   }
