@@ -44,19 +44,14 @@ class RecordingSink : public sim::DatasetSink {
 
 sim::ScenarioConfig build_config(const SimulateArgs& args) {
   YAML::Node file;
-  if (!args.config.empty()) {
-    try {
-      file = YAML::LoadFile(args.config);
-    } catch (const YAML::BadFile&) {
-      throw InputError(args.config, "", "cannot open the file");
-    } catch (const YAML::ParserException& e) {
-      throw InputError(args.config, "line " + std::to_string(e.mark.line + 1), e.msg);
-    }
-  }
+  if (!args.config.empty()) file = sim::load_scenario_yaml(args.config);
   // The preset comes from --scenario, else the file's `name`; its randomisation from --seed,
   // else the file's `seed`, else 1.
   std::string name = args.scenario;
-  if (name.empty() && file && file.IsMap() && file["name"]) name = file["name"].Scalar();
+  if (name.empty() && file && file.IsMap() && file["name"]) {
+    if (!file["name"].IsScalar()) throw InputError(args.config, "key name", "expected a string");
+    name = file["name"].Scalar();
+  }
   if (name.empty()) throw ConfigError("no scenario: give --scenario NAME (or `name:` in --config)");
   std::uint64_t seed = 1;
   if (args.seed) {

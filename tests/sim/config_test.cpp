@@ -3,6 +3,7 @@
 
 #include <fstream>
 
+#include "fdv/core/config_text.h"
 #include "fdv/core/error.h"
 #include "fdv/sim/scenario_config.h"
 #include "test_support.h"
@@ -111,9 +112,59 @@ TEST(ScenarioConfig, BadFilesGiveFileKeyAndReason) {
   EXPECT_EQ(error_of("scene:\n  room_min_W_m: [1, 2]\n"),
             "key scene.room_min_W_m | expected a list of 3 numbers");
   EXPECT_EQ(error_of("imu: 5\n"), "key imu | expected a mapping of keys");
-  EXPECT_EQ(error_of("event_camera: {width: 640\n").substr(0, 7), "line 2 ");
+  EXPECT_EQ(error_of("event_camera: {width: 640\n").substr(0, 8), "line 2, ");
   EXPECT_EQ(error_of("depth_camera:\n  min_range_m: 12\n"),
             "key depth_camera.max_range_m | must exceed min_range_m");
+}
+
+/// "where | reason" of apply_scenario_yaml_text on `yaml` (named "scenario.yaml").
+std::string text_error_of(const std::string& yaml) {
+  ScenarioConfig c = make_preset("fast_forward", 1);
+  try {
+    apply_scenario_yaml_text(c, yaml, "scenario.yaml");
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), "scenario.yaml");
+    return e.where() + " | " + e.reason();
+  }
+  return "no error";
+}
+
+TEST(ScenarioConfig, MalformedStructureNamesFileAndKey) {
+  EXPECT_EQ(text_error_of("duration_s: 2.5\n"), "no error");
+  EXPECT_EQ(text_error_of("[a, b]: 1\n"), "key ? | a key must be a plain name, not a list or map (line 1)");
+  EXPECT_EQ(text_error_of("event_camera:\n  {x: 1}: 2\n"),
+            "key event_camera.? | a key must be a plain name, not a list or map (line 2)");
+  EXPECT_EQ(text_error_of("balls:\n  - [1]: 2\n"),
+            "key balls[0].? | a key must be a plain name, not a list or map (line 2)");
+  EXPECT_EQ(text_error_of("42\n"), " | a scenario file must be a mapping of keys");
+  EXPECT_EQ(text_error_of("- a\n"), " | a scenario file must be a mapping of keys");
+  EXPECT_EQ(text_error_of("balls: {a: 1}\n"), "key balls | expected a list");
+  EXPECT_EQ(text_error_of("balls: [5]\n"), "key balls[0] | expected a mapping of keys");
+  std::string many = "balls: [";
+  for (int i = 0; i < 100000; ++i) many += "{},";
+  EXPECT_EQ(text_error_of(many + "]\n"), "key balls | 100000 items, at most 64 are read");
+  EXPECT_EQ(text_error_of("name: [a]\n"), "key name | expected a string");
+  EXPECT_EQ(text_error_of("seed: {a: 1}\n"), "key seed | expected a non-negative integer");
+  EXPECT_EQ(text_error_of("scene: {panels: [{albedo: [1]}]}\n"),
+            "key scene.panels[0].albedo | expected a number");
+  EXPECT_NE(text_error_of("scene: " + std::string(60000, '[')).find("| nested deeper than"),
+            std::string::npos);
+  EXPECT_EQ(text_error_of(std::string(kMaxConfigFileBytes + 1, '#')),
+            " | larger than 1048576 bytes: not a configuration file");
+}
+
+TEST(ScenarioConfig, LoadScenarioYamlChecksSizeAndSyntax) {
+  const std::string path = write_file("s.yaml", "name: swing\nseed: 3\n");
+  EXPECT_EQ(load_scenario_yaml(path)["name"].Scalar(), "swing");
+  const std::string bad = write_file("bad.yaml", "name: [swing\n");
+  try {
+    load_scenario_yaml(bad);
+    ADD_FAILURE() << "accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), bad);
+    EXPECT_EQ(e.where().substr(0, 7), "line 2,");
+  }
+  EXPECT_THROW(load_scenario_yaml(write_file("none/../missing.yaml", "")), InputError);
 }
 
 TEST(ScenarioConfig, ValidateNamesTheKey) {

@@ -8,6 +8,7 @@
 #include <set>
 #include <sstream>
 
+#include "fdv/core/config_text.h"
 #include "fdv/core/error.h"
 #include "fdv/sim/scenario_config.h"
 
@@ -37,6 +38,10 @@ void describe(V& v, ScenarioConfig& c);
 
 // ------------------------------------------------------------------------------------------ load
 
+/// Longest list (balls, panels) read item by item: validate() allows at most 64 panels and
+/// 8 balls; a longer list is refused before its items are built.
+constexpr std::size_t kMaxListItems = 64;
+
 class Loader {
  public:
   Loader(const YAML::Node& node, const std::string& file, std::string prefix)
@@ -47,7 +52,7 @@ class Loader {
     known_.insert(key);
     const YAML::Node n = node_[key];
     if (!n) return;
-    read(n, value, path(key));
+    guarded(path(key), [&] { read(n, value, path(key)); });
   }
 
   template <class T>
@@ -57,8 +62,10 @@ class Loader {
     if (!n) return;
     if (!n.IsMap()) fail(path(key), "expected a mapping of keys");
     Loader inner(n, file_, path(key) + ".");
-    describe(inner, sub);
-    inner.check_unknown();
+    guarded(path(key), [&] {
+      describe(inner, sub);
+      inner.check_unknown();
+    });
   }
 
   template <class T>
@@ -67,14 +74,18 @@ class Loader {
     const YAML::Node n = node_[key];
     if (!n) return;
     if (!n.IsSequence()) fail(path(key), "expected a list");
+    if (n.size() > kMaxListItems)
+      fail(path(key), fmt::format("{} items, at most {} are read", n.size(), kMaxListItems));
     std::vector<T> out;
     for (std::size_t i = 0; i < n.size(); ++i) {
       const std::string item_key = fmt::format("{}[{}]", path(key), i);
       if (!n[i].IsMap()) fail(item_key, "expected a mapping of keys");
       T item = i < items.size() ? items[i] : T{};
       Loader inner(n[i], file_, item_key + ".");
-      describe(inner, item);
-      inner.check_unknown();
+      guarded(item_key, [&] {
+        describe(inner, item);
+        inner.check_unknown();
+      });
       out.push_back(std::move(item));
     }
     items = std::move(out);
@@ -83,6 +94,8 @@ class Loader {
   void check_unknown() const {
     if (!node_.IsMap()) return;
     for (const auto& kv : node_) {
+      if (!kv.first.IsScalar())
+        fail(path("?"), "a key must be a plain name, not a list or map" + at(kv.first.Mark()));
       const std::string key = kv.first.Scalar();
       if (known_.count(key)) continue;
       std::string list;
@@ -95,6 +108,19 @@ class Loader {
   std::string path(const std::string& key) const { return prefix_ + key; }
   [[noreturn]] void fail(const std::string& key, const std::string& reason) const {
     throw InputError(file_, "key " + key, reason);
+  }
+  static std::string at(const YAML::Mark& m) {
+    return m.is_null() ? "" : " (line " + std::to_string(m.line + 1) + ")";
+  }
+  /// Runs `f`; a yaml-cpp exception in it (a safety net: the readers check node kinds before
+  /// converting) becomes InputError naming `key`.
+  template <class F>
+  void guarded(const std::string& key, F&& f) const {
+    try {
+      f();
+    } catch (const YAML::Exception& e) {
+      fail(key, yaml_reason(e) + at(e.mark));
+    }
   }
 
   double number(const YAML::Node& n, const std::string& key) const {
@@ -391,22 +417,30 @@ void apply_scenario_yaml(ScenarioConfig& config, const YAML::Node& node, const s
   if (!node || node.IsNull()) return;
   if (!node.IsMap()) throw InputError(file, "", "a scenario file must be a mapping of keys");
   Loader loader(node, file, "");
-  describe(loader, config);
-  loader.check_unknown();
+  try {
+    describe(loader, config);
+    loader.check_unknown();
+  } catch (const YAML::Exception& e) {
+    throw InputError(file, yaml_position(e.mark), yaml_reason(e));
+  }
+}
+
+YAML::Node parse_scenario_yaml(std::string_view text, const std::string& file) {
+  return parse_config_yaml(text, file);
+}
+
+YAML::Node load_scenario_yaml(const std::string& path) {
+  return parse_config_yaml(read_config_file(path), path);
+}
+
+void apply_scenario_yaml_text(ScenarioConfig& config, std::string_view text, const std::string& file) {
+  apply_scenario_yaml(config, parse_config_yaml(text, file), file);
+  if (const auto problem = config.find_problem())
+    throw InputError(file, "key " + problem->first, problem->second);
 }
 
 void apply_scenario_yaml(ScenarioConfig& config, const std::string& path) {
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(path);
-  } catch (const YAML::BadFile&) {
-    throw InputError(path, "", "cannot open the file");
-  } catch (const YAML::ParserException& e) {
-    throw InputError(path, "line " + std::to_string(e.mark.line + 1), e.msg);
-  }
-  apply_scenario_yaml(config, root, path);
-  if (const auto problem = config.find_problem())
-    throw InputError(path, "key " + problem->first, problem->second);
+  apply_scenario_yaml_text(config, read_config_file(path), path);
 }
 
 std::string to_yaml(const ScenarioConfig& config) {

@@ -19,6 +19,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "fdv/core/calibration.h"
@@ -239,6 +240,14 @@ void apply_scenario_yaml(ScenarioConfig& config, const YAML::Node& node, const s
 /// Loads `path` and applies it; then validates. Throws InputError naming the file, the key (or
 /// line, for a YAML syntax error) and the reason.
 void apply_scenario_yaml(ScenarioConfig& config, const std::string& path);
+/// Same on YAML text in memory; `file` names it in errors. At most kMaxConfigFileBytes
+/// (fdv/core/config_text.h); no yaml-cpp exception escapes.
+void apply_scenario_yaml_text(ScenarioConfig& config, std::string_view text, const std::string& file);
+/// Parses scenario YAML text (size-checked; a syntax error is InputError naming the file and
+/// line), for callers that read keys such as `name` before apply_scenario_yaml.
+YAML::Node parse_scenario_yaml(std::string_view text, const std::string& file);
+/// Reads `path` (size-checked) and parses it as parse_scenario_yaml does.
+YAML::Node load_scenario_yaml(const std::string& path);
 /// The complete configuration as YAML (loadable by apply_scenario_yaml).
 std::string to_yaml(const ScenarioConfig& config);
 
