@@ -6,6 +6,7 @@
 #include <zstd.h>
 
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -130,6 +131,30 @@ TEST(Aedat4Hostile, XmlWithoutRootElementFindings) {
       EXPECT_EQ(e.file(), path);
       EXPECT_EQ(e.reason(), "IOHeader stream description: not valid XML (no root element)");
     }
+  }
+}
+
+TEST(Aedat4Hostile, NonUtf8XmlTextIsEscaped) {
+  // tinyxml2 does not check UTF-8: a stream's source and type reach info().notes, the XML text
+  // can reach an error message.
+  std::string xml = info_xml({{0, "EVTS", 346, 260}, {1, "FRME", 346, 260}});
+  xml.replace(xml.find("TEST_CAMERA"), 11, "CAM\xFF\xC3");
+  xml.replace(xml.find("FRME"), 4, "FR\x80" "E");
+  Bytes f = file_with_xml(xml);
+  const Bytes packet = events_payload(kTwo);
+  const std::int32_t head[2] = {1, static_cast<std::int32_t>(packet.size())};
+  f.insert(f.end(), reinterpret_cast<const std::uint8_t*>(head),
+           reinterpret_cast<const std::uint8_t*>(head) + 8);
+  f.insert(f.end(), packet.begin(), packet.end());  // a packet of the stream with that type
+  const Result r = read_all(open_bytes(f, "utf8.aedat4"));
+  EXPECT_NO_THROW((void)nlohmann::json(r.info.notes).dump());
+  EXPECT_EQ(r.info.notes.at(1), "events: stream 0, 346x260, source CAM\\xFF\\xC3");
+  EXPECT_EQ(r.info.notes.at(2), "stream 1 (FR\\x80E): 1 packets skipped");
+  try {
+    open_bytes(file_with_xml("<dv\xFF><node></dv\xFF>"), "bad.aedat4");
+    ADD_FAILURE() << "no InputError";
+  } catch (const InputError& e) {
+    EXPECT_NO_THROW((void)nlohmann::json(std::string(e.what())).dump()) << e.what();
   }
 }
 

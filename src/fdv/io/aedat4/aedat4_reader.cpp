@@ -22,6 +22,7 @@
 #include "fdv/io/aedat4/event_packet_generated.h"
 #include "fdv/io/aedat4/imu_packet_generated.h"
 #include "fdv/io/aedat4/io_header_generated.h"
+#include "fdv/io/text_fields.h"
 
 namespace fdv {
 namespace {
@@ -123,7 +124,7 @@ std::map<std::int32_t, StreamDesc> parse_streams(const char* xml, std::size_t si
   };
   tinyxml2::XMLDocument doc;
   if (doc.Parse(xml, size) != tinyxml2::XML_SUCCESS)
-    fail(std::string("not valid XML (") + doc.ErrorStr() + ")");
+    fail("not valid XML (" + escape_non_utf8(doc.ErrorStr()) + ")");  // may quote the text
   // Parse() accepts a document of only comments, text or a declaration: no element at all.
   const tinyxml2::XMLElement* root = doc.RootElement();
   if (!root) fail("not valid XML (no root element)");
@@ -134,17 +135,19 @@ std::map<std::int32_t, StreamDesc> parse_streams(const char* xml, std::size_t si
     const char* name = n->Attribute("name");
     int id = 0;
     if (!name || !parse_int(name, id) || id < 0)
-      fail(std::string("stream node name \"") + (name ? name : "") +
+      fail("stream node name \"" + escape_non_utf8(name ? name : "") +
            "\" is not a non-negative integer id");
     StreamDesc s;
-    if (const char* t = attr_text(n, "typeIdentifier")) s.type_id = t;
+    // The XML parser does not check UTF-8; these texts reach info().notes.
+    if (const char* t = attr_text(n, "typeIdentifier")) s.type_id = escape_non_utf8(t);
     if (const auto* info = child_node(n, "info")) {
       for (auto [key, value] : {std::pair{"sizeX", &s.width}, std::pair{"sizeY", &s.height}}) {
         const char* text = attr_text(info, key);
         if (text && !parse_int(text, *value))
-          fail("stream " + std::to_string(id) + " " + key + " \"" + text + "\" is not an integer");
+          fail("stream " + std::to_string(id) + " " + key + " \"" + escape_non_utf8(text) +
+               "\" is not an integer");
       }
-      if (const char* src = attr_text(info, "source")) s.source = src;
+      if (const char* src = attr_text(info, "source")) s.source = escape_non_utf8(src);
     }
     if (!streams.emplace(id, std::move(s)).second)
       fail("stream id " + std::to_string(id) + " is declared twice");
