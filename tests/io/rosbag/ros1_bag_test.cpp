@@ -603,6 +603,23 @@ TEST_F(Ros1BagTest, CompressedChunkSizeAboveTheLimitIsAnErrorNotAnAllocation) {
       << what;
 }
 
+TEST_F(Ros1BagTest, ConnectionCountAboveTheLimitIsAnError) {
+  // rosbag::View is quadratic in the connections it matches (a bag of 40,000 one-message topics,
+  // 17 MB, took 11 s in `fdv info`): the bag header's conn_count is bounded (kMaxConnections).
+  std::string b = file_string(bag_);
+  const std::size_t field = b.find("conn_count=");
+  ASSERT_NE(field, std::string::npos);
+  const std::uint32_t many = 4097;
+  std::memcpy(b.data() + field + 11, &many, 4);
+  const std::string path = dir_ + "/many_connections.bag";
+  write_string(path, b);
+  const std::string what = expect_input_error([&] { open_ros1_bag(path); });
+  EXPECT_NE(what.find("byte 13: bag header record: conn_count 4097 is above the reader's limit "
+                      "of 4096 connections"),
+            std::string::npos)
+      << what;
+}
+
 TEST_F(Ros1BagTest, TopicAndTypeThatAreNotUtf8AreEscapedInTheSummary) {
   // Connection headers are the bag's text: a topic name with a byte that is not UTF-8 is listed
   // escaped (the summary goes into JSON), and the escaped name selects it.

@@ -8,6 +8,7 @@
 #include <sys/mman.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <fstream>
@@ -71,19 +72,21 @@ class Ros1BagReader final : public rosbag_impl_reader {
   const char* position_label() const override { return "message "; }
 
   void check_selected() override {
-    ::rosbag::View all(bag_);
-    for (const auto* c : all.getConnections()) {
+    const auto& stats = structure_->connection_stats();
+    for (const auto& [id, c] : structure_->connections()) {
+      const auto s_it = stats.find(id);
+      if (s_it == stats.end() || s_it->second.count == 0) continue;  // no messages to decode
       for (const auto& s : selected()) {
-        if (escape_non_utf8(c->topic) != s.topic) continue;
-        const std::string datatype = escape_non_utf8(c->datatype);
+        if (escape_non_utf8(c.topic) != s.topic) continue;
+        const std::string datatype = escape_non_utf8(c.type);
         if (datatype != s.type_name)
           throw InputError(path(), "topic " + s.topic,
                            "has messages of two types, " + s.type_name + " and " + datatype);
         const std::string expected = bag::type_info(s.type).ros1_md5;
-        if (c->md5sum != expected)
+        if (c.md5sum != expected)
           throw InputError(path(), "topic " + s.topic,
                            "MD5 sum of " + datatype + " in the bag is " +
-                               escape_non_utf8(c->md5sum) +
+                               escape_non_utf8(c.md5sum) +
                                ", but this reader decodes the definition whose MD5 sum is " +
                                expected + ": the message layout differs");
       }
@@ -170,22 +173,33 @@ class Ros1BagReader final : public rosbag_impl_reader {
 
   /// Every topic with its type, message count and rate over its span of bag time.
   std::vector<TopicInfo> list_topics() {
-    ::rosbag::View all(bag_);
-    std::map<std::string, std::string> types;
-    for (const auto* c : all.getConnections()) types.emplace(c->topic, c->datatype);
+    struct Topic {
+      std::string type;
+      bag::Ros1BagStructure::ConnectionStats stats;
+    };
+    std::map<std::string, Topic> by_name;  // the library's (raw) topic names
+    const auto& stats = structure_->connection_stats();
+    for (const auto& [id, c] : structure_->connections()) {
+      const auto s = stats.find(id);
+      if (s == stats.end() || s->second.count == 0) continue;  // as rosbag::View lists them
+      Topic& t = by_name.emplace(c.topic, Topic{c.type, {}}).first->second;
+      t.stats.first =
+          t.stats.count == 0 ? s->second.first : std::min(t.stats.first, s->second.first);
+      t.stats.last = t.stats.count == 0 ? s->second.last : std::max(t.stats.last, s->second.last);
+      t.stats.count += s->second.count;
+    }
     std::vector<TopicInfo> topics;
-    for (const auto& [topic, type] : types) {
-      ::rosbag::View v(bag_, ::rosbag::TopicQuery(topic));
-      TopicInfo t;
+    for (const auto& [topic, t] : by_name) {
+      TopicInfo info;
       // Names and types as valid UTF-8 (printed and put into JSON); the library keeps its own.
-      t.topic = escape_non_utf8(topic);
-      t.type = escape_non_utf8(type);
-      raw_topic_.emplace(t.topic, topic);
-      t.count = v.size();
+      info.topic = escape_non_utf8(topic);
+      info.type = escape_non_utf8(t.type);
+      raw_topic_.emplace(info.topic, topic);
+      info.count = t.stats.count;
       // ROS 1 times are uint32 seconds: the span fits in int64 nanoseconds.
-      const double span_s = to_seconds(to_ns(v.getEndTime()) - to_ns(v.getBeginTime()));
-      if (t.count > 1 && span_s > 0) t.rate_hz = static_cast<double>(t.count - 1) / span_s;
-      topics.push_back(t);
+      const double span_s = to_seconds(t.stats.last - t.stats.first);
+      if (info.count > 1 && span_s > 0) info.rate_hz = static_cast<double>(info.count - 1) / span_s;
+      topics.push_back(info);
     }
     return topics;
   }

@@ -22,6 +22,10 @@ constexpr std::uint32_t kMaxHeaderLength = 1u << 20;
 /// Likewise for a connection record's data (its connection header: type, MD5 sum, message
 /// definition): a damaged length above this is not allocated.
 constexpr std::uint32_t kMaxConnectionDataLength = 16u << 20;
+/// Connections (topic and publisher pairs) in the index; real bags have tens to hundreds.
+/// rosbag::View matches each connection against the ranges it has so far, time quadratic in
+/// their number: 4096 connections of one topic take about a second.
+constexpr std::uint32_t kMaxConnections = 4096;
 /// A chunk's records once decompressed. rosbag closes a chunk once it passes 768 KiB (its
 /// default), so a chunk is that plus one message; 128 MiB leaves room for large images while
 /// the check's buffer, the library's (it decompresses the chunk again) and one message copied
@@ -184,15 +188,22 @@ Ros1BagStructure::Ros1BagStructure(const std::string& path, const std::string& n
     f.fail(kMagicSize, "bag header record: index_pos " + std::to_string(index_pos) +
                            " is outside the file's records");
 
+  if (conn_count > kMaxConnections)
+    throw InputError(name_, "byte " + std::to_string(kMagicSize),
+                     "bag header record: conn_count " + std::to_string(conn_count) +
+                         " is above the reader's limit of " + std::to_string(kMaxConnections) +
+                         " connections");
+
   // The index section: connection records, then chunk info records.
   std::set<std::uint32_t> connections;
   std::uint64_t pos = index_pos;
   Fields connection_header;
   for (std::uint32_t i = 0; i < conn_count; ++i) {
     const Record r = f.record(pos, kOpConnection, "connection record");
-    connections.insert(f.required<std::uint32_t>(r, pos, "conn", "connection record"));
-    if (r.fields.find("topic") == r.fields.end())
-      f.fail(pos, "connection record: no `topic` field");
+    const auto conn = f.required<std::uint32_t>(r, pos, "conn", "connection record");
+    connections.insert(conn);
+    const auto topic = r.fields.find("topic");
+    if (topic == r.fields.end()) f.fail(pos, "connection record: no `topic` field");
     if (r.data_len > kMaxConnectionDataLength)
       f.fail(pos, "connection record: data length " + std::to_string(r.data_len) +
                       " is implausible (> 16 MiB)");
@@ -200,6 +211,9 @@ Ros1BagStructure::Ros1BagStructure(const std::string& path, const std::string& n
     f.read(r.data_pos, data.data(), data.size());
     if (!parse_fields(data.data(), data.size(), connection_header))
       f.fail(pos, "connection record: its connection header's fields do not fit in it");
+    // As the library keeps it: the first record of an id.
+    connections_.emplace(
+        conn, Connection{topic->second, connection_header["type"], connection_header["md5sum"]});
     pos = r.end;
   }
   struct Info {
@@ -271,6 +285,7 @@ Ros1BagStructure::Ros1BagStructure(const std::string& path, const std::string& n
       const auto count = f.required<std::uint32_t>(ix, at, "count", what);
       if (ix.data_len != 12ull * count)
         f.fail(at, what + ": data length is not 12 bytes per message");
+      ConnectionStats& s = stats_[conn];
       std::vector<std::uint8_t> entries(ix.data_len);
       f.read(ix.data_pos, entries.data(), entries.size());
       for (std::uint32_t m = 0; m < count; ++m) {
@@ -285,6 +300,9 @@ Ros1BagStructure::Ros1BagStructure(const std::string& path, const std::string& n
           f.fail(at, what + ": a message time lies outside its chunk's start and end times");
         if (offset >= c.size) f.fail(at, what + ": a message offset lies past its chunk's records");
         c.message_offsets.push_back(offset);
+        s.first = s.count == 0 ? tn : std::min(s.first, tn);
+        s.last = s.count == 0 ? tn : std::max(s.last, tn);
+        ++s.count;
       }
       at = ix.end;
     }

@@ -9,6 +9,7 @@
 /// the header's `op` field gives the kind: bag header 0x03, chunk 0x05, connection 0x07, chunk
 /// info 0x06, index data 0x04, message data 0x02 (inside chunks, with connection records).
 #include <cstdint>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -38,8 +39,26 @@ class Ros1BagStructure {
   /// says so (no chunks listed). Errors name `name` (default: the path) as the file.
   explicit Ros1BagStructure(const std::string& path, const std::string& name = "");
 
+  /// A connection record of the index section: the record's topic, and its connection header's
+  /// type and md5sum (empty when missing), as the library reads them.
+  struct Connection {
+    std::string topic, type, md5sum;
+  };
+  /// What the index data records say of one connection's messages.
+  struct ConnectionStats {
+    std::uint64_t count = 0;
+    TimeNs first = 0, last = 0;  ///< earliest and latest message time (when count > 0)
+  };
+
   /// Chunks by start time.
   const std::vector<Chunk>& chunks() const { return chunks_; }
+  /// Per connection id, from the index the library reads too: the topic listing takes counts
+  /// and spans from here (one rosbag::View per topic costs time in the number of connections,
+  /// quadratic over a bag of many topics).
+  const std::map<std::uint32_t, ConnectionStats>& connection_stats() const { return stats_; }
+  /// Per connection id. The reader lists topics and checks types from here rather than from a
+  /// rosbag::View of the whole bag, whose construction is quadratic in the connections.
+  const std::map<std::uint32_t, Connection>& connections() const { return connections_; }
 
   /// Reads and decompresses chunk i and walks its records: every record inside the chunk, each a
   /// message data or connection record, every index offset on a message data record. The reason
@@ -49,6 +68,8 @@ class Ros1BagStructure {
  private:
   std::string path_, name_;
   std::vector<Chunk> chunks_;
+  std::map<std::uint32_t, ConnectionStats> stats_;
+  std::map<std::uint32_t, Connection> connections_;
 };
 
 }  // namespace fdv::bag
