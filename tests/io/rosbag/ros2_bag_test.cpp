@@ -980,6 +980,23 @@ TEST(Ros2BagHostile, AMessageBeyondTheLengthLimitIsNotAllocated) {
             "read");
 }
 
+TEST(Ros2BagHostile, AnErrorWhileListingTopicsIsAnInputErrorNotAPartialListing) {
+  // The second row of `topics` cannot be read (its generated name is above the length limit):
+  // listing only the first topic would silently change which topics are chosen.
+  const std::string path = test::scratch_dir("ros2_hostile") + "/topics.db3";
+  {
+    Db3Writer db(path);
+    db.exec(
+        "DROP TABLE topics; CREATE TABLE topics(id INTEGER PRIMARY KEY, type TEXT, "
+        "serialization_format TEXT, name TEXT GENERATED ALWAYS AS (CASE WHEN id = 1 THEN "
+        "'/imu' ELSE zeroblob(300000000) END) VIRTUAL);"
+        "INSERT INTO topics(type, serialization_format) VALUES('sensor_msgs/msg/Imu', 'cdr'), "
+        "('sensor_msgs/msg/Imu', 'cdr');");
+  }
+  const std::string error = error_of(path);
+  EXPECT_EQ(error.rfind("table topics | unreadable database: ", 0), 0u) << error;
+}
+
 TEST(Ros2BagHostile, AVirtualBagTableIsAnInputError) {
   // A virtual table runs a module's code (here FTS4's) over the file's own data; rosbag2 writes
   // plain tables, so the reader refuses one before querying it.

@@ -156,7 +156,8 @@ void read_topics(const Database& db, BagFile& file, std::map<std::string, TopicI
                            (has_topics ? "messages" : "topics") + "` table");
   }
   Statement topics(db, "SELECT id, name, type, serialization_format FROM topics", "table topics");
-  while (sqlite3_step(topics.get()) == SQLITE_ROW) {
+  int rc;
+  while ((rc = sqlite3_step(topics.get())) == SQLITE_ROW) {
     FileTopic t{column_text(topics.get(), 1), column_text(topics.get(), 2),
                 column_text(topics.get(), 3)};
     auto& entry = listing[t.name];
@@ -164,11 +165,12 @@ void read_topics(const Database& db, BagFile& file, std::map<std::string, TopicI
     entry.type = t.type;
     file.topics[sqlite3_column_int64(topics.get(), 0)] = std::move(t);
   }
+  if (rc != SQLITE_DONE)  // not a partial listing: the topics decide what is read
+    throw InputError(db.path(), "table topics", "unreadable database: " + db.error());
   Statement counts(db,
                    "SELECT topic_id, COUNT(*), MIN(timestamp), MAX(timestamp) FROM messages "
                    "GROUP BY topic_id",
                    "table messages");
-  int rc;
   while ((rc = sqlite3_step(counts.get())) == SQLITE_ROW) {
     const auto it = file.topics.find(sqlite3_column_int64(counts.get(), 0));
     if (it == file.topics.end()) continue;  // messages of an unlisted topic cannot be decoded
