@@ -187,34 +187,37 @@ Bytes lz4_frame(const Bytes& in, bool declare_size) {
   return out;
 }
 
-/// A file of three events packets: valid, `bomb`, valid. The bomb is dropped and counted, the
-/// others read.
-void expect_bomb_dropped(int compression, const Bytes& bomb, const std::string& name) {
+/// A file of three events packets: valid, `bomb`, valid. Reading stops at the bomb with an
+/// InputError naming the name and the packet's byte.
+void expect_bomb_refused(int compression, const Bytes& bomb, const std::string& name) {
   Aedat4Writer w(compression, {{0, "EVTS", 346, 260}});
   w.packet(0, events_payload({kTwo[0]}));
   const std::size_t bad = w.raw_packet(0, bomb);
   w.packet(0, events_payload({kTwo[1]}));
-  const Result r = read_all(open_bytes(w.file(), name));
-  EXPECT_EQ(r.events.size(), 2u) << name;
-  EXPECT_EQ(dropped(r.report, kTooLarge), 1u) << name;
-  EXPECT_EQ(first_where(r.report, kTooLarge), "byte " + std::to_string(w.header_end() + bad))
-      << name;
+  try {
+    (void)read_all(open_bytes(w.file(), name));
+    ADD_FAILURE() << name << ": the bomb was not refused";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), name);
+    EXPECT_EQ(e.where(), "packet at byte " + std::to_string(w.header_end() + bad)) << name;
+    EXPECT_NE(e.reason().find(kTooLarge), std::string::npos) << e.what();
+  }
 }
 
-TEST(Aedat4Hostile, ZstdBombDeclaringItsSizeIsDroppedUnopened) {
-  expect_bomb_dropped(3, zstd_frame(just_too_large(), true), "zstd_declared");
+TEST(Aedat4Hostile, ZstdBombDeclaringItsSizeIsRefusedUnopened) {
+  expect_bomb_refused(3, zstd_frame(just_too_large(), true), "zstd_declared");
 }
 
 TEST(Aedat4Hostile, ZstdBombOfUnknownSizeStopsAtTheLimit) {
-  expect_bomb_dropped(3, zstd_frame(just_too_large(), false), "zstd_unknown");
+  expect_bomb_refused(3, zstd_frame(just_too_large(), false), "zstd_unknown");
 }
 
-TEST(Aedat4Hostile, Lz4BombDeclaringItsSizeIsDroppedUnopened) {
-  expect_bomb_dropped(1, lz4_frame(just_too_large(), true), "lz4_declared");
+TEST(Aedat4Hostile, Lz4BombDeclaringItsSizeIsRefusedUnopened) {
+  expect_bomb_refused(1, lz4_frame(just_too_large(), true), "lz4_declared");
 }
 
 TEST(Aedat4Hostile, Lz4BombOfUnknownSizeStopsAtTheLimit) {
-  expect_bomb_dropped(1, lz4_frame(just_too_large(), false), "lz4_unknown");
+  expect_bomb_refused(1, lz4_frame(just_too_large(), false), "lz4_unknown");
 }
 
 TEST(Aedat4Hostile, FramesOfUnknownAndDeclaredSizeStillDecode) {
@@ -247,9 +250,13 @@ TEST(Aedat4Hostile, UncompressedPacketAboveTheLimitIsSkippedUnread) {
 TEST(Aedat4Hostile, ZstdBombFinding) {
   const std::string path = test::fuzz_finding("aedat4/f7-zstd-bomb.aedat4");
   FDV_REQUIRE_REAL_FILE(path);
-  const Result r = read_all(open_aedat4(path));
-  EXPECT_EQ(dropped(r.report, kTooLarge), 1u);
-  EXPECT_EQ(first_where(r.report, kTooLarge), "byte 3126");
+  try {
+    (void)read_all(open_aedat4(path));
+    ADD_FAILURE() << "the bomb was not refused";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), path);
+    EXPECT_EQ(e.where(), "packet at byte 3126");
+  }
 }
 
 }  // namespace

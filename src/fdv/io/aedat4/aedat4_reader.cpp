@@ -502,6 +502,11 @@ class Aedat4Reader final : public RecordingReader {
       std::size_t inflated_len = 0;
       if (const char* why = decompressor_.run(compression_, payload_.data(), payload_.size(),
                                               inflated_, inflated_len)) {
+        // A packet that inflates past the limit is no camera's: a decompression bomb is refused
+        // as a whole file, not skipped (docs/FORMATS.md "Bad input"). Other damage is a drop.
+        if (why == kPacketTooLarge)
+          throw InputError(path_, "packet at " + at_byte(at), std::string(kPacketTooLarge) +
+                                                                  " (a decompression bomb or a damaged file)");
         report_.drop(why, at_byte(at));
         return;
       }
