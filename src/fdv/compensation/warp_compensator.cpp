@@ -110,7 +110,7 @@ bool all_set(vi m) {
 /// previous_t: time of the event visited before `begin` (for the out-of-order count).
 /// kDecimated: false when stride = 1 (nearly always): the event addresses need no multiplication.
 template <Model M, bool kDecimated>
-__attribute__((target_clones("avx2", "default"))) WarpCounts warp_range(const WarpParams& p, std::size_t begin, std::size_t end, TimeNs previous_t, Output out) {
+FDV_AVX2_CLONES WarpCounts warp_range(const WarpParams& p, std::size_t begin, std::size_t end, TimeNs previous_t, Output out) {
   const std::size_t stride = kDecimated ? p.stride : 1;
   WarpCounts c;
   const int w = p.width, h = p.height;

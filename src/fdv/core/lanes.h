@@ -8,6 +8,16 @@
 #include <bit>
 #include <cstdint>
 
+/// FDV_AVX2_CLONES before a hot function: GCC on x86-64 builds it twice, for AVX2 and the baseline,
+/// and picks one at load time. Elsewhere it builds once: clang rejects target_clones on templates
+/// and beside `flatten`, and aarch64 (Jetson-class boards) has no such targets. These lanes use
+/// no FMA, so on x86-64 the clones and the single build give the same results to the bit.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define FDV_AVX2_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define FDV_AVX2_CLONES
+#endif
+
 namespace fdv::lanes {
 
 using vf = float __attribute__((vector_size(16)));

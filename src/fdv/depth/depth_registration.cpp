@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "fdv/core/error.h"
+#include "fdv/core/lanes.h"
 
 namespace fdv {
 
@@ -125,7 +126,7 @@ void project_tail(const Projection& p, std::size_t i0, std::size_t n, int out_wi
 /// All pixels, eight at a time in float lanes (the AVX2 clone holds them in one register, the
 /// baseline in two SSE2 ones), then each lane's z-test in pixel order. No FMA (neither clone
 /// enables it), so the lanes give project_tail's results to the bit.
-__attribute__((target_clones("avx2", "default"))) void project_all(const Projection& p, std::size_t n, int out_width,
+FDV_AVX2_CLONES void project_all(const Projection& p, std::size_t n, int out_width,
                                                                      float* cells, Tally& c) {
   const vf8 lo = vf8{} + p.lo, hi = vf8{} + p.hi, zero = vf8{}, one = vf8{} + 1.0f, half = vf8{} + 0.5f;
   const vf8 two_p1 = vf8{} + 2 * p.p1, two_p2 = vf8{} + 2 * p.p2, two = vf8{} + 2.0f;

@@ -84,7 +84,7 @@ void row_sums4(const float* const p[4], int width, float out[4]) {
 
 // AVX2 clone (chosen at run time): the column sums vectorise 8 lanes wide; lane-wise adds, the same
 // results to the bit.
-__attribute__((target_clones("avx2", "default"), flatten)) GaussianFit
+FDV_AVX2_CLONES __attribute__((flatten)) GaussianFit
 iterative_gaussian_fit(const cv::Mat& P, const Eigen::Vector2d& c0, const Eigen::Vector2d& l0, const DetectorOptions& o) {
   CV_Assert(P.type() == CV_32F);
   GaussianFit fit;

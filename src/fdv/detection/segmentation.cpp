@@ -124,7 +124,7 @@ struct RowMaximum {
 /// detector's first candidate search costs nothing more). Returns r1.
 // AVX2 clone (chosen at run time): the plain loops below vectorise 8 lanes wide instead of 4. Lane-wise
 // adds, products, minima and maxima, no FMA: the same results as the baseline build, to the bit.
-__attribute__((target_clones("avx2", "default"), flatten)) cv::Rect
+FDV_AVX2_CLONES __attribute__((flatten)) cv::Rect
 open_mean_square(const cv::Mat& S, const cv::Rect& s_bounds, int h1, int h2, cv::Mat& P, cv::Mat& a, cv::Mat& b,
                  std::vector<float>& line, RowMaximum& best, int part = 0, int parts = 1) {
   const cv::Rect image(0, 0, S.cols, S.rows);
@@ -218,7 +218,7 @@ namespace {
 
 // AVX2 clone, as open_mean_square.
 /// segment() over the rows [y0, y1) of S (created).
-__attribute__((target_clones("avx2", "default"))) SegmentResult
+FDV_AVX2_CLONES SegmentResult
 segment_rows(const TimeImages& ti, float th, std::int32_t min_count, cv::Mat& S, int y0, int y1) {
   SegmentResult res;
   int x_lo = S.cols, x_hi = -1, y_lo = S.rows, y_hi = -1;

@@ -132,7 +132,7 @@ std::size_t Evt2Decoder::decode(const Word* words, std::size_t n, Event* out,
   for (; i < n && k < max_events; ++i) {
     const std::uint32_t w = words[i];
     const std::uint32_t type = w >> 28;
-    if (type <= evt2::kCdOn) [[likely]] {
+    if (type == evt2::kCdOff || type == evt2::kCdOn) [[likely]] {
       // [27:22] time low 6 bits, [21:11] x, [10:0] y; polarity = type (CD_ON = 1).
       if (emitting) [[likely]] {
         out[k++] = Event{high_ns + static_cast<TimeNs>((w >> 22) & 0x3F) * kNsPerUs,
