@@ -24,6 +24,11 @@
 
 namespace fdv {
 
+/// Rows one stream hands out per chunk at most: a chunk stays bounded whatever its time horizon
+/// (one corrupt event time far ahead would otherwise pull a whole file into one chunk). About a
+/// minute of 1 kHz IMU; later rows follow in the next chunks.
+inline constexpr std::size_t kMaxTableRowsPerChunk = 1 << 16;
+
 template <typename T>
 class TableStream {
  public:
@@ -32,7 +37,14 @@ class TableStream {
   TableStream(const std::filesystem::path& path, std::string name, Parser parse,
               char separator = ',')
       : name_(std::move(name)), parse_(std::move(parse)), separator_(separator) {
-    if (std::filesystem::exists(path)) lines_.emplace(path.string());
+    std::error_code ec;
+    // An existing file that cannot be inspected is opened anyway, so its error names it.
+    if (std::filesystem::exists(path, ec) || ec) lines_.emplace(path.string());
+  }
+  /// Reads the rows of `lines` (a file or an in-memory stream).
+  TableStream(LineReader lines, std::string name, Parser parse, char separator = ',')
+      : name_(std::move(name)), parse_(std::move(parse)), separator_(separator) {
+    lines_.emplace(std::move(lines));
   }
   bool present() const { return lines_.has_value(); }
 

@@ -2,6 +2,7 @@
 
 #include <charconv>
 #include <cmath>
+#include <fstream>
 
 #include "fdv/core/error.h"
 
@@ -14,17 +15,34 @@ std::string_view trim(std::string_view s) {
 }
 }  // namespace
 
-LineReader::LineReader(const std::string& path) : path_(path), in_(path) {
-  if (!in_) throw InputError(path, "", "cannot open file");
+LineReader::LineReader(const std::string& path)
+    : path_(path), in_(std::make_unique<std::ifstream>(path, std::ios::binary)) {
+  if (!*in_) throw InputError(path, "", "cannot open file");
+}
+
+LineReader::LineReader(std::unique_ptr<std::istream> in, std::string name)
+    : path_(std::move(name)), in_(std::move(in)) {
+  if (!in_ || !*in_) throw InputError(path_, "", "cannot read");
 }
 
 bool LineReader::next(std::string_view& line) {
-  while (std::getline(in_, buffer_)) {
+  buffer_.resize(kMaxLineBytes + 1);
+  while (true) {
+    in_->getline(buffer_.data(), static_cast<std::streamsize>(buffer_.size()));
+    const auto got = static_cast<std::size_t>(in_->gcount());
+    if (got == 0 && in_->eof()) return false;  // nothing left
     ++line_number_;
-    line = trim(buffer_);
+    if (in_->bad()) throw InputError(path_, where(), "read error");
+    // failbit without eof: the buffer filled before a newline came.
+    if (in_->fail() && !in_->eof())
+      throw InputError(path_, where(),
+                       "line longer than " + std::to_string(kMaxLineBytes) + " bytes");
+    // gcount counts the newline when one was extracted.
+    const std::size_t length = in_->eof() ? got : got - 1;
+    line = trim(std::string_view(buffer_.data(), length));
     if (!line.empty() && line.front() != '#') return true;
+    if (in_->eof()) return false;
   }
-  return false;
 }
 
 void split_fields(std::string_view line, char separator, std::vector<std::string_view>& fields) {
@@ -71,9 +89,10 @@ bool parse_seconds_to_ns(std::string_view s, TimeNs& out) {
   const std::string_view whole = s.substr(0, dot);
   std::string_view frac = dot == std::string_view::npos ? std::string_view{} : s.substr(dot + 1);
   std::int64_t sec = 0;
+  // One sign only: parse_int64 would take a second '-'.
+  if (!whole.empty() && (whole.front() < '0' || whole.front() > '9')) return false;
   if (!whole.empty() && !parse_int64(whole, sec)) return false;
   if (whole.empty() && frac.empty()) return false;
-  if (sec > 9'000'000'000) return false;  // beyond int64 nanoseconds
   std::int64_t ns = 0;
   int digits = 0;
   bool round_up = false;
@@ -88,8 +107,11 @@ bool parse_seconds_to_ns(std::string_view s, TimeNs& out) {
     }
   }
   for (; digits < 9; ++digits) ns *= 10;
-  const TimeNs total = sec * kNsPerS + ns + (round_up ? 1 : 0);
-  out = negative ? -total : total;
+  // Beyond int64 nanoseconds (about 292 years from the epoch) is not a time.
+  const auto sec_ns = checked_mul(sec, kNsPerS);
+  const auto total = sec_ns ? checked_add(*sec_ns, ns + (round_up ? 1 : 0)) : std::nullopt;
+  if (!total) return false;
+  out = negative ? -*total : *total;
   return true;
 }
 

@@ -3,6 +3,8 @@
 /// integer timestamps: a time never passes through a double, so nanoseconds since 1970 stay exact.
 #include <cstdint>
 #include <fstream>
+#include <istream>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -11,11 +13,19 @@
 
 namespace fdv {
 
+/// Longest line a text table may have. The longest real row (odometry.csv, 14 numbers) is a few
+/// hundred bytes; the bound keeps a file without newlines from being read into memory whole.
+inline constexpr std::size_t kMaxLineBytes = 64 * 1024;
+
+/// Reads the lines of a text table from a file or any stream (e.g. an in-memory buffer).
 class LineReader {
  public:
   /// Throws InputError if the file cannot be opened.
   explicit LineReader(const std::string& path);
+  /// Reads `in`; `name` stands for the file in positions and errors.
+  LineReader(std::unique_ptr<std::istream> in, std::string name);
   /// Next non-empty line that is not a comment ('#' first); false at end of file.
+  /// Throws InputError (file, line) for a line longer than kMaxLineBytes or a read error.
   bool next(std::string_view& line);
   std::size_t line_number() const { return line_number_; }
   const std::string& path() const { return path_; }
@@ -23,7 +33,7 @@ class LineReader {
 
  private:
   std::string path_;
-  std::ifstream in_;
+  std::unique_ptr<std::istream> in_;
   std::string buffer_;
   std::size_t line_number_ = 0;
 };
