@@ -4,10 +4,13 @@
 
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
 #include "fdv/core/error.h"
 #include "fdv/io/recording.h"
 #include "fdv/io/rpg/rpg_text_reader.h"
+#include "fdv/io/table_stream.h"
+#include "fdv/io/text_fields.h"
 #include "test_support.h"
 
 namespace fdv {
@@ -259,6 +262,85 @@ TEST(RpgText, FolderWithoutEventsIsNotRecognised) {
   write(dir, "imu.txt", "1.0 0 0 9.8 0 0 0\n");
   EXPECT_THROW(open_recording(dir), InputError);
   EXPECT_THROW(open_rpg_text(dir), InputError);
+}
+
+std::unique_ptr<std::istream> text(const std::string& s) {
+  return std::make_unique<std::istringstream>(s);
+}
+
+// The in-memory entry points read what the folder reader reads, with the same drops.
+TEST(RpgText, InMemoryEntryPointsParseOneFileEach) {
+  ReadReport report;
+  const auto events = read_rpg_events(
+      text("# t x y p\n1.0 3 4 1\n1.5 240 0 1\n1.900000001 5 6 0\nx 1 1 1\n"), "mem/events.txt",
+      report);
+  ASSERT_EQ(events.size(), 2u);
+  EXPECT_EQ(events[0], (Event{1'000'000'000, 3, 4, true}));
+  EXPECT_EQ(events[1], (Event{1'900'000'001, 5, 6, false}));
+  ASSERT_NE(dropped(report, "event pixel outside the sensor"), nullptr);
+  ASSERT_NE(dropped(report, "events: malformed timestamp"), nullptr);
+  EXPECT_EQ(dropped(report, "events: malformed timestamp")->first_where, "mem/events.txt:line 5");
+
+  const auto imu = read_rpg_imu(text("0.5 1 2 3 4 5 6\n0.25 1 2 3 4 5 6\n"), "imu.txt", report);
+  ASSERT_EQ(imu.size(), 1u);
+  EXPECT_DOUBLE_EQ(imu[0].accel_m_s2.z(), 3.0);
+  EXPECT_DOUBLE_EQ(imu[0].gyro_rad_s.x(), 4.0);
+  ASSERT_NE(dropped(report, "imu: timestamp went backwards"), nullptr);
+
+  const auto gt = read_rpg_groundtruth(text("1 1 2 3 0 0 0 1\n"), "groundtruth.txt", report);
+  ASSERT_EQ(gt.size(), 1u);
+  EXPECT_DOUBLE_EQ(gt[0].p_W_B.y(), 2.0);
+
+  const Calibration c = read_rpg_calib(text("200 200 120 90\n"), "calib.txt");
+  EXPECT_DOUBLE_EQ(c.event_camera.fx, 200.0);
+  EXPECT_THROW(read_rpg_calib(text("200 200\n"), "calib.txt"), InputError);
+}
+
+// 1e10 s is beyond int64 nanoseconds: the line is dropped, no time wraps.
+TEST(RpgText, TimesBeyondInt64NanosecondsAreDropped) {
+  ReadReport report;
+  const auto events = read_rpg_events(
+      text("1.0 3 4 1\n9223372037.0 3 4 1\n-9223372037.5 3 4 1\n2.0 3 4 0\n"), "events.txt",
+      report);
+  ASSERT_EQ(events.size(), 2u);
+  EXPECT_EQ(events[1].t, 2'000'000'000);
+  ASSERT_NE(dropped(report, "events: malformed timestamp"), nullptr);
+  EXPECT_EQ(dropped(report, "events: malformed timestamp")->count, 2u);
+  EXPECT_EQ(dropped(report, "events: malformed timestamp")->first_where, "events.txt:line 2");
+}
+
+// A file with no newline is not read into memory whole: an error naming the file and line.
+TEST(RpgText, OverlongLineIsAnErrorNamingTheFile) {
+  const auto dir = test::scratch_dir("rpg_long_line");
+  write(dir, "events.txt", "1.0 3 4 1\n" + std::string(kMaxLineBytes + 1, '1') + "\n");
+  auto reader = open_recording(dir);
+  SensorChunk chunk;
+  try {
+    while (reader->read(chunk)) {
+    }
+    FAIL() << "an overlong line was accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), (std::filesystem::path(dir) / "events.txt").string());
+    EXPECT_EQ(e.where(), "line 2");
+  }
+}
+
+// All imu.txt rows up to the first chunk's last event time used to come in that one chunk.
+TEST(RpgText, ImuRowsPerChunkAreBounded) {
+  const auto dir = test::scratch_dir("rpg_rows_per_chunk");
+  write(dir, "events.txt", "1.0 3 4 1\n1.0 3 4 0\n1.0 5 5 1\n");
+  std::string imu;
+  for (std::size_t i = 0; i < kMaxTableRowsPerChunk + 10; ++i) imu += "0.5 0 0 9.81 0 0 0\n";
+  write(dir, "imu.txt", imu);
+  auto reader = open_recording(dir, chunked(1));
+  SensorChunk c;
+  std::size_t total = 0, most = 0;
+  while (reader->read(c)) {
+    total += c.imu.size();
+    most = std::max(most, c.imu.size());
+  }
+  EXPECT_EQ(total, kMaxTableRowsPerChunk + 10);
+  EXPECT_EQ(most, kMaxTableRowsPerChunk);
 }
 
 }  // namespace

@@ -77,40 +77,87 @@ const char* parse_event(const std::vector<std::string_view>& f, Event& e) {
 }
 
 /// calib.txt: one line "fx fy cx cy [k1 k2 p1 p2 [k3]]".
-Calibration read_calib(const fs::path& path) {
-  LineReader lines(path.string());
+Calibration read_calib(LineReader& lines) {
+  const std::string& path = lines.path();
   std::string_view line;
-  if (!lines.next(line)) throw InputError(path.string(), "line 1", "empty calibration file");
+  if (!lines.next(line)) throw InputError(path, "line 1", "empty calibration file");
   std::vector<std::string_view> f;
   split_fields(line, ' ', f);
   if (f.size() != 4 && f.size() != 8 && f.size() != 9)
-    throw InputError(path.string(), lines.where(),
+    throw InputError(path, lines.where(),
                      "expected fx fy cx cy [k1 k2 p1 p2 [k3]] (4, 8 or 9 numbers), got " +
                          std::to_string(f.size()));
   double v[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
   for (std::size_t i = 0; i < f.size(); ++i)
     if (!parse_double(f[i], v[i]))
-      throw InputError(path.string(), lines.where(),
+      throw InputError(path, lines.where(),
                        std::string(number_problem(f[i])) + " in column " + std::to_string(i + 1));
   const std::string first_where = lines.where();
   if (lines.next(line))
-    throw InputError(path.string(), lines.where(), "expected a single line of numbers");
+    throw InputError(path, lines.where(), "expected a single line of numbers");
   Calibration c;
   c.event_camera = {kRpgWidth, kRpgHeight, v[0], v[1], v[2], v[3], {v[4], v[5], v[6], v[7], v[8]}};
   if (const std::string why = c.event_camera.validate(); !why.empty())
-    throw InputError(path.string(), first_where,
+    throw InputError(path, first_where,
                      "camera does not fit the dataset's 240x180 sensor: " + why);
   return c;
+}
+
+/// events.txt, parsed and sanitised a bounded number of lines at a time.
+class EventLines {
+ public:
+  explicit EventLines(LineReader lines) : lines_(std::move(lines)), sanitizer_(kRpgWidth, kRpgHeight) {}
+
+  /// Parses up to max_lines good lines and appends the valid events to `out`; false once the
+  /// text is exhausted.
+  bool read(std::size_t max_lines, std::vector<Event>& out, ReadReport& report) {
+    raw_.clear();
+    std::size_t first_line = 0;
+    std::string_view line;
+    bool more = true;
+    while (raw_.size() < max_lines) {
+      if (!lines_.next(line)) {
+        more = false;
+        break;
+      }
+      if (first_line == 0) first_line = lines_.line_number();
+      split_fields(line, ' ', fields_);
+      Event e;
+      if (const char* why = parse_event(fields_, e)) {
+        report.drop(std::string("events: ") + why, lines_.path() + ":" + lines_.where());
+      } else {
+        raw_.push_back(e);
+      }
+    }
+    if (!raw_.empty())
+      sanitizer_.append(raw_.data(), raw_.data() + raw_.size(), out, report,
+                        lines_.path() + ":lines " + std::to_string(first_line) + "-" +
+                            std::to_string(lines_.line_number()));
+    return more;
+  }
+
+ private:
+  LineReader lines_;
+  EventSanitizer sanitizer_;
+  std::vector<std::string_view> fields_;
+  std::vector<Event> raw_;
+};
+
+template <typename T>
+std::vector<T> read_all(TableStream<T>&& stream, ReadReport& report) {
+  std::vector<T> out;
+  stream.take_until(std::numeric_limits<TimeNs>::max(), std::numeric_limits<std::size_t>::max(),
+                    out, report);
+  return out;
 }
 
 class RpgTextReader final : public RecordingReader {
  public:
   RpgTextReader(const std::string& dir, const ReaderOptions& options)
       : chunk_events_(std::max<std::size_t>(1, options.chunk_events)),
-        events_((fs::path(dir) / kRpgEventsFile).string()),
+        events_(LineReader((fs::path(dir) / kRpgEventsFile).string())),
         imu_(fs::path(dir) / "imu.txt", "imu", parse_imu, ' '),
-        groundtruth_(fs::path(dir) / "groundtruth.txt", "groundtruth", parse_groundtruth, ' '),
-        sanitizer_(kRpgWidth, kRpgHeight) {
+        groundtruth_(fs::path(dir) / "groundtruth.txt", "groundtruth", parse_groundtruth, ' ') {
     info_.path = dir;
     info_.format = "rpg_text";
     info_.width = kRpgWidth;
@@ -130,8 +177,10 @@ class RpgTextReader final : public RecordingReader {
           "odometry = groundtruth.txt, the motion-capture pose of the event camera (T_W_B with "
           "B = E); velocity and angular velocity are not given (zero)");
     }
-    if (const auto calib = fs::path(dir) / "calib.txt"; fs::exists(calib)) {
-      info_.calibration = read_calib(calib);
+    std::error_code ec;
+    if (const auto calib = fs::path(dir) / "calib.txt"; fs::exists(calib, ec) || ec) {
+      LineReader lines(calib.string());
+      info_.calibration = read_calib(lines);
       info_.notes.push_back(
           "calibration from calib.txt (fx fy cx cy k1 k2 p1 p2 k3); extrinsics identity");
     }
@@ -142,12 +191,13 @@ class RpgTextReader final : public RecordingReader {
 
   bool read(SensorChunk& chunk) override {
     chunk.clear();
-    while (chunk.events.empty() && !events_done_) read_events(chunk.events);
+    while (chunk.events.empty() && !events_done_)
+      events_done_ = !events_.read(chunk_events_, chunk.events, report_);
     // The other streams follow the events: everything up to the last event handed out, or,
     // once the events are exhausted, the rest in bounded pieces.
     const TimeNs horizon =
         events_done_ ? std::numeric_limits<TimeNs>::max() : chunk.events.back().t;
-    const std::size_t cap = events_done_ ? 4096 : std::numeric_limits<std::size_t>::max();
+    const std::size_t cap = events_done_ ? 4096 : kMaxTableRowsPerChunk;
     imu_.take_until(horizon, cap, chunk.imu, report_);
     groundtruth_.take_until(horizon, cap, chunk.odometry, report_);
     return !chunk.empty() ||
@@ -155,40 +205,12 @@ class RpgTextReader final : public RecordingReader {
   }
 
  private:
-  /// Parses up to chunk_events_ good lines and appends the valid events to `out`.
-  void read_events(std::vector<Event>& out) {
-    raw_.clear();
-    std::size_t first_line = 0;
-    std::string_view line;
-    while (raw_.size() < chunk_events_) {
-      if (!events_.next(line)) {
-        events_done_ = true;
-        break;
-      }
-      if (first_line == 0) first_line = events_.line_number();
-      split_fields(line, ' ', fields_);
-      Event e;
-      if (const char* why = parse_event(fields_, e)) {
-        report_.drop(std::string("events: ") + why, events_.path() + ":" + events_.where());
-      } else {
-        raw_.push_back(e);
-      }
-    }
-    if (!raw_.empty())
-      sanitizer_.append(raw_.data(), raw_.data() + raw_.size(), out, report_,
-                        events_.path() + ":lines " + std::to_string(first_line) + "-" +
-                            std::to_string(events_.line_number()));
-  }
-
   std::size_t chunk_events_;
   RecordingInfo info_;
   ReadReport report_;
-  LineReader events_;
+  EventLines events_;
   TableStream<ImuSample> imu_;
   TableStream<OdometrySample> groundtruth_;
-  EventSanitizer sanitizer_;
-  std::vector<std::string_view> fields_;
-  std::vector<Event> raw_;
   bool events_done_ = false;
 };
 
@@ -197,6 +219,33 @@ class RpgTextReader final : public RecordingReader {
 std::unique_ptr<RecordingReader> open_rpg_text(const std::string& dir,
                                                const ReaderOptions& options) {
   return std::make_unique<RpgTextReader>(dir, options);
+}
+
+std::vector<Event> read_rpg_events(std::unique_ptr<std::istream> in, const std::string& name,
+                                   ReadReport& report) {
+  EventLines lines(LineReader(std::move(in), name));
+  std::vector<Event> out;
+  while (lines.read(4096, out, report)) {
+  }
+  return out;
+}
+
+std::vector<ImuSample> read_rpg_imu(std::unique_ptr<std::istream> in, const std::string& name,
+                                    ReadReport& report) {
+  return read_all(TableStream<ImuSample>(LineReader(std::move(in), name), "imu", parse_imu, ' '),
+                  report);
+}
+
+std::vector<OdometrySample> read_rpg_groundtruth(std::unique_ptr<std::istream> in,
+                                                 const std::string& name, ReadReport& report) {
+  return read_all(TableStream<OdometrySample>(LineReader(std::move(in), name), "groundtruth",
+                                              parse_groundtruth, ' '),
+                  report);
+}
+
+Calibration read_rpg_calib(std::unique_ptr<std::istream> in, const std::string& name) {
+  LineReader lines(std::move(in), name);
+  return read_calib(lines);
 }
 
 }  // namespace fdv

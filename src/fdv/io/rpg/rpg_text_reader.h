@@ -15,8 +15,10 @@
 /// The layout does not state the sensor size: every sequence of the dataset was recorded with
 /// (or simulated for) a DAVIS240C, so the reader uses 240x180 and drops and counts events
 /// outside it. Bad lines are dropped and counted with their file and line. Not thread-safe.
+#include <istream>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "fdv/io/recording.h"
 
@@ -31,5 +33,19 @@ inline constexpr int kRpgHeight = 180;
 /// malformed (file, line and reason).
 std::unique_ptr<RecordingReader> open_rpg_text(const std::string& dir,
                                                const ReaderOptions& options = {});
+
+/// One file of the layout read from any stream (e.g. a std::istringstream over a fuzzer's
+/// buffer), in full, by the same code open_rpg_text() runs on the files. `name` stands for the
+/// file in report positions ("name:line N") and errors. Bad lines are dropped and counted in
+/// `report`; events are also checked against the 240x180 sensor and time order (EventSanitizer).
+/// Throws InputError for a line longer than kMaxLineBytes (text_fields.h) or a read error.
+std::vector<Event> read_rpg_events(std::unique_ptr<std::istream> in, const std::string& name,
+                                   ReadReport& report);
+std::vector<ImuSample> read_rpg_imu(std::unique_ptr<std::istream> in, const std::string& name,
+                                    ReadReport& report);
+std::vector<OdometrySample> read_rpg_groundtruth(std::unique_ptr<std::istream> in,
+                                                 const std::string& name, ReadReport& report);
+/// calib.txt; throws InputError (name, line, reason) when it is malformed.
+Calibration read_rpg_calib(std::unique_ptr<std::istream> in, const std::string& name);
 
 }  // namespace fdv
