@@ -1,11 +1,16 @@
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <opencv2/imgcodecs.hpp>
+#include <sstream>
 
 #include "fdv/core/error.h"
 #include "fdv/io/dataset/dataset_reader.h"
 #include "fdv/io/dataset/dataset_writer.h"
+#include "fdv/io/table_stream.h"
 #include "test_support.h"
 
 namespace fdv {
@@ -166,6 +171,218 @@ TEST(OpenRecording, MissingAndUnknownInputsAreClearErrors) {
   } catch (const InputError& e) {
     EXPECT_NE(e.reason().find("unrecognised"), std::string::npos);
   }
+}
+
+std::unique_ptr<std::istream> text(const std::string& s) {
+  return std::make_unique<std::istringstream>(s);
+}
+
+std::string events_bin(std::uint32_t w, std::uint32_t h, std::uint64_t count,
+                       const std::vector<Event>& events) {
+  std::string b(kEventsMagic, 8);
+  b.append(reinterpret_cast<const char*>(&w), 4);
+  b.append(reinterpret_cast<const char*>(&h), 4);
+  b.append(reinterpret_cast<const char*>(&count), 8);
+  for (const Event& e : events) {
+    char r[16] = {};
+    std::memcpy(r, &e.t, 8);
+    std::memcpy(r + 8, &e.x, 2);
+    std::memcpy(r + 10, &e.y, 2);
+    r[12] = e.polarity ? 1 : 0;
+    b.append(r, 16);
+  }
+  return b;
+}
+
+std::string reason_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    return e.where() + ": " + e.reason();
+  }
+  return "no error";
+}
+
+TEST(DatasetInMemory, EventsBinCountIsBoundedByTheBytesPresent) {
+  ReadReport report;
+  // A count of 2^64-1 with two records: nothing is allocated for the declared count.
+  const auto events = read_dataset_events(
+      text(events_bin(64, 48, ~std::uint64_t{0}, {{10, 1, 2, true}, {20, 63, 47, false}})),
+      "events.bin", 64, 48, report);
+  ASSERT_EQ(events.size(), 2u);
+  EXPECT_EQ(events[1], (Event{20, 63, 47, false}));
+  EXPECT_EQ(report.dropped().at("events.bin truncated: events missing at the end").count,
+            ~std::uint64_t{0} - 2);
+  EXPECT_EQ(reason_of([] {
+              ReadReport r;
+              read_dataset_events(text(events_bin(65, 48, 0, {})), "events.bin", 64, 48, r);
+            }),
+            "byte 8: resolution differs from dataset.yaml");
+  EXPECT_EQ(reason_of([] {
+              ReadReport r;
+              read_dataset_events(text("FDVEVT01"), "events.bin", 64, 48, r);
+            }),
+            "byte 0: truncated header");
+}
+
+TEST(DatasetInMemory, ManifestSizeIsBoundedAndNamesTheKey) {
+  EXPECT_EQ(parse_dataset_manifest("width: 64\nheight: 48\nformat: fdv_dataset\n", "m").width, 64);
+  EXPECT_EQ(parse_dataset_manifest("width: 4096\nheight: 1\n", "m").width, kMaxDatasetSensorSide);
+  const auto bad = [](const std::string& yaml) {
+    return reason_of([&] { parse_dataset_manifest(yaml, "dataset.yaml"); });
+  };
+  EXPECT_EQ(bad("width: 0\nheight: 48\n"), "key width: must be 1 to 4096 pixels");
+  EXPECT_EQ(bad("width: 64\nheight: -48\n"), "key height: must be 1 to 4096 pixels");
+  EXPECT_EQ(bad("width: 4097\nheight: 48\n"), "key width: must be 1 to 4096 pixels");
+  EXPECT_EQ(bad("width: 64\n"), "key height: missing (the event sensor size is required)");
+  EXPECT_NE(bad("width: 1e10\nheight: 48\n").find("key width: not an integer"), std::string::npos);
+  EXPECT_NE(bad("width: [1]\nheight: 48\n").find("key width: not an integer"), std::string::npos);
+  EXPECT_EQ(bad("just text"), ": not a YAML mapping (needs width and height)");
+  EXPECT_NE(bad("width: [64\n").find("line "), std::string::npos);
+  EXPECT_NE(bad(std::string(100'000, '[')).find("not valid YAML"), std::string::npos);
+  EXPECT_NE(bad("width: 64\nheight: 48\n#" + std::string(kMaxManifestBytes, 'x'))
+                .find("larger than"),
+            std::string::npos);
+}
+
+TEST(DatasetInMemory, CsvFilesAndDepthIndex) {
+  ReadReport report;
+  const auto imu = read_dataset_imu(text("# t_ns,gx,gy,gz,ax,ay,az\n5,1,2,3,4,5,6\n"), "imu.csv", report);
+  ASSERT_EQ(imu.size(), 1u);
+  EXPECT_DOUBLE_EQ(imu[0].gyro_rad_s.x(), 1.0);
+  EXPECT_DOUBLE_EQ(imu[0].accel_m_s2.z(), 6.0);
+  const auto poses = read_dataset_poses(text("7,1,2,3,0,0,0,1,0,0,0,0,0,0\n"), "odometry.csv", report);
+  ASSERT_EQ(poses.size(), 1u);
+  EXPECT_EQ(poses[0].t, 7);
+  // An id beyond int (a double cast to int would be undefined) is dropped.
+  const auto objects = read_dataset_objects(
+      text("1,1,0,0,1,0,0,0\n2,1e300,0,0,1,0,0,0\n3,-3e9,0,0,1,0,0,0\n4,2,0,0,1,0,0,0\n"),
+      "objects.csv", report);
+  ASSERT_EQ(objects.size(), 2u);
+  EXPECT_EQ(objects[1].id, 2);
+  EXPECT_EQ(report.dropped().at("ground truth: object id is not an integer").count, 2u);
+  // A frame file must lie inside the folder: an absolute path or ".." could name a device.
+  const auto rows = read_dataset_depth_index(
+      text("1,depth/0.png\n2,/dev/zero\n3,../x.png\n4,depth/../../x.png\n5,depth/1.png\n"),
+      "depth.csv", report);
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[1].file, "depth/1.png");
+  EXPECT_EQ(report.dropped().at("depth: file path leaves the dataset folder").count, 3u);
+  EXPECT_EQ(report.dropped().at("depth: file path leaves the dataset folder").first_where,
+            "depth.csv:line 2");
+}
+
+std::vector<std::uint8_t> png_of(const cv::Mat& m) {
+  std::vector<std::uint8_t> bytes;
+  cv::imencode(".png", m, bytes);
+  return bytes;
+}
+
+TEST(DatasetInMemory, DepthPngIsCheckedBeforeDecoding) {
+  cv::Mat mm(3, 4, CV_16UC1, cv::Scalar(1500));
+  mm.at<std::uint16_t>(2, 3) = 0;
+  ReadReport report;
+  const auto frame = decode_dataset_depth(png_of(mm), 42, std::nullopt, "d.png", report);
+  ASSERT_TRUE(frame.has_value());
+  EXPECT_EQ(frame->t, 42);
+  EXPECT_EQ(frame->width, 4);
+  EXPECT_FLOAT_EQ(frame->at(0, 0), 1.5f);
+  EXPECT_FLOAT_EQ(frame->at(3, 2), 0.0f);
+  EXPECT_FALSE(decode_dataset_depth(png_of(mm), 0, PinholeCamera{5, 3, 1, 1, 2, 1, {}}, "d.png",
+                                    report));
+  EXPECT_EQ(report.dropped().at("depth: image size differs from the depth camera calibration").count,
+            1u);
+  EXPECT_FALSE(decode_dataset_depth(png_of(cv::Mat(3, 4, CV_8UC1, cv::Scalar(1))), 0,
+                                    std::nullopt, "d.png", report));
+  EXPECT_EQ(report.dropped().at("depth: image is not 16-bit single channel").count, 1u);
+  // A header declaring 30000 x 30000 (1.8 GB decoded) is refused before OpenCV allocates.
+  std::vector<std::uint8_t> huge = png_of(mm);
+  const std::uint8_t side[4] = {0, 0, 0x75, 0x30};  // 30000 big-endian
+  std::memcpy(&huge[16], side, 4);
+  std::memcpy(&huge[20], side, 4);
+  EXPECT_FALSE(decode_dataset_depth(huge, 0, std::nullopt, "d.png", report));
+  EXPECT_EQ(report.dropped().at("depth: image larger than 4194304 pixels").count, 1u);
+  // Not a PNG (OpenCV would decode a TIFF, a JPEG, ... with their own decoders).
+  std::vector<std::uint8_t> tiff;
+  cv::imencode(".tiff", mm, tiff);
+  EXPECT_FALSE(decode_dataset_depth(tiff, 0, std::nullopt, "d.png", report));
+  EXPECT_FALSE(decode_dataset_depth({}, 0, std::nullopt, "d.png", report));
+  EXPECT_EQ(report.dropped().at("depth: image is not a PNG").count, 2u);
+  // A valid header with a corrupt body.
+  std::vector<std::uint8_t> cut = png_of(mm);
+  cut.resize(40);
+  EXPECT_FALSE(decode_dataset_depth(cut, 0, std::nullopt, "d.png", report));
+  EXPECT_EQ(report.dropped().at("depth: image missing or unreadable").count, 1u);
+}
+
+// The folder reader runs the same checks: a depth row naming a device or a folder is dropped.
+TEST(Dataset, DepthRowsOutsideTheFolderOrNotFilesAreDropped) {
+  const auto dir = test::scratch_dir("dataset_depth_paths");
+  {
+    DatasetWriter w(dir, small_calibration());
+    w.add_events(std::vector<Event>{{0, 1, 1, true}, {100, 2, 2, false}});
+    w.finish();
+  }
+  std::ofstream(dir + "/depth.csv") << "# t_ns,file\n10,/dev/zero\n20,depth\n30,../dataset_bad_rows/imu.csv\n";
+  auto reader = open_recording(dir);
+  EXPECT_TRUE(read_everything(*reader).depth.empty());
+  const auto& dropped = reader->report().dropped();
+  EXPECT_EQ(dropped.at("depth: file path leaves the dataset folder").count, 2u);
+  EXPECT_EQ(dropped.at("depth: image missing or unreadable").count, 1u);
+}
+
+TEST(Dataset, ManifestSizeOutOfBoundsIsAnErrorNamingTheKey) {
+  const auto dir = test::scratch_dir("dataset_manifest_bounds");
+  {
+    DatasetWriter w(dir, small_calibration());
+    w.finish();
+  }
+  std::ofstream(dir + "/dataset.yaml") << "format: fdv_dataset\nwidth: -64\nheight: 48\n";
+  try {
+    open_recording(dir);
+    FAIL() << "a negative width was accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), dir + "/dataset.yaml");
+    EXPECT_EQ(e.where(), "key width");
+  }
+}
+
+// Rows up to a chunk's horizon come in bounded pieces: all IMU rows and depth frames at the first
+// event's time were handed out in the first chunk (a 1 GB imu.csv would have been one chunk).
+TEST(Dataset, RowsPerChunkAreBoundedWhateverTheHorizon) {
+  const auto dir = test::scratch_dir("dataset_rows_per_chunk");
+  const std::size_t imu_rows = kMaxTableRowsPerChunk + 100, depth_rows = 3 * kMaxDepthFramesPerChunk;
+  {
+    DatasetWriter w(dir, small_calibration());
+    w.add_events(std::vector<Event>(2000, Event{0, 1, 1, true}));
+    w.add_depth(DepthFrame{0, 32, 24, std::vector<float>(32 * 24, 1.0f)});
+    for (std::size_t i = 0; i < imu_rows; ++i) w.add_imu({0, {0, 0, 0}, {0, 0, 9.81}});
+    w.finish();
+  }
+  {
+    std::ifstream in(dir + "/depth.csv");
+    std::string header, row;
+    std::getline(in, header);
+    std::getline(in, row);
+    std::ofstream out(dir + "/depth.csv");
+    out << header << "\n";
+    for (std::size_t i = 0; i < depth_rows; ++i) out << row << "\n";
+  }
+  ReaderOptions options;
+  options.chunk_events = 500;
+  auto reader = open_recording(dir, options);
+  SensorChunk c;
+  std::size_t imu = 0, depth = 0, max_imu = 0, max_depth = 0;
+  while (reader->read(c)) {
+    imu += c.imu.size();
+    depth += c.depth.size();
+    max_imu = std::max(max_imu, c.imu.size());
+    max_depth = std::max(max_depth, c.depth.size());
+  }
+  EXPECT_EQ(imu, imu_rows);
+  EXPECT_EQ(depth, depth_rows);
+  EXPECT_EQ(max_imu, kMaxTableRowsPerChunk);
+  EXPECT_EQ(max_depth, kMaxDepthFramesPerChunk);
 }
 
 }  // namespace

@@ -2,10 +2,13 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 #include <limits>
+#include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <optional>
 
@@ -45,57 +48,156 @@ std::string parse_pose(const std::vector<std::string_view>& f, OdometrySample& s
 std::string parse_object(const std::vector<std::string_view>& f, ObjectState& s) {
   double v[7];
   if (auto why = parse_numbers(f, 8, s.t, v); !why.empty()) return why;
-  if (v[0] != std::floor(v[0])) return "object id is not an integer";
+  if (v[0] != std::floor(v[0]) || std::abs(v[0]) > std::numeric_limits<int>::max())
+    return "object id is not an integer";
   s.id = static_cast<int>(v[0]);
   s.p_W = {v[1], v[2], v[3]};
   s.v_W = {v[4], v[5], v[6]};
   return {};
 }
 
-/// A depth index row; the PNG is loaded only when the row is handed out.
-struct DepthRef {
-  TimeNs t = 0;
-  std::string file;
+std::string parse_imu(const std::vector<std::string_view>& f, ImuSample& s) {
+  double v[6];
+  if (auto why = parse_numbers(f, 7, s.t, v); !why.empty()) return why;
+  s.gyro_rad_s = {v[0], v[1], v[2]};
+  s.accel_m_s2 = {v[3], v[4], v[5]};
+  return {};
+}
+
+std::string parse_depth_row(const std::vector<std::string_view>& f, DepthIndexRow& d) {
+  if (f.size() != 2) return "expected 2 columns";
+  if (!parse_int64(f[0], d.t)) return "bad timestamp";
+  // The frame must be a file inside the folder: an absolute path or ".." could name a device.
+  const fs::path file(f[1]);
+  if (f[1].empty() || file.is_absolute()) return "file path leaves the dataset folder";
+  for (const auto& part : file)
+    if (part == "..") return "file path leaves the dataset folder";
+  d.file = std::string(f[1]);
+  return {};
+}
+
+/// The size of a seekable stream, leaving it at the start; nullopt if it cannot be seeked.
+std::optional<std::uint64_t> stream_size(std::istream& in) {
+  in.seekg(0, std::ios::end);
+  const std::streamoff end = in.tellg();
+  in.seekg(0, std::ios::beg);
+  if (!in || end < 0) return std::nullopt;
+  return static_cast<std::uint64_t>(end);
+}
+
+/// events.bin: the header, then the records a bounded number at a time.
+class EventRecords {
+ public:
+  EventRecords(std::unique_ptr<std::istream> in, std::string name, int width, int height,
+               ReadReport& report)
+      : name_(std::move(name)), in_(std::move(in)), sanitizer_(width, height) {
+    const auto size = in_ ? stream_size(*in_) : std::nullopt;
+    if (!size) throw InputError(name_, "", "cannot read (events.bin is required)");
+    char header[kEventsHeaderBytes];
+    in_->read(header, sizeof header);
+    if (in_->gcount() != static_cast<std::streamsize>(sizeof header))
+      throw InputError(name_, "byte 0", "truncated header");
+    if (std::memcmp(header, kEventsMagic, 8) != 0)
+      throw InputError(name_, "byte 0", "wrong magic (expected FDVEVT01)");
+    std::uint32_t w, h;
+    std::memcpy(&w, header + 8, 4);
+    std::memcpy(&h, header + 12, 4);
+    std::memcpy(&left_, header + 16, 8);
+    if (w != static_cast<std::uint32_t>(width) || h != static_cast<std::uint32_t>(height))
+      throw InputError(name_, "byte 8", "resolution differs from dataset.yaml");
+    // The count is bounded by the bytes present, never allocated as declared.
+    const std::uint64_t present =
+        *size > kEventsHeaderBytes ? (*size - kEventsHeaderBytes) / 16 : 0;
+    if (present < left_) {
+      report.drop("events.bin truncated: events missing at the end",
+                  "byte " + std::to_string(kEventsHeaderBytes + present * 16), left_ - present);
+      left_ = present;
+    }
+  }
+
+  bool done() const { return left_ == 0; }
+  TimeNs last_time() const { return last_t_; }
+
+  /// Reads up to max_events records and appends the valid events to `out`.
+  void read(std::size_t max_events, std::vector<Event>& out, ReadReport& report) {
+    const std::size_t n = static_cast<std::size_t>(std::min<std::uint64_t>(left_, max_events));
+    if (n == 0) return;
+    const std::uint64_t offset = kEventsHeaderBytes + read_ * 16;
+    bytes_.resize(n * 16);
+    in_->read(bytes_.data(), static_cast<std::streamsize>(bytes_.size()));
+    // Fewer bytes than the size promised: the file shrank while being read.
+    const std::size_t got = static_cast<std::size_t>(std::max<std::streamsize>(0, in_->gcount())) / 16;
+    if (got < n) {
+      report.drop("events.bin truncated: events missing at the end",
+                  "byte " + std::to_string(offset + got * 16), left_ - got);
+      left_ = got;
+    }
+    left_ -= got;
+    read_ += got;
+    raw_.resize(got);
+    for (std::size_t i = 0; i < got; ++i) {  // field by field: the polarity byte may be corrupt
+      const char* r = bytes_.data() + i * 16;
+      std::memcpy(&raw_[i].t, r, 8);
+      std::memcpy(&raw_[i].x, r + 8, 2);
+      std::memcpy(&raw_[i].y, r + 10, 2);
+      raw_[i].polarity = r[12] != 0;
+    }
+    sanitizer_.append(raw_.data(), raw_.data() + got, out, report, "byte " + std::to_string(offset));
+    if (!raw_.empty()) last_t_ = std::max(last_t_, raw_.back().t);
+  }
+
+ private:
+  std::string name_;
+  std::unique_ptr<std::istream> in_;
+  EventSanitizer sanitizer_;
+  std::uint64_t left_ = 0, read_ = 0;
+  std::vector<char> bytes_;
+  std::vector<Event> raw_;
+  TimeNs last_t_ = std::numeric_limits<TimeNs>::min();
 };
+
+std::unique_ptr<std::istream> open_binary(const std::string& path) {
+  return std::make_unique<std::ifstream>(path, std::ios::binary);
+}
+
+/// dataset.yaml, read at most kMaxManifestBytes.
+DatasetManifest load_manifest(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, "", "cannot open file");
+  std::string text(kMaxManifestBytes + 1, '\0');
+  in.read(text.data(), static_cast<std::streamsize>(text.size()));
+  if (in.bad()) throw InputError(path, "", "read error");
+  text.resize(static_cast<std::size_t>(in.gcount()));
+  return parse_dataset_manifest(text, path);
+}
+
+template <typename T>
+std::vector<T> read_all(CsvStream<T>&& stream, ReadReport& report) {
+  std::vector<T> out;
+  stream.take_until(std::numeric_limits<TimeNs>::max(), std::numeric_limits<std::size_t>::max(),
+                    out, report);
+  return out;
+}
 
 class DatasetReader final : public RecordingReader {
  public:
   DatasetReader(const std::string& dir, const ReaderOptions& options)
       : dir_(dir),
         options_(options),
-        imu_(fs::path(dir) / "imu.csv", "imu",
-             [](const auto& f, ImuSample& s) {
-               double v[6];
-               auto why = parse_numbers(f, 7, s.t, v);
-               s.gyro_rad_s = {v[0], v[1], v[2]};
-               s.accel_m_s2 = {v[3], v[4], v[5]};
-               return why;
-             }),
+        imu_(fs::path(dir) / "imu.csv", "imu", parse_imu),
         odometry_(fs::path(dir) / "odometry.csv", "odometry", parse_pose),
-        depth_(fs::path(dir) / "depth.csv", "depth",
-               [](const auto& f, DepthRef& d) -> std::string {
-                 if (f.size() != 2) return "expected 2 columns";
-                 if (!parse_int64(f[0], d.t)) return "bad timestamp";
-                 d.file = std::string(f[1]);
-                 return {};
-               }),
-        objects_(fs::path(dir) / "truth" / "objects.csv", "ground truth",
-                 parse_object) {
-    const std::string manifest_path = (fs::path(dir) / kDatasetManifest).string();
-    YAML::Node manifest;
-    try {
-      manifest = YAML::LoadFile(manifest_path);
-      info_.width = manifest["width"].as<int>();
-      info_.height = manifest["height"].as<int>();
-    } catch (const YAML::Exception& e) {
-      throw InputError(manifest_path, "line " + std::to_string(e.mark.line + 1),
-                       "bad manifest (needs integer width and height): " + e.msg);
-    }
+        depth_(fs::path(dir) / "depth.csv", "depth", parse_depth_row),
+        objects_(fs::path(dir) / "truth" / "objects.csv", "ground truth", parse_object) {
+    const DatasetManifest manifest = load_manifest((fs::path(dir) / kDatasetManifest).string());
+    info_.width = manifest.width;
+    info_.height = manifest.height;
     info_.path = dir;
     info_.format = "fdv_dataset";
-    if (const auto calib = fs::path(dir) / "calibration.yaml"; fs::exists(calib))
+    std::error_code ec;
+    if (const auto calib = fs::path(dir) / "calibration.yaml"; fs::exists(calib, ec) || ec)
       info_.calibration = load_calibration(calib.string());
-    open_events();
+    const std::string events_path = (fs::path(dir) / "events.bin").string();
+    events_.emplace(open_binary(events_path), events_path, info_.width, info_.height, report_);
     info_.streams.push_back(StreamKind::kEvents);
     if (imu_.present()) info_.streams.push_back(StreamKind::kImu);
     if (depth_.present()) info_.streams.push_back(StreamKind::kDepth);
@@ -108,127 +210,60 @@ class DatasetReader final : public RecordingReader {
 
   bool read(SensorChunk& chunk) override {
     chunk.clear();
-    read_events(chunk.events);
+    events_->read(options_.chunk_events, chunk.events, report_);
     // Other streams follow the events: everything up to the last event handed out, or, once
     // the events are exhausted, the rest in bounded pieces.
-    const bool events_done = events_left_ == 0;
+    const bool events_done = events_->done();
     const TimeNs horizon = events_done ? std::numeric_limits<TimeNs>::max()
-                                       : (chunk.events.empty() ? last_event_t_ : chunk.events.back().t);
-    const std::size_t cap = events_done ? 4096 : std::numeric_limits<std::size_t>::max();
+                                       : (chunk.events.empty() ? events_->last_time() : chunk.events.back().t);
+    const std::size_t cap = events_done ? 4096 : kMaxTableRowsPerChunk;
     imu_.take_until(horizon, cap, chunk.imu, report_);
     odometry_.take_until(horizon, cap, chunk.odometry, report_);
     objects_.take_until(horizon, cap, chunk.ground_truth, report_);
-    std::vector<DepthRef> refs;
-    depth_.take_until(horizon, events_done ? 8 : cap, refs, report_);
-    for (const auto& r : refs) load_depth(r, chunk.depth);
+    std::vector<DepthIndexRow> refs;
+    depth_.take_until(horizon, kMaxDepthFramesPerChunk, refs, report_);
+    for (const auto& r : refs)
+      if (auto frame = load_depth(r)) chunk.depth.push_back(std::move(*frame));
     return !chunk.empty() || !(events_done && imu_.exhausted(report_) &&
                                odometry_.exhausted(report_) && depth_.exhausted(report_) &&
                                objects_.exhausted(report_));
   }
 
  private:
-  void open_events() {
-    const std::string path = (fs::path(dir_) / "events.bin").string();
-    events_path_ = path;
-    events_.open(path, std::ios::binary);
-    if (!events_) throw InputError(path, "", "cannot open (events.bin is required)");
-    char header[kEventsHeaderBytes];
-    events_.read(header, sizeof header);
-    if (events_.gcount() != static_cast<std::streamsize>(sizeof header))
-      throw InputError(path, "byte 0", "truncated header");
-    if (std::memcmp(header, kEventsMagic, 8) != 0)
-      throw InputError(path, "byte 0", "wrong magic (expected FDVEVT01)");
-    std::uint32_t w, h;
-    std::memcpy(&w, header + 8, 4);
-    std::memcpy(&h, header + 12, 4);
-    std::memcpy(&events_left_, header + 16, 8);
-    if (static_cast<int>(w) != info_.width || static_cast<int>(h) != info_.height)
-      throw InputError(path, "byte 8", "resolution differs from dataset.yaml");
-    const auto bytes = fs::file_size(path) - kEventsHeaderBytes;
-    const std::uint64_t present = bytes / 16;
-    if (present < events_left_) {
-      report_.drop("events.bin truncated: events missing at the end",
-                   "byte " + std::to_string(kEventsHeaderBytes + present * 16), events_left_ - present);
-      events_left_ = present;
-    }
-    sanitizer_.emplace(info_.width, info_.height);
-  }
-
-  void read_events(std::vector<Event>& out) {
-    const std::size_t n = static_cast<std::size_t>(
-        std::min<std::uint64_t>(events_left_, options_.chunk_events));
-    if (n == 0) return;
-    const auto offset = static_cast<std::uint64_t>(events_.tellg());
-    bytes_.resize(n * 16);
-    events_.read(bytes_.data(), static_cast<std::streamsize>(bytes_.size()));
-    events_left_ -= n;
-    raw_.resize(n);
-    for (std::size_t i = 0; i < n; ++i) {  // field by field: the polarity byte may be corrupt
-      const char* r = bytes_.data() + i * 16;
-      std::memcpy(&raw_[i].t, r, 8);
-      std::memcpy(&raw_[i].x, r + 8, 2);
-      std::memcpy(&raw_[i].y, r + 10, 2);
-      raw_[i].polarity = r[12] != 0;
-    }
-    sanitizer_->append(raw_.data(), raw_.data() + n, out, report_, "byte " + std::to_string(offset));
-    if (!raw_.empty()) last_event_t_ = std::max(last_event_t_, raw_.back().t);
-  }
-
-  void load_depth(const DepthRef& ref, std::vector<DepthFrame>& out) {
+  std::optional<DepthFrame> load_depth(const DepthIndexRow& ref) {
     const std::string path = (fs::path(dir_) / ref.file).string();
-    const cv::Mat mm = cv::imread(path, cv::IMREAD_UNCHANGED);
-    if (mm.empty()) {
+    // Only a regular file of bounded size is read (not a FIFO or a device).
+    std::error_code ec;
+    const auto status = fs::status(path, ec);
+    if (ec || !fs::is_regular_file(status)) {
       report_.drop("depth: image missing or unreadable", path);
-      return;
+      return std::nullopt;
     }
-    if (mm.type() != CV_16UC1) {
-      report_.drop("depth: image is not 16-bit single channel", path);
-      return;
+    const std::uint64_t size = fs::file_size(path, ec);
+    if (ec || size > kMaxDepthFileBytes) {
+      report_.drop("depth: image file larger than " + std::to_string(kMaxDepthFileBytes) + " bytes",
+                   path);
+      return std::nullopt;
     }
-    const auto& cam = info_.calibration && info_.calibration->depth_camera
-                          ? info_.calibration->depth_camera
-                          : std::optional<PinholeCamera>{};
-    if (cam && (mm.cols != cam->width || mm.rows != cam->height)) {
-      report_.drop("depth: image size differs from the depth camera calibration", path);
-      return;
-    }
-    DepthFrame f;
-    f.t = ref.t;
-    f.width = mm.cols;
-    f.height = mm.rows;
-    f.depth_m.resize(static_cast<std::size_t>(mm.total()));
-    for (int v = 0; v < mm.rows; ++v)
-      for (int u = 0; u < mm.cols; ++u)
-        f.depth_m[static_cast<std::size_t>(v) * mm.cols + u] =
-            static_cast<float>(mm.at<std::uint16_t>(v, u)) * 0.001f;
-    out.push_back(std::move(f));
+    std::vector<std::uint8_t> bytes(static_cast<std::size_t>(size));
+    std::ifstream in(path, std::ios::binary);
+    in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+    bytes.resize(static_cast<std::size_t>(std::max<std::streamsize>(0, in.gcount())));
+    const auto& cam = info_.calibration ? info_.calibration->depth_camera
+                                        : std::optional<PinholeCamera>{};
+    return decode_dataset_depth(bytes, ref.t, cam, path, report_);
   }
 
   std::string dir_;
   ReaderOptions options_;
   RecordingInfo info_;
   ReadReport report_;
-  std::string events_path_;
-  std::ifstream events_;
-  std::uint64_t events_left_ = 0;
-  std::vector<char> bytes_;
-  std::vector<Event> raw_;
-  std::optional<EventSanitizer> sanitizer_;
-  TimeNs last_event_t_ = std::numeric_limits<TimeNs>::min();
+  std::optional<EventRecords> events_;
   CsvStream<ImuSample> imu_;
   CsvStream<OdometrySample> odometry_;
-  CsvStream<DepthRef> depth_;
+  CsvStream<DepthIndexRow> depth_;
   CsvStream<ObjectState> objects_;
 };
-
-template <typename T>
-std::vector<T> read_all(CsvStream<T>&& stream) {
-  std::vector<T> out;
-  ReadReport ignored;
-  stream.take_until(std::numeric_limits<TimeNs>::max(), std::numeric_limits<std::size_t>::max(),
-                    out, ignored);
-  return out;
-}
 
 }  // namespace
 
@@ -237,12 +272,135 @@ std::unique_ptr<RecordingReader> open_dataset(const std::string& dir, const Read
 }
 
 std::vector<OdometrySample> read_body_truth(const std::string& dir) {
-  return read_all(CsvStream<OdometrySample>(fs::path(dir) / "truth" / "body.csv", "body", parse_pose));
+  ReadReport ignored;
+  return read_all(
+      CsvStream<OdometrySample>(fs::path(dir) / "truth" / "body.csv", "body", parse_pose), ignored);
 }
 
 std::vector<ObjectState> read_object_truth(const std::string& dir) {
-  return read_all(CsvStream<ObjectState>(
-      fs::path(dir) / "truth" / "objects.csv", "ground truth", parse_object));
+  ReadReport ignored;
+  return read_all(CsvStream<ObjectState>(fs::path(dir) / "truth" / "objects.csv", "ground truth",
+                                         parse_object),
+                  ignored);
+}
+
+DatasetManifest parse_dataset_manifest(std::string_view yaml_text, const std::string& name) {
+  if (yaml_text.size() > kMaxManifestBytes)
+    throw InputError(name, "", "larger than " + std::to_string(kMaxManifestBytes) + " bytes");
+  YAML::Node root;
+  try {
+    root = YAML::Load(std::string(yaml_text));
+  } catch (const YAML::Exception& e) {
+    throw InputError(name, "line " + std::to_string(e.mark.line + 1), "not valid YAML: " + e.msg);
+  }
+  if (!root.IsMap()) throw InputError(name, "", "not a YAML mapping (needs width and height)");
+  DatasetManifest m;
+  for (auto [key, side] : {std::pair{"width", &m.width}, std::pair{"height", &m.height}}) {
+    const std::string where = std::string("key ") + key;
+    try {
+      const YAML::Node node = root[key];
+      if (!node) throw InputError(name, where, "missing (the event sensor size is required)");
+      *side = node.as<int>();
+    } catch (const YAML::Exception& e) {
+      throw InputError(name, where, "not an integer: " + e.msg);
+    }
+    if (*side < 1 || *side > kMaxDatasetSensorSide)
+      throw InputError(name, where,
+                       "must be 1 to " + std::to_string(kMaxDatasetSensorSide) + " pixels");
+  }
+  return m;
+}
+
+std::vector<Event> read_dataset_events(std::unique_ptr<std::istream> in, const std::string& name,
+                                       int width, int height, ReadReport& report) {
+  EventRecords records(std::move(in), name, width, height, report);
+  std::vector<Event> out;
+  while (!records.done()) records.read(4096, out, report);
+  return out;
+}
+
+std::vector<ImuSample> read_dataset_imu(std::unique_ptr<std::istream> in, const std::string& name,
+                                        ReadReport& report) {
+  return read_all(CsvStream<ImuSample>(LineReader(std::move(in), name), "imu", parse_imu), report);
+}
+
+std::vector<OdometrySample> read_dataset_poses(std::unique_ptr<std::istream> in,
+                                               const std::string& name, ReadReport& report) {
+  return read_all(
+      CsvStream<OdometrySample>(LineReader(std::move(in), name), "odometry", parse_pose), report);
+}
+
+std::vector<ObjectState> read_dataset_objects(std::unique_ptr<std::istream> in,
+                                              const std::string& name, ReadReport& report) {
+  return read_all(
+      CsvStream<ObjectState>(LineReader(std::move(in), name), "ground truth", parse_object),
+      report);
+}
+
+std::vector<DepthIndexRow> read_dataset_depth_index(std::unique_ptr<std::istream> in,
+                                                    const std::string& name, ReadReport& report) {
+  return read_all(
+      CsvStream<DepthIndexRow>(LineReader(std::move(in), name), "depth", parse_depth_row), report);
+}
+
+std::optional<DepthFrame> decode_dataset_depth(std::span<const std::uint8_t> png, TimeNs t,
+                                               const std::optional<PinholeCamera>& camera,
+                                               const std::string& name, ReadReport& report) {
+  // The PNG signature and IHDR chunk (PNG spec, section 11.2.2) give the size and pixel type
+  // before the decoder allocates: width and height big-endian at bytes 16 and 20, bit depth at
+  // 24, colour type at 25 (0 = greyscale).
+  static constexpr std::uint8_t kPngStart[16] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n',
+                                                 0,    0,   0,   13,  'I',  'H',  'D',  'R'};
+  if (png.size() < 26 || std::memcmp(png.data(), kPngStart, sizeof kPngStart) != 0) {
+    report.drop("depth: image is not a PNG", name);
+    return std::nullopt;
+  }
+  const auto be32 = [&](std::size_t at) {
+    return std::uint32_t{png[at]} << 24 | std::uint32_t{png[at + 1]} << 16 |
+           std::uint32_t{png[at + 2]} << 8 | std::uint32_t{png[at + 3]};
+  };
+  const std::uint32_t width = be32(16), height = be32(20);
+  if (png[24] != 16 || png[25] != 0) {
+    report.drop("depth: image is not 16-bit single channel", name);
+    return std::nullopt;
+  }
+  if (width == 0 || height == 0 ||
+      static_cast<std::uint64_t>(width) * height > static_cast<std::uint64_t>(kMaxDepthPixels)) {
+    report.drop("depth: image larger than " + std::to_string(kMaxDepthPixels) + " pixels", name);
+    return std::nullopt;
+  }
+  if (camera && (static_cast<std::int64_t>(width) != camera->width ||
+                 static_cast<std::int64_t>(height) != camera->height)) {
+    report.drop("depth: image size differs from the depth camera calibration", name);
+    return std::nullopt;
+  }
+  cv::Mat mm;
+  try {
+    const cv::Mat buffer(1, static_cast<int>(png.size()), CV_8UC1,
+                         const_cast<std::uint8_t*>(png.data()));
+    mm = cv::imdecode(buffer, cv::IMREAD_UNCHANGED);
+  } catch (const cv::Exception&) {
+    mm.release();
+  }
+  if (mm.empty()) {
+    report.drop("depth: image missing or unreadable", name);
+    return std::nullopt;
+  }
+  if (mm.type() != CV_16UC1 || static_cast<std::uint32_t>(mm.cols) != width ||
+      static_cast<std::uint32_t>(mm.rows) != height) {
+    report.drop("depth: image is not 16-bit single channel", name);
+    return std::nullopt;
+  }
+  DepthFrame f;
+  f.t = t;
+  f.width = mm.cols;
+  f.height = mm.rows;
+  f.depth_m.resize(static_cast<std::size_t>(mm.total()));
+  for (int v = 0; v < mm.rows; ++v)
+    for (int u = 0; u < mm.cols; ++u)
+      f.depth_m[static_cast<std::size_t>(v) * mm.cols + u] =
+          static_cast<float>(mm.at<std::uint16_t>(v, u)) * 0.001f;
+  return f;
 }
 
 }  // namespace fdv

@@ -12,8 +12,14 @@
 ///   DIR/truth/body.csv      same columns as odometry.csv      (optional true vehicle motion)
 ///
 /// Every stream file is optional except events.bin.
+#include <cstdint>
+#include <istream>
 #include <memory>
+#include <optional>
+#include <span>
 #include <string>
+#include <string_view>
+#include <vector>
 
 #include "fdv/io/recording.h"
 
@@ -23,11 +29,65 @@ inline constexpr const char* kDatasetManifest = "dataset.yaml";
 inline constexpr char kEventsMagic[8] = {'F', 'D', 'V', 'E', 'V', 'T', '0', '1'};
 inline constexpr std::size_t kEventsHeaderBytes = 24;
 
+/// Bounds on what a dataset folder declares (docs/FORMATS.md, "Bad input").
+/// Largest sensor side in dataset.yaml: today's largest event sensors are 1280x960; the pipeline
+/// allocates per-pixel images of width x height.
+inline constexpr int kMaxDatasetSensorSide = 4096;
+/// dataset.yaml is read whole before parsing; a simulator manifest is a few kilobytes.
+inline constexpr std::size_t kMaxManifestBytes = 1 << 20;
+/// Pixels of one depth frame, checked in the PNG header before decoding: 4x the 1280x720 of
+/// common depth cameras; 16 MiB as floats.
+inline constexpr std::int64_t kMaxDepthPixels = std::int64_t{2048} * 2048;
+/// A depth PNG is read whole before decoding: 2048x2048 16-bit stored uncompressed is 8 MiB.
+inline constexpr std::uint64_t kMaxDepthFileBytes = 16 << 20;
+/// Depth frames per chunk at most (each up to 16 MiB), whatever the chunk's time horizon.
+inline constexpr std::size_t kMaxDepthFramesPerChunk = 8;
+
 std::unique_ptr<RecordingReader> open_dataset(const std::string& dir, const ReaderOptions& options);
 
 /// Reads the true vehicle motion `truth/body.csv` of a dataset (empty if absent).
 std::vector<OdometrySample> read_body_truth(const std::string& dir);
 /// Reads `truth/objects.csv` of a dataset (empty if absent).
 std::vector<ObjectState> read_object_truth(const std::string& dir);
+
+// One file of the folder from memory or any stream, in full, by the same code open_dataset()
+// runs on the files (for fuzzing and tests). `name` stands for the file in report positions
+// ("name:line N", "byte N") and errors. Recoverable damage is dropped and counted in `report`;
+// the rest throws InputError (name, position, reason). Nothing else escapes.
+
+struct DatasetManifest {
+  int width = 0;  ///< event sensor [px], 1..kMaxDatasetSensorSide
+  int height = 0;
+};
+/// dataset.yaml's text (at most kMaxManifestBytes).
+DatasetManifest parse_dataset_manifest(std::string_view yaml_text, const std::string& name);
+
+/// events.bin; `in` must be seekable (its size bounds the count). The header must give
+/// width x height (the manifest's). Events outside the sensor or going back are dropped.
+std::vector<Event> read_dataset_events(std::unique_ptr<std::istream> in, const std::string& name,
+                                       int width, int height, ReadReport& report);
+
+std::vector<ImuSample> read_dataset_imu(std::unique_ptr<std::istream> in, const std::string& name,
+                                        ReadReport& report);
+/// odometry.csv or truth/body.csv.
+std::vector<OdometrySample> read_dataset_poses(std::unique_ptr<std::istream> in,
+                                               const std::string& name, ReadReport& report);
+/// truth/objects.csv.
+std::vector<ObjectState> read_dataset_objects(std::unique_ptr<std::istream> in,
+                                              const std::string& name, ReadReport& report);
+
+/// A depth.csv row: the PNG `file` (relative to the folder) holds the frame at `t`.
+struct DepthIndexRow {
+  TimeNs t = 0;
+  std::string file;
+};
+std::vector<DepthIndexRow> read_dataset_depth_index(std::unique_ptr<std::istream> in,
+                                                    const std::string& name, ReadReport& report);
+/// One depth PNG's bytes: 16-bit single channel, millimetres. A frame that is not such a PNG,
+/// has more than kMaxDepthPixels, or differs from `camera`'s size (when given) is dropped and
+/// counted (nullopt).
+std::optional<DepthFrame> decode_dataset_depth(std::span<const std::uint8_t> png, TimeNs t,
+                                               const std::optional<PinholeCamera>& camera,
+                                               const std::string& name, ReadReport& report);
 
 }  // namespace fdv
