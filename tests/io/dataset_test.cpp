@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
 
@@ -329,6 +330,23 @@ TEST(Dataset, DepthRowsOutsideTheFolderOrNotFilesAreDropped) {
   const auto& dropped = reader->report().dropped();
   EXPECT_EQ(dropped.at("depth: file path leaves the dataset folder").count, 2u);
   EXPECT_EQ(dropped.at("depth: image missing or unreadable").count, 1u);
+}
+
+// The file name comes from depth.csv and reaches the report: fdv info's JSON needs UTF-8
+// (it ended with nlohmann's type_error.316).
+TEST(Dataset, DepthFileNameInTheReportIsValidUtf8) {
+  const auto dir = test::scratch_dir("dataset_depth_name_utf8");
+  {
+    DatasetWriter w(dir, small_calibration());
+    w.add_events(std::vector<Event>{{0, 1, 1, true}, {100, 2, 2, false}});
+    w.finish();
+  }
+  std::ofstream(dir + "/depth.csv") << "# t_ns,file\n10,depth/\xFF\xFE.png\n";
+  auto reader = open_recording(dir);
+  read_everything(*reader);
+  EXPECT_EQ(reader->report().dropped().at("depth: image missing or unreadable").first_where,
+            dir + "/depth/\\xFF\\xFE.png");
+  EXPECT_NO_THROW(reader->report().to_json().dump());
 }
 
 TEST(Dataset, ManifestSizeOutOfBoundsIsAnErrorNamingTheKey) {

@@ -232,17 +232,19 @@ class DatasetReader final : public RecordingReader {
  private:
   std::optional<DepthFrame> load_depth(const DepthIndexRow& ref) {
     const std::string path = (fs::path(dir_) / ref.file).string();
+    // The name comes from depth.csv: the report (and fdv info's JSON) needs it as UTF-8.
+    const std::string shown = escape_non_utf8(path);
     // Only a regular file of bounded size is read (not a FIFO or a device).
     std::error_code ec;
     const auto status = fs::status(path, ec);
     if (ec || !fs::is_regular_file(status)) {
-      report_.drop("depth: image missing or unreadable", path);
+      report_.drop("depth: image missing or unreadable", shown);
       return std::nullopt;
     }
     const std::uint64_t size = fs::file_size(path, ec);
     if (ec || size > kMaxDepthFileBytes) {
       report_.drop("depth: image file larger than " + std::to_string(kMaxDepthFileBytes) + " bytes",
-                   path);
+                   shown);
       return std::nullopt;
     }
     std::vector<std::uint8_t> bytes(static_cast<std::size_t>(size));
@@ -251,7 +253,7 @@ class DatasetReader final : public RecordingReader {
     bytes.resize(static_cast<std::size_t>(std::max<std::streamsize>(0, in.gcount())));
     const auto& cam = info_.calibration ? info_.calibration->depth_camera
                                         : std::optional<PinholeCamera>{};
-    return decode_dataset_depth(bytes, ref.t, cam, path, report_);
+    return decode_dataset_depth(bytes, ref.t, cam, shown, report_);
   }
 
   std::string dir_;
