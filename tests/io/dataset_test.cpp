@@ -403,5 +403,19 @@ TEST(Dataset, RowsPerChunkAreBoundedWhateverTheHorizon) {
   EXPECT_EQ(max_depth, kMaxDepthFramesPerChunk);
 }
 
+// chunk_events = 0 read nothing and never finished (read() returned true forever).
+TEST(Dataset, ZeroChunkEventsStillEnds) {
+  const auto dir = test::scratch_dir("dataset_zero_chunk");
+  {
+    DatasetWriter w(dir, small_calibration());
+    w.add_events(std::vector<Event>{{0, 1, 1, true}, {100, 2, 2, false}});
+    w.finish();
+  }
+  ReaderOptions zero;
+  zero.chunk_events = 0;
+  auto reader = open_recording(dir, zero);
+  EXPECT_EQ(read_everything(*reader).events.size(), 2u);
+}
+
 }  // namespace
 }  // namespace fdv

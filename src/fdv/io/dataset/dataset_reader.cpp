@@ -210,7 +210,7 @@ class DatasetReader final : public RecordingReader {
 
   bool read(SensorChunk& chunk) override {
     chunk.clear();
-    events_->read(options_.chunk_events, chunk.events, report_);
+    events_->read(std::max<std::size_t>(1, options_.chunk_events), chunk.events, report_);
     // Other streams follow the events: everything up to the last event handed out, or, once
     // the events are exhausted, the rest in bounded pieces.
     const bool events_done = events_->done();
