@@ -23,8 +23,10 @@ namespace fdv::lanes {
 using vf = float __attribute__((vector_size(16)));
 using vi = std::int32_t __attribute__((vector_size(16)));
 using vd = double __attribute__((vector_size(16)));
-using vf_u = float __attribute__((vector_size(16), aligned(4)));
-using vi_u = std::int32_t __attribute__((vector_size(16), aligned(4)));
+// typedef, not `using`: clang ignores `aligned` in an alias declaration's attribute.
+typedef float vf_u __attribute__((vector_size(16), aligned(4)));
+typedef std::int32_t vi_u __attribute__((vector_size(16), aligned(4)));
+static_assert(alignof(vf_u) == 4 && alignof(vi_u) == 4);
 
 inline vf load(const float* p) { return *reinterpret_cast<const vf_u*>(p); }
 inline vi load(const std::int32_t* p) { return *reinterpret_cast<const vi_u*>(p); }

@@ -72,7 +72,7 @@ namespace {
 
 using vf8 = float __attribute__((vector_size(32)));
 using vi8 = std::int32_t __attribute__((vector_size(32)));
-using vf8_u = float __attribute__((vector_size(32), aligned(4)));
+typedef float vf8_u __attribute__((vector_size(32), aligned(4)));
 
 /// Everything the per-pixel loop reads, as plain numbers (single precision: see register_frame()).
 struct Projection {

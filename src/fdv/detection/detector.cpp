@@ -32,7 +32,7 @@ void bin_slice(const std::int32_t* __restrict pixel, const float* __restrict t_s
   using lanes::vf;
   using lanes::vi;
   using vu = std::uint32_t __attribute__((vector_size(16)));
-  using vu_u = std::uint32_t __attribute__((vector_size(16), aligned(4)));
+  typedef std::uint32_t vu_u __attribute__((vector_size(16), aligned(4)));
   const std::uint32_t first = row0 * w, band = rows * w;
   const vu first_v = vu{} + first, band_v = vu{} + band;
   const vf lo = vf{} + t_lo, hi = vf{} + t_hi;
