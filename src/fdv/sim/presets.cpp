@@ -53,7 +53,7 @@ void add_panels(ScenarioConfig& c, Rng& rng, double x_side_min, double x_overhea
 }
 
 Eigen::Vector3d random_spin(Rng& rng) {
-  Eigen::Vector3d axis(rng.normal(), rng.normal(), rng.normal());
+  const Eigen::Vector3d axis = rng.normal3();
   return axis.normalized() * rng.uniform(8.0, 20.0);  // [rad/s], 1.3-3.2 rev/s
 }
 

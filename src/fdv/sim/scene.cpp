@@ -93,7 +93,7 @@ Scene::Scene(const SceneConfig& config, const std::vector<BallConfig>& balls, st
         Rng::stream(seed, RngStream::kScenario, 3000 + static_cast<std::uint64_t>(bc.id));
     const double rel[3] = {1.0, 1.6, 2.5}, amp[3] = {1.0, 0.6, 0.4};
     for (int k = 0; k < 3; ++k) {
-      Eigen::Vector3d dir(ball_rng.normal(), ball_rng.normal(), ball_rng.normal());
+      Eigen::Vector3d dir = ball_rng.normal3();
       dir.normalize();
       const double freq = bc.texture_frequency * rel[k];
       for (int a = 0; a < 3; ++a) b.wave[k][a] = static_cast<float>(dir[a] * freq);

@@ -16,8 +16,8 @@ ImuModel::ImuModel(const ImuConfig& config, const Eigen::Matrix3d& R_B_I,
       g_W_(gravity_W),
       rng_(Rng::stream(seed, RngStream::kImu)) {
   dt_ = 1.0 / config.rate_hz;
-  bg_ = config.gyro_bias_sigma * Eigen::Vector3d(rng_.normal(), rng_.normal(), rng_.normal());
-  ba_ = config.accel_bias_sigma * Eigen::Vector3d(rng_.normal(), rng_.normal(), rng_.normal());
+  bg_ = config.gyro_bias_sigma * rng_.normal3();
+  ba_ = config.accel_bias_sigma * rng_.normal3();
 }
 
 ImuSample ImuModel::sample(TimeNs t, const BodyState& s) {
@@ -25,12 +25,12 @@ ImuSample ImuModel::sample(TimeNs t, const BodyState& s) {
   const double sa = config_.accel_noise_density / std::sqrt(dt_);
   ImuSample out;
   out.t = t;
-  const Eigen::Vector3d ng(rng_.normal(), rng_.normal(), rng_.normal());
-  const Eigen::Vector3d na(rng_.normal(), rng_.normal(), rng_.normal());
+  const Eigen::Vector3d ng = rng_.normal3();
+  const Eigen::Vector3d na = rng_.normal3();
   out.gyro_rad_s = R_I_B_ * s.omega_B + bg_ + sg * ng;
   out.accel_m_s2 = R_I_B_ * (s.R_W_B.transpose() * (s.a_W - g_W_)) + ba_ + sa * na;
-  const Eigen::Vector3d wg(rng_.normal(), rng_.normal(), rng_.normal());
-  const Eigen::Vector3d wa(rng_.normal(), rng_.normal(), rng_.normal());
+  const Eigen::Vector3d wg = rng_.normal3();
+  const Eigen::Vector3d wa = rng_.normal3();
   bg_ += config_.gyro_random_walk * std::sqrt(dt_) * wg;
   ba_ += config_.accel_random_walk * std::sqrt(dt_) * wa;
   return out;
