@@ -6,6 +6,8 @@
 #   BUILD_DIR=build-asan FDV_SANITIZE=ON scripts/setup.sh   # ASan+UBSan build
 #   FDV_SKIP_INSTALL=1 scripts/setup.sh                     # build only
 #   FDV_BUILD_BENCH=OFF scripts/setup.sh                    # without the benchmark programs
+#   CC=clang CXX=clang++ FDV_SANITIZE=ON FDV_FUZZ=ON BUILD_DIR=build-fuzz scripts/setup.sh
+#                                  # clang, ASan+UBSan, and the libFuzzer targets (fuzz/run.sh)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -18,6 +20,8 @@ PACKAGES=(
   librosbag-storage-dev libroslz4-dev libbz2-dev libsensor-msgs-dev libnav-msgs-dev
   libgeometry-msgs-dev libfastcdr-dev
 )
+# The fuzz build: clang with its libFuzzer and sanitizer runtimes; python3 builds the seed corpora.
+[ "${FDV_FUZZ:-OFF}" = "ON" ] && PACKAGES+=(clang libclang-rt-14-dev python3)
 
 if [ "${FDV_SKIP_INSTALL:-0}" != "1" ]; then
   missing=()
@@ -38,6 +42,7 @@ cmake -S . -B "$BUILD_DIR" -G Ninja \
   -DCMAKE_BUILD_TYPE="$BUILD_TYPE" \
   -DFDV_WERROR="${FDV_WERROR:-OFF}" \
   -DFDV_SANITIZE="${FDV_SANITIZE:-OFF}" \
-  -DFDV_BUILD_BENCH="${FDV_BUILD_BENCH:-ON}" >/dev/null
+  -DFDV_BUILD_BENCH="${FDV_BUILD_BENCH:-ON}" \
+  -DFDV_FUZZ="${FDV_FUZZ:-OFF}" >/dev/null
 cmake --build "$BUILD_DIR" -j "$(nproc)"
 echo "setup: built into $BUILD_DIR"
