@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <limits>
 
+#include "fdv/core/config_text.h"
 #include "fdv/core/error.h"
 #include "fdv/eval/ground_truth_box.h"
 #include "fdv/io/dataset/dataset_reader.h"
@@ -48,7 +49,7 @@ DatasetTruth load_dataset_truth(const std::string& dir) {
   std::stable_sort(truth.objects.begin(), truth.objects.end(),
                    [](const ObjectState& a, const ObjectState& b) { return a.t < b.t; });
   try {
-    const YAML::Node m = YAML::LoadFile(manifest_path);
+    const YAML::Node m = parse_config_yaml(read_config_file(manifest_path), manifest_path);
     if (m["scenario"]) truth.scenario = m["scenario"].as<std::string>();
     if (m["gravity_W"]) {
       const auto g = m["gravity_W"].as<std::vector<double>>();

@@ -12,6 +12,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <optional>
 
+#include "fdv/core/config_text.h"
 #include "fdv/core/error.h"
 #include "fdv/io/table_stream.h"
 #include "fdv/io/text_fields.h"
@@ -160,17 +161,6 @@ std::unique_ptr<std::istream> open_binary(const std::string& path) {
   return std::make_unique<std::ifstream>(path, std::ios::binary);
 }
 
-/// dataset.yaml, read at most kMaxManifestBytes.
-DatasetManifest load_manifest(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path, "", "cannot open file");
-  std::string text(kMaxManifestBytes + 1, '\0');
-  in.read(text.data(), static_cast<std::streamsize>(text.size()));
-  if (in.bad()) throw InputError(path, "", "read error");
-  text.resize(static_cast<std::size_t>(in.gcount()));
-  return parse_dataset_manifest(text, path);
-}
-
 template <typename T>
 std::vector<T> read_all(CsvStream<T>&& stream, ReadReport& report) {
   std::vector<T> out;
@@ -188,7 +178,8 @@ class DatasetReader final : public RecordingReader {
         odometry_(fs::path(dir) / "odometry.csv", "odometry", parse_pose),
         depth_(fs::path(dir) / "depth.csv", "depth", parse_depth_row),
         objects_(fs::path(dir) / "truth" / "objects.csv", "ground truth", parse_object) {
-    const DatasetManifest manifest = load_manifest((fs::path(dir) / kDatasetManifest).string());
+    const std::string manifest_path = (fs::path(dir) / kDatasetManifest).string();
+    const DatasetManifest manifest = parse_dataset_manifest(read_config_file(manifest_path), manifest_path);
     info_.width = manifest.width;
     info_.height = manifest.height;
     info_.path = dir;
@@ -287,14 +278,7 @@ std::vector<ObjectState> read_object_truth(const std::string& dir) {
 }
 
 DatasetManifest parse_dataset_manifest(std::string_view yaml_text, const std::string& name) {
-  if (yaml_text.size() > kMaxManifestBytes)
-    throw InputError(name, "", "larger than " + std::to_string(kMaxManifestBytes) + " bytes");
-  YAML::Node root;
-  try {
-    root = YAML::Load(std::string(yaml_text));
-  } catch (const YAML::Exception& e) {
-    throw InputError(name, "line " + std::to_string(e.mark.line + 1), "not valid YAML: " + e.msg);
-  }
+  const YAML::Node root = parse_config_yaml(yaml_text, name);
   if (!root.IsMap()) throw InputError(name, "", "not a YAML mapping (needs width and height)");
   DatasetManifest m;
   for (auto [key, side] : {std::pair{"width", &m.width}, std::pair{"height", &m.height}}) {

@@ -33,8 +33,6 @@ inline constexpr std::size_t kEventsHeaderBytes = 24;
 /// Largest sensor side in dataset.yaml: today's largest event sensors are 1280x960; the pipeline
 /// allocates per-pixel images of width x height.
 inline constexpr int kMaxDatasetSensorSide = 4096;
-/// dataset.yaml is read whole before parsing; a simulator manifest is a few kilobytes.
-inline constexpr std::size_t kMaxManifestBytes = 1 << 20;
 /// Pixels of one depth frame, checked in the PNG header before decoding: 4x the 1280x720 of
 /// common depth cameras; 16 MiB as floats.
 inline constexpr std::int64_t kMaxDepthPixels = std::int64_t{2048} * 2048;
@@ -59,7 +57,7 @@ struct DatasetManifest {
   int width = 0;  ///< event sensor [px], 1..kMaxDatasetSensorSide
   int height = 0;
 };
-/// dataset.yaml's text (at most kMaxManifestBytes).
+/// dataset.yaml's text (at most kMaxConfigFileBytes, fdv/core/config_text.h).
 DatasetManifest parse_dataset_manifest(std::string_view yaml_text, const std::string& name);
 
 /// events.bin; `in` must be seekable (its size bounds the count). The header must give
