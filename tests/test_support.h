@@ -6,7 +6,22 @@
 #include <filesystem>
 #include <string>
 
+#include "fdv/core/error.h"
+
 namespace fdv::test {
+
+/// "where | reason" of the InputError that `parse()` throws, which must name `file`; "no error"
+/// when it throws none.
+template <class Parse>
+std::string input_error_of(const std::string& file, Parse&& parse) {
+  try {
+    parse();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), file);
+    return e.where() + " | " + e.reason();
+  }
+  return "no error";
+}
 
 /// Path of a real recording in ../shared/data/real. If the folder is absent (a clone without
 /// shared/), the test is skipped, unless FDV_REQUIRE_REAL_DATA=1 (CI) makes that a failure.

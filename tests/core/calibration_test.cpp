@@ -98,13 +98,7 @@ std::string read_text(const std::string& path) {
 /// "where | reason" of the InputError that load_calibration_text raises on `text` (named
 /// "calib"), or "no error".
 std::string text_error(const std::string& text) {
-  try {
-    load_calibration_text(text, "calib");
-  } catch (const InputError& e) {
-    EXPECT_EQ(e.file(), "calib");
-    return e.where() + " | " + e.reason();
-  }
-  return "no error";
+  return test::input_error_of("calib", [&] { load_calibration_text(text, "calib"); });
 }
 
 // The DV calibration's numbers in OpenCV's YAML encoding (as cv::FileStorage writes it).

@@ -88,13 +88,7 @@ TEST(ScenarioConfig, YamlRoundTripsEveryField) {
 std::string error_of(const std::string& yaml) {
   ScenarioConfig c = make_preset("fast_forward", 1);
   const std::string path = write_file("bad.yaml", yaml);
-  try {
-    apply_scenario_yaml(c, path);
-  } catch (const InputError& e) {
-    EXPECT_EQ(e.file(), path);
-    return e.where() + " | " + e.reason();
-  }
-  return "no error";
+  return test::input_error_of(path, [&] { apply_scenario_yaml(c, path); });
 }
 
 TEST(ScenarioConfig, BadFilesGiveFileKeyAndReason) {
@@ -120,13 +114,7 @@ TEST(ScenarioConfig, BadFilesGiveFileKeyAndReason) {
 /// "where | reason" of apply_scenario_yaml_text on `yaml` (named "scenario.yaml").
 std::string text_error_of(const std::string& yaml) {
   ScenarioConfig c = make_preset("fast_forward", 1);
-  try {
-    apply_scenario_yaml_text(c, yaml, "scenario.yaml");
-  } catch (const InputError& e) {
-    EXPECT_EQ(e.file(), "scenario.yaml");
-    return e.where() + " | " + e.reason();
-  }
-  return "no error";
+  return test::input_error_of("scenario.yaml", [&] { apply_scenario_yaml_text(c, yaml, "scenario.yaml"); });
 }
 
 TEST(ScenarioConfig, MalformedStructureNamesFileAndKey) {

@@ -24,26 +24,10 @@ using namespace test::aedat4;
 
 constexpr const char* kBall = "davis346_ball_throw_person.aedat4";
 
-struct Result {
-  std::vector<Event> events;
-  std::vector<ImuSample> imu;
-  ReadReport report;
-  RecordingInfo info;
-};
-
 Result read_file(const std::string& path, std::size_t chunk_events = 1 << 16) {
   ReaderOptions options;
   options.chunk_events = chunk_events;
-  auto reader = open_aedat4(path, options);
-  Result r;
-  SensorChunk chunk;
-  while (reader->read(chunk)) {
-    r.events.insert(r.events.end(), chunk.events.begin(), chunk.events.end());
-    r.imu.insert(r.imu.end(), chunk.imu.begin(), chunk.imu.end());
-  }
-  r.report = reader->report();
-  r.info = reader->info();
-  return r;
+  return read_all(open_aedat4(path, options));
 }
 
 std::vector<Event> converted(const std::vector<RawEvent>& raw, std::size_t first,

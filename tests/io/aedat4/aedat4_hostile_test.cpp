@@ -22,25 +22,6 @@ namespace {
 
 using namespace test::aedat4;
 
-struct Result {
-  std::vector<Event> events;
-  std::vector<ImuSample> imu;
-  ReadReport report;
-  RecordingInfo info;
-};
-
-Result read_all(std::unique_ptr<RecordingReader> reader) {
-  Result r;
-  SensorChunk chunk;
-  while (reader->read(chunk)) {
-    r.events.insert(r.events.end(), chunk.events.begin(), chunk.events.end());
-    r.imu.insert(r.imu.end(), chunk.imu.begin(), chunk.imu.end());
-  }
-  r.report = reader->report();
-  r.info = reader->info();
-  return r;
-}
-
 std::unique_ptr<RecordingReader> open_bytes(const Bytes& b, const std::string& name) {
   return open_aedat4(std::make_unique<std::istringstream>(std::string(b.begin(), b.end())), name);
 }

@@ -2,7 +2,8 @@
 // Test-only tools for AEDAT 4.0, independent of the reader under test:
 //  - IndependentDecode: walks a file's packets by hand, decompresses with LZ4 / Zstd directly and
 //    reads the FlatBuffers by raw offsets (no generated schema code, no XML parser);
-//  - Aedat4Writer: synthesises small files byte by byte with FlatBuffers' generic builder.
+//  - Aedat4Writer: synthesises small files byte by byte with FlatBuffers' generic builder;
+//  - read_all: what a reader under test hands out, gathered.
 #include <flatbuffers/flatbuffers.h>
 #include <lz4frame.h>
 #include <lz4hc.h>
@@ -13,11 +14,34 @@
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "fdv/io/recording.h"
+
 namespace fdv::test::aedat4 {
+
+/// Everything a reader handed out, and its report and info once exhausted.
+struct Result {
+  std::vector<Event> events;
+  std::vector<ImuSample> imu;
+  ReadReport report;
+  RecordingInfo info;
+};
+
+inline Result read_all(std::unique_ptr<RecordingReader> reader) {
+  Result r;
+  SensorChunk chunk;
+  while (reader->read(chunk)) {
+    r.events.insert(r.events.end(), chunk.events.begin(), chunk.events.end());
+    r.imu.insert(r.imu.end(), chunk.imu.begin(), chunk.imu.end());
+  }
+  r.report = reader->report();
+  r.info = reader->info();
+  return r;
+}
 
 using Bytes = std::vector<std::uint8_t>;
 

@@ -426,13 +426,7 @@ TEST(BackendConfig, ErrorsFromAFileNameThatFile) {
 
 /// "where | reason" of load_perception_options_text on `yaml` (named "cfg.yaml").
 std::string text_error_of(const std::string& yaml) {
-  try {
-    load_perception_options_text(yaml, "cfg.yaml");
-  } catch (const InputError& e) {
-    EXPECT_EQ(e.file(), "cfg.yaml");
-    return e.where() + " | " + e.reason();
-  }
-  return "no error";
+  return test::input_error_of("cfg.yaml", [&] { load_perception_options_text(yaml, "cfg.yaml"); });
 }
 
 TEST(BackendConfig, MalformedStructureNamesFileAndKey) {

@@ -521,23 +521,32 @@ TEST_F(Ros1BagTest, DamagedIndexSectionIsAnErrorNamingTheRecord) {
   EXPECT_NE(what.find("rosbag reindex"), std::string::npos) << what;
 }
 
-TEST_F(Ros1BagTest, ImplausibleChunkSizeIsAnErrorNotAnAllocation) {
-  // The first chunk's `size` field (its records' size once decompressed) set to 4 GiB - 16: the
-  // library would allocate that; the reader stops at the chunk record instead.
-  std::string b = file_string(bag_);
-  const auto records = top_records(b);
+/// `bag` with its first chunk's `size` field (its records' size once decompressed) set to
+/// `size`, written to `path`; returns the chunk record's byte position.
+std::size_t write_with_first_chunk_size(std::string bag, std::uint32_t size, const std::string& path) {
+  const auto records = top_records(bag);
   const auto chunk =
       std::find_if(records.begin(), records.end(), [](const TopRecord& r) { return r.op == 5; });
-  ASSERT_NE(chunk, records.end());
-  const std::size_t field = b.find("size=", chunk->pos);
-  ASSERT_LT(field, chunk->data);
-  const std::uint32_t huge = 0xFFFFFFF0u;
-  std::memcpy(b.data() + field + 5, &huge, 4);
+  if (chunk == records.end()) {
+    ADD_FAILURE() << "the bag has no chunk record";
+    return 0;
+  }
+  const std::size_t field = bag.find("size=", chunk->pos);
+  if (field >= chunk->data) {
+    ADD_FAILURE() << "the chunk record's header has no size field";
+    return 0;
+  }
+  std::memcpy(bag.data() + field + 5, &size, 4);
+  write_string(path, bag);
+  return chunk->pos;
+}
+
+TEST_F(Ros1BagTest, ImplausibleChunkSizeIsAnErrorNotAnAllocation) {
+  // 4 GiB - 16: the library would allocate that; the reader stops at the chunk record instead.
   const std::string path = dir_ + "/huge_chunk.bag";
-  write_string(path, b);
+  const std::size_t chunk = write_with_first_chunk_size(file_string(bag_), 0xFFFFFFF0u, path);
   const std::string what = expect_input_error([&] { open_ros1_bag(path); });
-  EXPECT_NE(what.find("byte " + std::to_string(chunk->pos) +
-                      ": chunk record: size 4294967280 is implausible"),
+  EXPECT_NE(what.find("byte " + std::to_string(chunk) + ": chunk record: size 4294967280 is implausible"),
             std::string::npos)
       << what;
 }
@@ -581,23 +590,14 @@ TEST_F(Ros1BagTest, RandomCorruptionIsAnInputErrorOrAReadableStream) {
 }
 
 TEST_F(Ros1BagTest, CompressedChunkSizeAboveTheLimitIsAnErrorNotAnAllocation) {
-  // An lz4 chunk whose `size` field (its records once decompressed) says 200 MiB: within what
-  // the format allows, but the check (and then the library) would allocate it however small the
-  // compressed data. Above kMaxChunkSize (128 MiB): an error at the chunk record.
+  // An lz4 chunk whose `size` field says 200 MiB: within what the format allows, but the check
+  // (and then the library) would allocate it however small the compressed data. Above
+  // kMaxChunkSize (128 MiB): an error at the chunk record.
   const std::string path = dir_ + "/lz4.bag";
   write_reference_bag(path, BagWriter::Compression::kLz4);
-  std::string b = file_string(path);
-  const auto records = top_records(b);
-  const auto chunk =
-      std::find_if(records.begin(), records.end(), [](const TopRecord& r) { return r.op == 5; });
-  ASSERT_NE(chunk, records.end());
-  const std::size_t field = b.find("size=", chunk->pos);
-  ASSERT_LT(field, chunk->data);
-  const std::uint32_t big = 200u << 20;
-  std::memcpy(b.data() + field + 5, &big, 4);
-  write_string(path, b);
+  const std::size_t chunk = write_with_first_chunk_size(file_string(path), 200u << 20, path);
   const std::string what = expect_input_error([&] { open_ros1_bag(path); });
-  EXPECT_NE(what.find("byte " + std::to_string(chunk->pos) +
+  EXPECT_NE(what.find("byte " + std::to_string(chunk) +
                       ": chunk record: size 209715200 is implausible (> 128 MiB)"),
             std::string::npos)
       << what;
