@@ -11,6 +11,8 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <tuple>
+#include <utility>
 
 #include "fdv/core/error.h"
 #include "fdv/estimation/residuals.h"
@@ -280,154 +282,217 @@ void TrajectoryEstimator::drop_oldest_beyond_limit() {
   }
 }
 
-const TrajectoryEstimate& TrajectoryEstimator::solve() {
+namespace {
+
+// The phases of TrajectoryEstimator::solve, in the order it calls them.
+
+/// An estimate of ne events and nd depths before any fit: nothing usable, sigmas infinite, and a
+/// warning when fusion has no depth yet.
+TrajectoryEstimate unfitted_estimate(EstimatorMode mode, int ne, int nd) {
   TrajectoryEstimate e;
-  const bool use_depth = options_.mode == EstimatorMode::kFusion && !depths_.empty();
-  const int ne = static_cast<int>(events_.size());
-  const int nd = use_depth ? static_cast<int>(depths_.size()) : 0;
   e.event_observations = ne;
   e.depth_observations = nd;
-  e.position_sigma_m = std::numeric_limits<double>::infinity();
-  e.horizon_sigma_m = std::numeric_limits<double>::infinity();
-  if (options_.mode == EstimatorMode::kFusion && !use_depth)
+  e.position_sigma_m = e.horizon_sigma_m = std::numeric_limits<double>::infinity();
+  if (mode == EstimatorMode::kFusion && nd == 0)
     e.message = "no depth observation: event-only fit, range observable only through gravity";
+  return e;
+}
 
-  const bool enough =
-      use_depth ? (ne >= options_.min_event_observations && nd >= options_.min_depth_observations &&
-                   2 * ne + nd >= options_.min_residuals)
-                : ne >= options_.min_event_observations_event_only;
-  if (!enough) {
-    append(e.message,
-           use_depth
-               ? format("waiting for observations: %.0f event + %.0f depth, need >= %.0f + %.0f",
-                        ne, nd, options_.min_event_observations, options_.min_depth_observations) +
-                     format(" and >= %.0f residuals", options_.min_residuals)
-               : format("waiting for observations: %.0f event, need >= %.0f", ne,
-                        options_.min_event_observations_event_only));
-    latest_ = e;
-    return latest_;
-  }
-  e.method = use_depth ? EstimateMethod::kFusion : EstimateMethod::kEventOnly;
-  static const std::vector<DepthMeasurement> kNoDepth;
-  const std::vector<DepthMeasurement>& depths = use_depth ? depths_ : kNoDepth;
+/// Why a solve cannot start yet: fusion needs min_event_observations events, min_depth_observations
+/// depths and min_residuals scalar residuals (2 per event, 1 per depth); event-only needs
+/// min_event_observations_event_only events. Nothing when there are enough.
+std::optional<std::string> missing_observations(const EstimatorOptions& o, int ne, int nd,
+                                                bool use_depth) {
+  const bool enough = use_depth ? (ne >= o.min_event_observations &&
+                                   nd >= o.min_depth_observations && 2 * ne + nd >= o.min_residuals)
+                                : ne >= o.min_event_observations_event_only;
+  if (enough) return std::nullopt;
+  return use_depth
+             ? format("waiting for observations: %.0f event + %.0f depth, need >= %.0f + %.0f", ne,
+                      nd, o.min_event_observations, o.min_depth_observations) +
+                   format(" and >= %.0f residuals", o.min_residuals)
+             : format("waiting for observations: %.0f event, need >= %.0f", ne,
+                      o.min_event_observations_event_only);
+}
+
+/// The earliest and the newest observation time: t0 anchors the model p(t) (eq. 11).
+std::pair<TimeNs, TimeNs> observed_interval(const std::vector<EventObservation>& events,
+                                            const std::vector<DepthMeasurement>& depths) {
   TimeNs t0 = std::numeric_limits<TimeNs>::max(), t1 = std::numeric_limits<TimeNs>::min();
-  for (const auto& o : events_) t0 = std::min(t0, o.t), t1 = std::max(t1, o.t);
+  for (const auto& o : events) t0 = std::min(t0, o.t), t1 = std::max(t1, o.t);
   for (const auto& o : depths) t0 = std::min(t0, o.t), t1 = std::max(t1, o.t);
-  e.t_first = t0;
-  e.t_last = t1;
-  const Eigen::Vector3d& g = options_.gravity_W;
-  const double sigma_n = options_.event_sigma_px / options_.event_focal_px;
+  return {t0, t1};
+}
 
-  // The problem: one 6-vector block, whitened residuals, Huber losses owned here.
-  double x[6];
-  ceres::HuberLoss huber_event(options_.huber_event), huber_depth(options_.huber_depth);
-  ceres::Problem::Options problem_options;
-  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  ceres::Problem problem(problem_options);
-  for (const auto& o : events_)
-    problem.AddResidualBlock(
-        EventResidual::create(to_seconds(o.t - t0), o.T_W_E, g, o.xn, event_sigma(o, sigma_n),
-                              options_.min_depth_in_front_m),
-        &huber_event, x);
-  for (const auto& o : depths)
-    problem.AddResidualBlock(
-        DepthResidual::create(to_seconds(o.t - t0), o.T_W_C, g, o.depth_m, o.sigma_m), &huber_depth,
-        x);
+/// The objective (16) over one parameter block x = (p0_W, v0_W) of the model (11): a whitened
+/// event residual block per event observation (eqs. 12-13, Huber at huber_event σ), then a
+/// depth residual block per depth observation (eqs. 14-15, Huber at huber_depth σ), in the order
+/// held. Residual order = block order. Holds references to the observations and options.
+class TrajectoryProblem {
+ public:
+  TrajectoryProblem(const EstimatorOptions& options, const std::vector<EventObservation>& events,
+                    const std::vector<DepthMeasurement>& depths, TimeNs t0, double sigma_n)
+      : options_(options),
+        events_(events),
+        depths_(depths),
+        t0_(t0),
+        huber_event_(options.huber_event),
+        huber_depth_(options.huber_depth),
+        problem_(problem_options()) {
+    const Eigen::Vector3d& g = options_.gravity_W;
+    for (const auto& o : events_)
+      problem_.AddResidualBlock(
+          EventResidual::create(to_seconds(o.t - t0), o.T_W_E, g, o.xn, event_sigma(o, sigma_n),
+                                options_.min_depth_in_front_m),
+          &huber_event_, x_);
+    for (const auto& o : depths_)
+      problem_.AddResidualBlock(
+          DepthResidual::create(to_seconds(o.t - t0), o.T_W_C, g, o.depth_m, o.sigma_m),
+          &huber_depth_, x_);
+  }
+  TrajectoryProblem(const TrajectoryProblem&) = delete;
+  TrajectoryProblem& operator=(const TrajectoryProblem&) = delete;
 
-  auto set_x = [&x](const BallisticTrajectory& tr) {
-    for (int i = 0; i < 3; ++i) x[i] = tr.p0_W[i], x[3 + i] = tr.v0_W[i];
-  };
-  // The farthest the object is from the event camera at any observation [m].
-  auto largest_range = [&](const BallisticTrajectory& tr) {
+  const std::vector<EventObservation>& events() const { return events_; }
+  const std::vector<DepthMeasurement>& depths() const { return depths_; }
+  TimeNs t0() const { return t0_; }
+  ceres::Problem& problem() { return problem_; }
+  double* x() { return x_; }
+
+  void set(const BallisticTrajectory& tr) {
+    for (int i = 0; i < 3; ++i) x_[i] = tr.p0_W[i], x_[3 + i] = tr.v0_W[i];
+  }
+  /// The trajectory x stands for.
+  BallisticTrajectory trajectory() const {
+    return BallisticTrajectory{t0_, Eigen::Vector3d(x_[0], x_[1], x_[2]),
+                               Eigen::Vector3d(x_[3], x_[4], x_[5]), options_.gravity_W};
+  }
+  /// The farthest the object is from the event camera at any event observation [m].
+  double largest_range(const BallisticTrajectory& tr) const {
     double z = 0;
     for (const auto& o : events_) z = std::max(z, depth_in_camera(tr, o.T_W_E, o.t));
     return z;
-  };
-  auto feasible_cost = [&](const BallisticTrajectory& tr) -> std::optional<double> {
+  }
+  /// Robust cost of tr, leaving x = tr; nothing when tr is not finite, beyond max_range_m, less
+  /// than min_depth_in_front_m in front of a depth camera or behind an event camera.
+  std::optional<double> feasible_cost(const BallisticTrajectory& tr) {
     if (!tr.p0_W.allFinite() || !tr.v0_W.allFinite()) return std::nullopt;
     if (!(largest_range(tr) <= options_.max_range_m)) return std::nullopt;
-    for (const auto& o : depths)
+    for (const auto& o : depths_)
       if (!(depth_in_camera(tr, o.T_W_C, o.t) > options_.min_depth_in_front_m)) return std::nullopt;
-    set_x(tr);
+    set(tr);
     double cost = 0;
-    if (!problem.Evaluate(ceres::Problem::EvaluateOptions(), &cost, nullptr, nullptr, nullptr))
+    if (!problem_.Evaluate(ceres::Problem::EvaluateOptions(), &cost, nullptr, nullptr, nullptr))
       return std::nullopt;
     return cost;  // events behind the camera make Evaluate fail
-  };
+  }
 
-  // Initial point: the lower-cost feasible one of {previous estimate, linear solution}; else the
-  // prior-depth heuristic.
-  std::optional<BallisticTrajectory> start;
+ private:
+  /// The Huber losses are members: the problem must not delete them.
+  static ceres::Problem::Options problem_options() {
+    ceres::Problem::Options o;
+    o.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    return o;
+  }
+
+  const EstimatorOptions& options_;
+  const std::vector<EventObservation>& events_;
+  const std::vector<DepthMeasurement>& depths_;
+  TimeNs t0_;
+  double x_[6];
+  ceres::HuberLoss huber_event_, huber_depth_;
+  ceres::Problem problem_;
+};
+
+/// Depth assumed along every bearing by the prior-depth start: the median depth observation, else
+/// mono_prior_depth_m.
+double prior_depth_m(const std::vector<DepthMeasurement>& depths, double mono_prior_depth_m) {
+  if (depths.empty()) return mono_prior_depth_m;
+  std::vector<double> d;
+  for (const auto& o : depths) d.push_back(o.depth_m);
+  std::nth_element(d.begin(), d.begin() + static_cast<long>(d.size() / 2), d.end());
+  return d[d.size() / 2];
+}
+
+constexpr const char* kNoFeasibleStart =
+    "initialisation failed: no feasible starting point (object behind a camera, or beyond "
+    "max_range_m?)";
+
+struct InitialGuess {
+  BallisticTrajectory trajectory;
+  const char* name;  ///< TrajectoryEstimate::initialisation
+};
+
+/// The fit's start (docs/ESTIMATION.md, "Initialisation"): the lower-cost feasible one of the
+/// previous estimate re-anchored at t0 and the linear solution of (12)-(15); if neither is
+/// feasible, the prior-depth heuristic. Nothing when no start is feasible. Leaves x anywhere.
+std::optional<InitialGuess> initial_guess(TrajectoryProblem& fit,
+                                          const std::optional<BallisticTrajectory>& previous,
+                                          const EstimatorOptions& o, double sigma_n) {
+  std::optional<InitialGuess> start;
   double best = std::numeric_limits<double>::infinity();
   auto consider = [&](const std::optional<BallisticTrajectory>& tr, const char* name) {
     if (!tr) return;
-    const auto c = feasible_cost(*tr);
-    if (c && *c < best) best = *c, start = tr, e.initialisation = name;
+    const auto c = fit.feasible_cost(*tr);
+    if (c && *c < best) best = *c, start = InitialGuess{*tr, name};
   };
-  if (previous_) consider(previous_->anchored_at(t0), "previous");
-  consider(linear_trajectory_solution(events_, depths, t0, g, sigma_n), "linear");
-  if (!start) {
-    double z_prior = options_.mono_prior_depth_m;
-    if (use_depth) {
-      std::vector<double> d;
-      for (const auto& o : depths) d.push_back(o.depth_m);
-      std::nth_element(d.begin(), d.begin() + static_cast<long>(d.size() / 2), d.end());
-      z_prior = d[d.size() / 2];
-    }
-    consider(prior_depth_solution(events_, t0, g, z_prior), "prior-depth");
-  }
-  if (!start) {
-    append(e.message,
-           "initialisation failed: no feasible starting point (object behind a camera, or beyond "
-           "max_range_m?)");
-    latest_ = e;
-    return latest_;
-  }
-  set_x(*start);
+  const TimeNs t0 = fit.t0();
+  if (previous) consider(previous->anchored_at(t0), "previous");
+  consider(linear_trajectory_solution(fit.events(), fit.depths(), t0, o.gravity_W, sigma_n),
+           "linear");
+  if (!start)
+    consider(prior_depth_solution(fit.events(), t0, o.gravity_W,
+                                  prior_depth_m(fit.depths(), o.mono_prior_depth_m)),
+             "prior-depth");
+  return start;
+}
 
+/// Levenberg-Marquardt with dense QR from x: single-threaded and silent (library code prints
+/// nothing), so that results are reproducible.
+ceres::Solver::Summary minimise(ceres::Problem& problem, const EstimatorOptions& o) {
   ceres::Solver::Options so;
   so.linear_solver_type = ceres::DENSE_QR;
-  so.max_num_iterations = options_.max_iterations;
-  so.function_tolerance = options_.function_tolerance;
-  so.parameter_tolerance = options_.parameter_tolerance;
+  so.max_num_iterations = o.max_iterations;
+  so.function_tolerance = o.function_tolerance;
+  so.parameter_tolerance = o.parameter_tolerance;
   so.gradient_tolerance = 1e-14;
   so.num_threads = 1;
   so.logging_type = ceres::SILENT;
   so.minimizer_progress_to_stdout = false;
   ceres::Solver::Summary summary;
   ceres::Solve(so, &problem, &summary);
-  e.initial_cost = summary.initial_cost;
-  e.final_cost = summary.final_cost;
-  e.iterations = summary.num_successful_steps + summary.num_unsuccessful_steps;
-  e.trajectory = BallisticTrajectory{t0, Eigen::Vector3d(x[0], x[1], x[2]),
-                                     Eigen::Vector3d(x[3], x[4], x[5]), g};
-  if (!summary.IsSolutionUsable() || !feasible_cost(e.trajectory)) {
-    if (const double z = largest_range(e.trajectory); summary.IsSolutionUsable() && z > options_.max_range_m)
-      append(e.message, format("diverged: the fit puts the object %.3g m away (max_range_m %.0f m)", z, options_.max_range_m));
-    else
-      append(e.message, "solver failed: " + summary.message);
-    latest_ = e;
-    return latest_;
-  }
-  previous_ = e.trajectory;  // warm start for the next solve
-  bool usable = summary.termination_type == ceres::CONVERGENCE;
-  e.converged = usable;
-  if (!usable) append(e.message, "not converged: " + summary.message);
+  return summary;
+}
 
-  // Outliers: whitened residual blocks beyond their Huber threshold (residual order = block order).
-  {
-    ceres::Problem::EvaluateOptions eo;
-    eo.apply_loss_function = false;
-    std::vector<double> res;
-    problem.Evaluate(eo, nullptr, &res, nullptr, nullptr);
-    std::size_t r = 0;
-    for (int k = 0; k < ne; ++k, r += 2)
-      if (std::hypot(res[r], res[r + 1]) > options_.huber_event) ++e.outliers;
-    for (int i = 0; i < nd; ++i, ++r)
-      if (std::abs(res[r]) > options_.huber_depth) ++e.outliers;
-  }
+/// Why the solver's result is no estimate: the solver failed, the range ran away beyond
+/// max_range_m, or the trajectory is not in front of every camera. Nothing when it is one.
+std::optional<std::string> rejected_solution(const ceres::Solver::Summary& summary,
+                                             TrajectoryProblem& fit, const BallisticTrajectory& tr,
+                                             double max_range_m) {
+  if (summary.IsSolutionUsable() && fit.feasible_cost(tr)) return std::nullopt;
+  if (const double z = fit.largest_range(tr); summary.IsSolutionUsable() && z > max_range_m)
+    return format("diverged: the fit puts the object %.3g m away (max_range_m %.0f m)", z,
+                  max_range_m);
+  return "solver failed: " + summary.message;
+}
 
-  // Rank test on the robustified Jacobian, then the covariance of (p0, v0).
+/// Residual blocks whose whitened, unrobustified residual norm exceeds their Huber threshold.
+int count_outliers(ceres::Problem& problem, int ne, int nd, const EstimatorOptions& o) {
+  ceres::Problem::EvaluateOptions eo;
+  eo.apply_loss_function = false;
+  std::vector<double> res;
+  problem.Evaluate(eo, nullptr, &res, nullptr, nullptr);
+  int outliers = 0;
+  std::size_t r = 0;  // residual order = block order: 2 per event, then 1 per depth
+  for (int k = 0; k < ne; ++k, r += 2)
+    if (std::hypot(res[r], res[r + 1]) > o.huber_event) ++outliers;
+  for (int i = 0; i < nd; ++i, ++r)
+    if (std::abs(res[r]) > o.huber_depth) ++outliers;
+  return outliers;
+}
+
+/// Smallest and largest eigenvalue of JᵀJ, J the whitened, robustified Jacobian at x.
+std::pair<double, double> jtj_eigenvalue_range(ceres::Problem& problem) {
   ceres::CRSMatrix crs;
   problem.Evaluate(ceres::Problem::EvaluateOptions(), nullptr, nullptr, nullptr, &crs);
   Eigen::Matrix<double, 6, 6> JtJ = Eigen::Matrix<double, 6, 6>::Zero();
@@ -439,45 +504,97 @@ const TrajectoryEstimate& TrajectoryEstimator::solve() {
     JtJ += j * j.transpose();
   }
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eig(JtJ, Eigen::EigenvaluesOnly);
-  const double lmax = eig.eigenvalues()(5), lmin = eig.eigenvalues()(0);
-  const bool full_rank = lmax > 0 && lmin > options_.min_reciprocal_condition * lmax;
-  if (!full_rank) {
-    usable = false;
+  return {eig.eigenvalues()(0), eig.eigenvalues()(5)};
+}
+
+/// cov(p0, v0) at x by ceres::Covariance (dense SVD, robustified); nothing when Ceres cannot.
+std::optional<Eigen::Matrix<double, 6, 6>> parameter_covariance(TrajectoryProblem& fit) {
+  ceres::Covariance::Options co;
+  co.algorithm_type = ceres::DENSE_SVD;
+  co.num_threads = 1;
+  co.apply_loss_function = true;
+  ceres::Covariance covariance(co);
+  double* x = fit.x();
+  const std::vector<std::pair<const double*, const double*>> blocks = {{x, x}};
+  Eigen::Matrix<double, 6, 6, Eigen::RowMajor> C;
+  if (!covariance.Compute(blocks, &fit.problem()) || !covariance.GetCovarianceBlock(x, x, C.data()))
+    return std::nullopt;
+  return C;
+}
+
+/// sqrt of the largest eigenvalue of the position covariance at t [m].
+double largest_position_sigma_m(const TrajectoryEstimate& e, TimeNs t) {
+  const Eigen::Matrix3d P = *e.position_covariance(t);
+  return std::sqrt(
+      std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(P).eigenvalues()(2)));
+}
+
+/// The tests of "Covariance, degeneracy, usable" (docs/ESTIMATION.md) on the solution at x: the
+/// rank of JᵀJ, then (when computed) the covariance and the position sigma usable_horizon_s past
+/// the newest observation. Fills e's covariance and sigmas; appends to e.message why a test
+/// failed. Returns whether all passed.
+bool well_constrained(TrajectoryProblem& fit, const EstimatorOptions& o, TrajectoryEstimate& e) {
+  const auto [lmin, lmax] = jtj_eigenvalue_range(fit.problem());
+  if (!(lmax > 0 && lmin > o.min_reciprocal_condition * lmax)) {
     append(e.message,
            format("degenerate geometry: trajectory not observable (JtJ reciprocal condition %.2g)",
                   lmax > 0 ? lmin / lmax : 0.0));
-  } else if (options_.compute_covariance) {
-    ceres::Covariance::Options co;
-    co.algorithm_type = ceres::DENSE_SVD;
-    co.num_threads = 1;
-    co.apply_loss_function = true;
-    ceres::Covariance covariance(co);
-    const std::vector<std::pair<const double*, const double*>> blocks = {{x, x}};
-    Eigen::Matrix<double, 6, 6, Eigen::RowMajor> C;
-    if (covariance.Compute(blocks, &problem) && covariance.GetCovarianceBlock(x, x, C.data())) {
-      e.covariance = C;
-      auto largest_sigma_at = [&e](TimeNs t) {
-        const Eigen::Matrix3d P = *e.position_covariance(t);
-        return std::sqrt(
-            std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(P).eigenvalues()(2)));
-      };
-      e.position_sigma_m = largest_sigma_at(t1);
-      e.horizon_sigma_m =
-          largest_sigma_at(t1 + from_seconds(options_.usable_horizon_s));
-      if (e.horizon_sigma_m > options_.max_position_sigma_m) {
-        usable = false;
-        append(e.message, format("poorly constrained: position sigma %.2f m %.2f s ahead > %.2f m",
-                                 e.horizon_sigma_m, options_.usable_horizon_s,
-                                 options_.max_position_sigma_m));
-      }
-    } else {
-      usable = false;
-      append(e.message, "covariance could not be computed");
-    }
+    return false;
   }
-  e.usable = usable;
-  latest_ = e;
-  return latest_;
+  if (!o.compute_covariance) return true;
+  e.covariance = parameter_covariance(fit);
+  if (!e.covariance) {
+    append(e.message, "covariance could not be computed");
+    return false;
+  }
+  e.position_sigma_m = largest_position_sigma_m(e, e.t_last);
+  e.horizon_sigma_m = largest_position_sigma_m(e, e.t_last + from_seconds(o.usable_horizon_s));
+  if (e.horizon_sigma_m <= o.max_position_sigma_m) return true;
+  append(e.message, format("poorly constrained: position sigma %.2f m %.2f s ahead > %.2f m",
+                           e.horizon_sigma_m, o.usable_horizon_s, o.max_position_sigma_m));
+  return false;
+}
+
+}  // namespace
+
+const TrajectoryEstimate& TrajectoryEstimator::solve() {
+  const bool use_depth = options_.mode == EstimatorMode::kFusion && !depths_.empty();
+  static const std::vector<DepthMeasurement> kNoDepth;
+  const std::vector<DepthMeasurement>& depths = use_depth ? depths_ : kNoDepth;
+  TrajectoryEstimate e = unfitted_estimate(options_.mode, static_cast<int>(events_.size()),
+                                           static_cast<int>(depths.size()));
+  if (auto wait =
+          missing_observations(options_, e.event_observations, e.depth_observations, use_depth)) {
+    append(e.message, *wait);
+    return latest_ = e;
+  }
+  e.method = use_depth ? EstimateMethod::kFusion : EstimateMethod::kEventOnly;
+  std::tie(e.t_first, e.t_last) = observed_interval(events_, depths);
+  const double sigma_n = options_.event_sigma_px / options_.event_focal_px;
+  TrajectoryProblem fit(options_, events_, depths, e.t_first, sigma_n);
+  const auto start = initial_guess(fit, previous_, options_, sigma_n);
+  if (!start) {
+    append(e.message, kNoFeasibleStart);
+    return latest_ = e;
+  }
+  e.initialisation = start->name;
+  fit.set(start->trajectory);
+  const ceres::Solver::Summary summary = minimise(fit.problem(), options_);
+  e.initial_cost = summary.initial_cost;
+  e.final_cost = summary.final_cost;
+  e.iterations = summary.num_successful_steps + summary.num_unsuccessful_steps;
+  e.trajectory = fit.trajectory();
+  if (auto why = rejected_solution(summary, fit, e.trajectory, options_.max_range_m)) {
+    append(e.message, *why);
+    return latest_ = e;
+  }
+  previous_ = e.trajectory;  // warm start for the next solve
+  e.converged = summary.termination_type == ceres::CONVERGENCE;
+  if (!e.converged) append(e.message, "not converged: " + summary.message);
+  e.outliers = count_outliers(fit.problem(), e.event_observations, e.depth_observations, options_);
+  const bool constrained = well_constrained(fit, options_, e);
+  e.usable = e.converged && constrained;
+  return latest_ = e;
 }
 
 }  // namespace fdv

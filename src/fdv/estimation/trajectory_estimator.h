@@ -5,9 +5,10 @@
 ///   EstimatorOptions o;  o.event_focal_px = calib.event_camera.fx;
 ///   TrajectoryEstimator est(o);                             // one per track
 ///   est.add(EventObservation{t, xn, *camera_pose_at(odom, t, calib.T_B_E)});
-///   est.add(DepthMeasurement{t_d, obs.depth_m, obs.sigma_m, *camera_pose_at(odom, t_d,
-///   calib.T_B_E)}); const TrajectoryEstimate& e = est.solve();              // after each new
-///   observation if (e.usable) predict(e.trajectory) ...
+///   est.add(DepthMeasurement{t_d, obs.depth_m, obs.sigma_m,
+///                            *camera_pose_at(odom, t_d, calib.T_B_E)});
+///   const TrajectoryEstimate& e = est.solve();              // after each new observation
+///   if (e.usable) predict(e.trajectory);
 ///
 /// Model: p(t) = p0 + v0 (t - t0) + ½ g (t - t0)² in W, t0 = the earliest observation held.
 /// Unknowns (p0, v0) minimise Σ ρ_E(|r_E/σ_n|²) + Σ ρ_D((r_D/σ_d)²) with Huber ρ (eq. 16, each
