@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <functional>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -284,6 +285,87 @@ TEST(DepthSegmentation, InvalidInputIsReportedNotThrown) {
   DepthSegmentationOptions bad;
   bad.bin_width_m = 0;
   EXPECT_THROW(segment_object_depth(depth_view(f), kCam, q, bad), ConfigError);
+}
+
+// The ROI holds the pixels whose centres lie inside the box x2: a 4 x 6 px box about (10.5, 20)
+// covers x in [6.5, 14.5] and y in [14, 26], so columns 7-14 and rows 14-26 (a centre on the
+// border counts); it is clipped at the image's edges and empty when the box is outside.
+TEST(DepthSegmentationPhases, RoiIsTheScaledBoxsPixelCentresClippedToTheImage) {
+  DepthQuery q;
+  q.centre_px = {10.5, 20};
+  q.box_size_px = {4, 6};
+  const PixelRect r = depth_roi(q, 2.0, 640, 480);
+  EXPECT_EQ(r.x0, 7);
+  EXPECT_EQ(r.x1, 14);
+  EXPECT_EQ(r.y0, 14);
+  EXPECT_EQ(r.y1, 26);
+  EXPECT_FALSE(r.empty());
+  q.centre_px = {1, 478};
+  const PixelRect corner = depth_roi(q, 2.0, 640, 480);
+  EXPECT_EQ(corner.x0, 0);
+  EXPECT_EQ(corner.x1, 5);
+  EXPECT_EQ(corner.y0, 472);
+  EXPECT_EQ(corner.y1, 479);
+  q.centre_px = {-10, 20};
+  EXPECT_TRUE(depth_roi(q, 2.0, 640, 480).empty());
+}
+
+// Bins of 0.5 m over [1, 3): every value is exact in float, so each pixel's bin is known. Holes
+// (0), NaN, infinity and depths outside [min, max) are ROI pixels but not valid ones.
+TEST(DepthSegmentationPhases, HistogramCountsTheRoisValidDepthsPerBin) {
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float inf = std::numeric_limits<float>::infinity();
+  const std::vector<float> d = {1.0f, 1.25f, 1.75f, 2.0f,  //
+                                2.5f, 2.75f, 3.0f,  0.5f,  //
+                                0.0f, nan,   inf,   2.25f};
+  const DepthImageView view{7, 4, 3, d};
+  DepthSegmentationOptions o;
+  o.min_depth_m = 1.0;
+  o.max_depth_m = 3.0;
+  o.bin_width_m = 0.5;
+  const DepthHistogram all = depth_histogram(view, PixelRect{0, 3, 0, 2}, o);
+  EXPECT_EQ(all.counts, (std::vector<int>{2, 1, 2, 2}));
+  EXPECT_EQ(all.roi_pixels, 12);
+  EXPECT_EQ(all.valid_pixels, 7);
+  EXPECT_DOUBLE_EQ(all.bin_centre_m(1), 1.75);
+  EXPECT_EQ(all.at(-1), 0);
+  EXPECT_EQ(all.at(4), 0);
+  const DepthHistogram part = depth_histogram(view, PixelRect{1, 2, 0, 1}, o);
+  EXPECT_EQ(part.counts, (std::vector<int>{1, 1, 0, 1}));
+  EXPECT_EQ(part.roi_pixels, 4);
+  EXPECT_EQ(part.valid_pixels, 3);
+}
+
+// Bins of 0.1 m from 0.3 m, centres c_i = 0.3 + (i + 0.5)·0.1. Counts 5, 20, 3 in bins 10-12
+// and 50 in bin 40, threshold 20: bin 10 is the first whose 3-bin sum (0 + 5 + 20) reaches it,
+// the peak is the fullest of bins 9-11, bin 11, and m₀ = (5 c10 + 20 c11 + 3 c12) / 28
+// = 0.3 + 0.1·320/28. Searching from beyond it finds bin 40 alone, m₀ = c40.
+TEST(DepthSegmentationPhases, NearestSignificantPeakIsTheWeightedCentreOfItsThreeBins) {
+  DepthHistogram h;
+  h.min_depth_m = 0.3;
+  h.bin_width_m = 0.1;
+  h.counts.assign(50, 0);
+  h.counts[10] = 5;
+  h.counts[11] = 20;
+  h.counts[12] = 3;
+  h.counts[40] = 50;
+  const auto near = nearest_significant_peak(h, 0, 20);
+  ASSERT_TRUE(near);
+  EXPECT_EQ(near->bin, 11);
+  EXPECT_NEAR(near->depth_m, 0.3 + 0.1 * 320.0 / 28.0, 1e-12);
+  const auto far = nearest_significant_peak(h, 13, 20);
+  ASSERT_TRUE(far);
+  EXPECT_EQ(far->bin, 40);
+  EXPECT_NEAR(far->depth_m, 4.35, 1e-12);
+  EXPECT_FALSE(nearest_significant_peak(h, 42, 20));  // nothing beyond
+  EXPECT_FALSE(nearest_significant_peak(h, 0, 60));   // nothing significant
+  // Two equal bins: the nearer is the peak, m₀ halfway between their centres.
+  h.counts.assign(50, 0);
+  h.counts[20] = h.counts[21] = 10;
+  const auto tie = nearest_significant_peak(h, 0, 15);
+  ASSERT_TRUE(tie);
+  EXPECT_EQ(tie->bin, 20);
+  EXPECT_NEAR(tie->depth_m, 2.4, 1e-12);
 }
 
 TEST(DepthNoiseModel, MatchesDesignFigures) {

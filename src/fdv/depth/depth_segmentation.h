@@ -16,6 +16,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <vector>
 
 #include "fdv/core/camera.h"
 #include "fdv/core/time.h"
@@ -144,5 +145,43 @@ struct DepthSegmentation {
 DepthSegmentation segment_object_depth(const DepthImageView& depth,
                                        const PinholeCamera& event_camera, const DepthQuery& query,
                                        const DepthSegmentationOptions& options);
+
+// The first phases of segment_object_depth, exposed as units for tests.
+
+/// Pixels [x0, x1] × [y0, y1], bounds included; empty when x0 > x1 or y0 > y1.
+struct PixelRect {
+  int x0 = 0, x1 = -1, y0 = 0, y1 = -1;
+  bool empty() const { return x0 > x1 || y0 > y1; }
+};
+
+/// The ROI (§IV-C.2, the box "scaled twice"): the pixels whose centres lie inside the query's
+/// box scaled by roi_scale about its centre, clipped to a width × height image.
+PixelRect depth_roi(const DepthQuery& query, double roi_scale, int width, int height);
+
+/// Histogram of the ROI's depths in [min_depth_m, max_depth_m) (others are holes or out of range).
+struct DepthHistogram {
+  /// Bin i holds [min_depth_m + i·bin_width_m, + bin_width_m); the last one up to max_depth_m.
+  std::vector<int> counts;
+  double min_depth_m = 0;
+  double bin_width_m = 1;
+  int roi_pixels = 0;    ///< pixels of the ROI
+  int valid_pixels = 0;  ///< of those, counted in a bin
+  int bins() const { return static_cast<int>(counts.size()); }
+  /// Count of bin i; 0 outside the histogram.
+  int at(int i) const { return i < 0 || i >= bins() ? 0 : counts[static_cast<std::size_t>(i)]; }
+  double bin_centre_m(int i) const { return min_depth_m + (i + 0.5) * bin_width_m; }
+};
+DepthHistogram depth_histogram(const DepthImageView& depth, const PixelRect& roi,
+                               const DepthSegmentationOptions& options);
+
+struct DepthPeak {
+  int bin = 0;         ///< the fullest of the three significant bins
+  double depth_m = 0;  ///< m₀: count-weighted centre of that bin and its two neighbours [m]
+};
+/// The nearest peak of the histogram (§IV-C.2: "the nearest peak in the histogram of the depth
+/// map") at or beyond bin `from`: the first bin whose 3-bin sum (it and its neighbours, so that an
+/// object split across a bin border stays significant) holds >= threshold pixels. Nothing if none.
+std::optional<DepthPeak> nearest_significant_peak(const DepthHistogram& histogram, int from,
+                                                  double threshold);
 
 }  // namespace fdv
