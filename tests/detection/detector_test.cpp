@@ -62,7 +62,7 @@ void expect_on_blob(const DetectionResult& r, const test::BlobScene& s, double t
   EXPECT_TRUE(d.box_raw.y0 < d.center_raw.y() && d.center_raw.y() < d.box_raw.y1);
   EXPECT_LT(d.box_undistorted.width(), 8 * s.radius_px);
   EXPECT_GT(d.events, 20);
-  EXPECT_GE(d.score, DetectorOptions{}.min_peak);
+  EXPECT_GE(d.score, DetectorOptions{}.gaussian_fit.min_peak);
   EXPECT_LE(d.score, 1.0);
 }
 
@@ -262,7 +262,7 @@ TEST_F(DetectorTest, BurstFarAboveTheNormalRate) {
   // random one.
   const auto late_burst = with_burst(ev, 24 * kNsPerMs, 25 * kNsPerMs, 200'000, 6);
   DetectorOptions paper_options;
-  paper_options.count_cue = false;
+  paper_options.count_contrast.enabled = false;
   Detector paper(paper_options, lens());
   const DetectionResult late_paper =
       paper.detect(view_of(compensator_->compensate({.events = late_burst, .t_start_ns = s.t0, .t_end_ns = s.t0 + s.duration})));
@@ -302,13 +302,13 @@ TEST_F(DetectorTest, NextCandidateIsTriedWhenTheStrongestPatternFailsTheEvidence
   DetectorOptions o;
   o.min_pixel_events = 1;     // the decoy's single-event pixels enter S (the paper's S)
   o.min_event_density = 2.0;  // the blob holds tens of events per pixel
-  o.max_candidates = 1;
+  o.gaussian_fit.max_candidates = 1;
   const CompensatedWindow& w = compensator_->compensate({.events = ev, .t_start_ns = s.t0, .t_end_ns = s.t0 + s.duration});
   const DetectionResult one = Detector(o, lens()).detect(view_of(w));
   EXPECT_FALSE(one.detection);
   EXPECT_EQ(one.status, DetectionStatus::kWeakEvidence);
   EXPECT_EQ(one.candidates, 1);
-  o.max_candidates = 3;
+  o.gaussian_fit.max_candidates = 3;
   const DetectionResult more = Detector(o, lens()).detect(view_of(w));
   EXPECT_EQ(more.candidates, 2);
   expect_on_blob(more, s, 2.0);
@@ -340,11 +340,11 @@ TEST_F(DetectorTest, SmallerInitialRoiFindsASmallBlobInSparseClutter) {
   const CompensatedWindow& w = compensator_->compensate({.events = ev, .t_start_ns = s.t0, .t_end_ns = s.t0 + s.duration});
   DetectorOptions o;
   o.min_pixel_events = 1;  // the clutter's single-event pixels enter S
-  o.max_candidates = 1;
-  o.refit_min_roi_px = 0;  // the paper: one fit from half the image
+  o.gaussian_fit.max_candidates = 1;
+  o.gaussian_fit.refit_min_roi_px = 0;  // the paper: one fit from half the image
   const DetectionResult paper = Detector(o, lens()).detect(view_of(w));
   EXPECT_FALSE(paper.detection) << "the half-image fit should spread over the clutter";
-  o.refit_min_roi_px = 16;
+  o.gaussian_fit.refit_min_roi_px = 16;
   const DetectionResult refit = Detector(o, lens()).detect(view_of(w));
   expect_on_blob(refit, s, 2.5);
   EXPECT_LT(refit.detection->box_undistorted.width(), 40);
@@ -356,8 +356,8 @@ TEST_F(DetectorTest, TrackPriorAdmitsAWeakerPatternOnlyInsideItsGate) {
   const auto ev = test::make_scene(lens(), s);
   const CompensatedWindow& w = compensator_->compensate({.events = ev, .t_start_ns = s.t0, .t_end_ns = s.t0 + s.duration});
   DetectorOptions o;
-  o.min_peak = 0.99;  // nothing passes the normal gate
-  o.prior_min_peak = 0.3;
+  o.gaussian_fit.min_peak = 0.99;  // nothing passes the normal gate
+  o.track_aided.min_peak = 0.3;
   Detector detector(o, lens());
   EXPECT_FALSE(detector.detect(view_of(w)).detection);
   const PinholeCamera cam = lens();
@@ -387,11 +387,11 @@ TEST_F(DetectorTest, DenseMotionCueFindsASlowDenseBlobInsideATrackGateOnly) {
   s.velocity_px_s = {0, -320};
   s.blob_rate_ev_s = 2'000'000;
   DetectorOptions o;
-  o.min_peak = 1.0;
-  o.prior_min_peak = 1.0;
+  o.gaussian_fit.min_peak = 1.0;
+  o.track_aided.min_peak = 1.0;
   // The count-contrast cue would find this dense blob too (inside a gate it asks no motion): this
   // test is about the dense-motion cue alone.
-  o.count_cue = false;
+  o.count_contrast.enabled = false;
   const PinholeCamera cam = lens();
   auto raw_of = [&](const Eigen::Vector2d& uv) {
     return cam.normalized_to_pixel({(uv.x() - cam.cx) / cam.fx, (uv.y() - cam.cy) / cam.fy});
@@ -411,7 +411,7 @@ TEST_F(DetectorTest, DenseMotionCueFindsASlowDenseBlobInsideATrackGateOnly) {
   const Detection2D& d = *found.detection;
   EXPECT_EQ(d.source, DetectionSource::kDenseMotion);
   EXPECT_TRUE(d.track_aided);
-  EXPECT_GE(found.motion_cue_r2, o.motion_cue_min_r2);
+  EXPECT_GE(found.motion_cue_r2, o.dense_motion.min_r2);
   EXPECT_DOUBLE_EQ(d.score, found.motion_cue_r2);
   // T rises by 8 px per window along −y: across the 21 px square that is ≈ 2.6 windows on an
   // infinite edge; the finite disk gives less, but well above the gate.
@@ -426,7 +426,7 @@ TEST_F(DetectorTest, DenseMotionCueFindsASlowDenseBlobInsideATrackGateOnly) {
   EXPECT_FALSE(no_prior.motion_cue_ran);
   // Switched off.
   DetectorOptions off = o;
-  off.motion_cue = false;
+  off.dense_motion.enabled = false;
   EXPECT_FALSE(detect(s, off, std::span(&on_blob, 1)).detection);
   // The same dense blob standing still: no trend of T across it.
   test::BlobScene still = s;
@@ -434,7 +434,7 @@ TEST_F(DetectorTest, DenseMotionCueFindsASlowDenseBlobInsideATrackGateOnly) {
   const DetectionResult static_blob = detect(still, o, std::span(&on_blob, 1));
   EXPECT_FALSE(static_blob.detection);
   EXPECT_TRUE(static_blob.motion_cue_ran);
-  EXPECT_LT(static_blob.motion_cue_r2, o.motion_cue_min_r2);
+  EXPECT_LT(static_blob.motion_cue_r2, o.dense_motion.min_r2);
 }
 
 // The hovering camera's jerk (docs/DETECTION.md, "Count-contrast cue"): the textured background
@@ -487,8 +487,8 @@ struct CountCueSearch {
 CountCueSearch count_cue_by_brute_force(const CompensatedEventsView& view, const DetectorOptions& o) {
   TimeImages ti;
   build_time_images(view, ti);
-  const int w = ti.count.cols, h = ti.count.rows, k = o.count_cue_box_px, hk = k / 2;
-  const int hs = static_cast<int>(std::lround(0.5 * o.count_cue_surround_scale * k));
+  const int w = ti.count.cols, h = ti.count.rows, k = o.count_contrast.box_px, hk = k / 2;
+  const int hs = static_cast<int>(std::lround(0.5 * o.count_contrast.surround_scale * k));
   std::vector<std::int64_t> count((w + 1) * (h + 1), 0), active((w + 1) * (h + 1), 0);
   auto at = [w](std::vector<std::int64_t>& t, int x, int y) -> std::int64_t& { return t[y * (w + 1) + x]; };
   for (int y = 0; y < h; ++y)
@@ -508,7 +508,7 @@ CountCueSearch count_cue_by_brute_force(const CompensatedEventsView& view, const
   for (int y = hs; y < h - hs; ++y)
     for (int x = hs; x < w - hs; ++x) {
       const double fill = sum(active, x - hk, y - hk, k) / centre_area;
-      if (fill < o.count_cue_min_fill) continue;
+      if (fill < o.count_contrast.min_fill) continue;
       ++r.filled_centres;
       const double in = sum(count, x - hk, y - hk, k);
       const double surround = (sum(count, x - hs, y - hs, 2 * hs + 1) - in) / ring_area;
@@ -541,8 +541,8 @@ TEST_F(DetectorTest, CountContrastCueFindsAnEvenlyFiringBlobOnALateBackground) {
     return detector.detect(view_of(w));
   };
   DetectorOptions off, on;
-  off.count_cue = false;
-  on.count_cue = true;
+  off.count_contrast.enabled = false;
+  on.count_contrast.enabled = true;
   const auto scene = late_background_scene(cam, s, false);
   // The premise: the time-based detector does not find the ball.
   const DetectionResult paper = detect(scene, off);
@@ -564,8 +564,8 @@ TEST_F(DetectorTest, CountContrastCueFindsAnEvenlyFiringBlobOnALateBackground) {
   const Detection2D& d = *found.detection;
   EXPECT_EQ(d.source, DetectionSource::kCountContrast);
   EXPECT_FALSE(d.track_aided);
-  EXPECT_GE(found.count_cue_contrast, on.count_cue_min_contrast);
-  EXPECT_GE(found.count_cue_fill, on.count_cue_min_fill);
+  EXPECT_GE(found.count_cue_contrast, on.count_contrast.min_contrast);
+  EXPECT_GE(found.count_cue_fill, on.count_contrast.min_fill);
   EXPECT_NEAR(d.score, 1.0 - 1.0 / found.count_cue_contrast, 1e-12);
   // Early against the late background: the ball's mean time is mid-window (0.5), the background's
   // ≈ 0.8 of it; by more than θ's margin c = 0.1 (static camera: ω = v = 0).
@@ -583,13 +583,13 @@ TEST_F(DetectorTest, CountContrastCueFindsAnEvenlyFiringBlobOnALateBackground) {
   const DetectionResult background = detect(late_background_scene(cam, no_ball, false), on);
   EXPECT_FALSE(background.detection) << background.detection->center_undistorted.transpose();
   EXPECT_TRUE(background.count_cue_ran);
-  EXPECT_LT(background.count_cue_contrast, on.count_cue_min_contrast);
+  EXPECT_LT(background.count_cue_contrast, on.count_contrast.min_contrast);
 
   // A dense, compact static spot that fires with the background: dense enough in I, but its
   // events follow the background's time profile, so the time test rejects it.
   const DetectionResult spot = detect(late_background_scene(cam, no_ball, true), on);
   EXPECT_FALSE(spot.detection) << spot.detection->center_undistorted.transpose();
-  EXPECT_GE(spot.count_cue_contrast, on.count_cue_min_contrast);
+  EXPECT_GE(spot.count_cue_contrast, on.count_contrast.min_contrast);
   EXPECT_LT(std::abs(spot.count_cue_time_offset), 0.1);
 
   // Uniform density: every pixel fires evenly, ≈ 4 events each (a large, evenly textured
@@ -606,7 +606,7 @@ TEST_F(DetectorTest, CountContrastCueFindsAnEvenlyFiringBlobOnALateBackground) {
   const DetectionResult flat = detector.detect(view_of(w));
   EXPECT_FALSE(flat.detection) << to_string(flat.status);
   EXPECT_TRUE(flat.count_cue_ran);
-  EXPECT_GE(flat.count_cue_fill, on.count_cue_min_fill);
+  EXPECT_GE(flat.count_cue_fill, on.count_contrast.min_fill);
   // The best of ≈ 300 k centres: a 9x9 box's mean count fluctuates by ≈ 0.22 around 4.
   EXPECT_LT(flat.count_cue_contrast, 2.0);
   SCOPED_TRACE("most centres filled: box sums from the whole image's table");
@@ -620,10 +620,10 @@ TEST_F(DetectorTest, CountContrastCueSkipsNoFilledCentreAtTheEdgesOfItsBlocks) {
   // no shifted box is filled), centred on the first and on the last centre of a block: a union
   // one pixel too small on either side would skip them.
   DetectorOptions o;
-  o.min_peak = 1.0;  // the time-based detection is kept out of the way
-  ASSERT_EQ(o.count_cue_box_px, 9);
-  ASSERT_DOUBLE_EQ(o.count_cue_surround_scale, 3.0);  // centres from x, y = 14, in blocks of 8
-  ASSERT_DOUBLE_EQ(o.count_cue_min_fill, 0.8);
+  o.gaussian_fit.min_peak = 1.0;  // the time-based detection is kept out of the way
+  ASSERT_EQ(o.count_contrast.box_px, 9);
+  ASSERT_DOUBLE_EQ(o.count_contrast.surround_scale, 3.0);  // centres from x, y = 14, in blocks of 8
+  ASSERT_DOUBLE_EQ(o.count_contrast.min_fill, 0.8);
   const int w = 640, h = 480;
   std::vector<std::int32_t> pixel;
   std::vector<float> t_s;
@@ -666,16 +666,16 @@ TEST_F(DetectorTest, CountContrastCueWaivesTheTimeTestOnlyInsideATrackGate) {
   const DetectionPrior on_ball{cam.normalized_to_pixel({(mid.x() - cam.cx) / cam.fx, (mid.y() - cam.cy) / cam.fy}),
                                {16, 16}};
   DetectorOptions o;
-  o.min_peak = 1.0;  // the time-based detection is kept out of the way
-  o.prior_min_peak = 1.0;
-  o.motion_cue = false;
-  o.count_cue = true;
-  o.count_cue_in_gates = false;
+  o.gaussian_fit.min_peak = 1.0;  // the time-based detection is kept out of the way
+  o.track_aided.min_peak = 1.0;
+  o.dense_motion.enabled = false;
+  o.count_contrast.enabled = true;
+  o.count_contrast.in_gates = false;
   const DetectionResult image_only = Detector(o, cam).detect(view_of(w), std::span(&on_ball, 1));
   EXPECT_FALSE(image_only.detection) << to_string(image_only.detection->source);
-  EXPECT_GE(image_only.count_cue_contrast, o.count_cue_min_contrast);
+  EXPECT_GE(image_only.count_cue_contrast, o.count_contrast.min_contrast);
   EXPECT_LT(std::abs(image_only.count_cue_time_offset), 0.1);
-  o.count_cue_in_gates = true;
+  o.count_contrast.in_gates = true;
   const DetectionResult gated = Detector(o, cam).detect(view_of(w), std::span(&on_ball, 1));
   ASSERT_TRUE(gated.detection) << to_string(gated.status);
   EXPECT_EQ(gated.detection->source, DetectionSource::kCountContrast);
@@ -696,19 +696,19 @@ TEST_F(DetectorTest, InvalidOptionsAreRejected) {
       {"threshold_a_s_per_rad (a)", [](DetectorOptions& x) { x.threshold_a_s_per_rad = -0.01; }},
       {"threshold_b_s_per_m (b)", [](DetectorOptions& x) { x.threshold_b_s_per_m = -1; }},
       {"threshold_c (c) must be in [-1, 1], got -5", [](DetectorOptions& x) { x.threshold_c = -5; }},
-      {"max_candidates", [](DetectorOptions& x) { x.max_candidates = 0; }},
+      {"max_candidates", [](DetectorOptions& x) { x.gaussian_fit.max_candidates = 0; }},
       {"min_pixel_events", [](DetectorOptions& x) { x.min_pixel_events = 0; }},
       {"min_event_density", [](DetectorOptions& x) { x.min_event_density = -1; }},
-      {"motion_cue_density_px", [](DetectorOptions& x) { x.motion_cue_density_px = 4; }},
-      {"motion_cue_min_r2", [](DetectorOptions& x) { x.motion_cue_min_r2 = 1.5; }},
+      {"motion_cue_density_px", [](DetectorOptions& x) { x.dense_motion.density_px = 4; }},
+      {"motion_cue_min_r2", [](DetectorOptions& x) { x.dense_motion.min_r2 = 1.5; }},
       {"refine_recentre_passes", [](DetectorOptions& x) { x.refine_recentre_passes = -1; }},
-      {"motion_cue_min_pixels", [](DetectorOptions& x) { x.motion_cue_min_pixels = 2; }},
-      {"refit_min_roi_px", [](DetectorOptions& x) { x.refit_min_roi_px = 0.5; }},
-      {"refit_local_scale", [](DetectorOptions& x) { x.refit_local_scale = -1; }},
-      {"count_cue_box_px", [](DetectorOptions& x) { x.count_cue_box_px = 8; }},
-      {"count_cue_surround_scale", [](DetectorOptions& x) { x.count_cue_surround_scale = 1; }},
-      {"count_cue_min_contrast", [](DetectorOptions& x) { x.count_cue_min_contrast = 0.5; }},
-      {"count_cue_min_fill", [](DetectorOptions& x) { x.count_cue_min_fill = 1.2; }},
+      {"motion_cue_min_pixels", [](DetectorOptions& x) { x.dense_motion.min_pixels = 2; }},
+      {"refit_min_roi_px", [](DetectorOptions& x) { x.gaussian_fit.refit_min_roi_px = 0.5; }},
+      {"refit_local_scale", [](DetectorOptions& x) { x.gaussian_fit.refit_local_scale = -1; }},
+      {"count_cue_box_px", [](DetectorOptions& x) { x.count_contrast.box_px = 8; }},
+      {"count_cue_surround_scale", [](DetectorOptions& x) { x.count_contrast.surround_scale = 1; }},
+      {"count_cue_min_contrast", [](DetectorOptions& x) { x.count_contrast.min_contrast = 0.5; }},
+      {"count_cue_min_fill", [](DetectorOptions& x) { x.count_contrast.min_fill = 1.2; }},
   };
   for (const auto& [name, make_bad] : cases) {
     DetectorOptions bad;

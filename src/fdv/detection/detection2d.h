@@ -21,8 +21,8 @@ struct Box2D {
 enum class DetectionSource {
   kGaussianFit,      ///< Algorithm 1 converged to a plausible ROI
   kRegionRetrieval,  ///< connected component chosen after the fit failed (paper §IV-B.3)
-  kDenseMotion,      ///< the dense-motion cue (DetectorOptions::motion_cue), when N had no pattern
-  kCountContrast,    ///< the count-contrast cue (DetectorOptions::count_cue), when nothing else passed
+  kDenseMotion,      ///< the dense-motion cue (DetectorOptions::dense_motion), when N had no pattern
+  kCountContrast,    ///< the count-contrast cue (DetectorOptions::count_contrast), when nothing else passed
 };
 std::string_view to_string(DetectionSource s);
 
@@ -45,10 +45,10 @@ struct Detection2D {
   int events = 0;      ///< compensated events inside the box
   /// Peak of the filtered segmentation (mean-filtered, opened S, before squaring) inside the box,
   /// in [0, 1]: the local density and recency of the segmented pattern; 1 = a fully segmented
-  /// neighbourhood at N = 1. Same scale as DetectorOptions::min_peak, the detection threshold.
-  /// For source kDenseMotion: the R² of the time plane (DetectorOptions::motion_cue_min_r2).
+  /// neighbourhood at N = 1. Same scale as GaussianFitSourceOptions::min_peak, the detection threshold.
+  /// For source kDenseMotion: the R² of the time plane (DenseMotionSourceOptions::min_r2).
   /// For source kCountContrast: 1 − 1/contrast, the fraction of the centre box's events above the
-  /// background level (DetectorOptions::count_cue_min_contrast).
+  /// background level (CountContrastSourceOptions::min_contrast).
   double score = 0;
   /// Compensated events per pixel of the box (gate DetectorOptions::min_event_density).
   double event_density = 0;

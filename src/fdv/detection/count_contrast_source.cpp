@@ -1,0 +1,199 @@
+#include "fdv/detection/count_contrast_source.h"
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+#include <sstream>
+
+namespace fdv {
+using detection_internal::ms_since;
+
+std::string CountContrastSourceOptions::validate() const {
+  for (double v : {surround_scale, min_contrast, min_fill})
+    if (!std::isfinite(v)) return "non-finite detector parameter";
+  std::ostringstream why;
+  if (!(box_px >= 1 && box_px % 2 == 1 && box_px <= 31))
+    why << "count_cue_box_px must be odd in [1, 31], got " << box_px;
+  else if (!(surround_scale > 1 && surround_scale <= 10))
+    why << "count_cue_surround_scale must be in (1, 10], got " << surround_scale;
+  else if (!(min_contrast >= 1)) why << "count_cue_min_contrast must be at least 1, got " << min_contrast;
+  else if (!(min_fill >= 0 && min_fill <= 1)) why << "count_cue_min_fill must be in [0, 1], got " << min_fill;
+  return why.str();
+}
+
+void CountTables::allocate(int width, int height) {
+  saturated8_.create(height, width, CV_8U);
+  active8_.create(height, width, CV_8U);
+  saturated_integral_.create(height + 1, width + 1, CV_32S);
+  active_integral_.create(height + 1, width + 1, CV_32S);
+}
+
+void CountTables::reset(const TimeImages& ti, int min_pixel_events) {
+  ti_ = &ti;
+  min_pixel_events_ = min_pixel_events;
+  active_built_ = saturated_built_ = false;
+}
+
+const cv::Mat& CountTables::active() {
+  if (!active_built_) {
+    cv::compare(ti_->count, min_pixel_events_ - 1, active8_, cv::CMP_GT);  // 255 where active
+    cv::integral(active8_, active_integral_, CV_32S);
+    active_built_ = true;
+  }
+  return active_integral_;
+}
+
+const cv::Mat& CountTables::saturated() {
+  if (!saturated_built_) {
+    ti_->count.convertTo(saturated8_, CV_8U);
+    cv::integral(saturated8_, saturated_integral_, CV_32S);
+    saturated_built_ = true;
+  }
+  return saturated_integral_;
+}
+
+void CountContrastSource::allocate(int width, int height) {
+  tables_.allocate(width, height);
+  live_blocks_.reserve(static_cast<std::size_t>(width));
+  excess_.create(height, width, CV_32F);
+  excess_.setTo(0);
+  excess_bounds_ = {};
+}
+
+std::optional<Candidate> CountContrastSource::find(SourceWindow& in, DetectionResult& res) {
+  if (!options_.count_contrast.enabled) return std::nullopt;
+  const auto t = std::chrono::steady_clock::now();
+  tables_.reset(in.ti, options_.min_pixel_events);
+  std::optional<Candidate> found;
+  for (const Box2D& gate : in.gates) {
+    if (!options_.count_contrast.in_gates) break;
+    found = find_in(in, box_pixels(gate, in.events.width, in.events.height), false, res);
+    if (found && gate.contains(found->center)) {
+      res.track_aided = true;
+      break;
+    }
+    found.reset();
+  }
+  if (!found) found = find_in(in, {0, 0, in.events.width, in.events.height}, true, res);
+  res.timings.count_cue_ms = ms_since(t);
+  return found;
+}
+
+std::optional<Candidate> CountContrastSource::find_in(const SourceWindow& in, const cv::Rect& search, bool time_test,
+                                                      DetectionResult& res) {
+  const DetectorOptions& o = options_;
+  const CountContrastSourceOptions& cc = o.count_contrast;
+  const TimeImages& ti = in.ti;
+  const int w = ti.count.cols, h = ti.count.rows;
+  const int k = cc.box_px, hk = k / 2;
+  const int hs = static_cast<int>(std::lround(0.5 * cc.surround_scale * k));
+  // Centres whose surround lies in the image: the contrast needs the whole surround (and the
+  // image's border is where compensation is worst: content enters and leaves there).
+  const cv::Rect area = search & cv::Rect(hs, hs, w - 2 * hs, h - 2 * hs);
+  if (area.area() <= 0 || ti.events <= 0 || !(ti.t_max_s > ti.t_min_s)) return std::nullopt;
+  res.count_cue_ran = true;
+  // The active pixels' table covers the whole image: the surround of a centre near the search
+  // area's border reaches outside it.
+  const cv::Mat& active = tables_.active();
+  auto box_sum = [](const cv::Mat& sat, int x, int y, int width, int height) {
+    return static_cast<double>(sat.at<std::int32_t>(y + height, x + width) - sat.at<std::int32_t>(y, x + width) -
+                               sat.at<std::int32_t>(y + height, x) + sat.at<std::int32_t>(y, x));
+  };
+  // Σ of I saturated at 255 over a box (8-bit counts: a hot pixel weighs as 255 events). Few centres
+  // pass the fill test (~100 of 280 k on a textured 5 M ev/s window), so their sums are taken
+  // directly; past kDirectSums centres the whole image's table is cheaper and is built. Both give the
+  // same integers.
+  constexpr int kDirectSums = 1000;
+  int filled = 0;  // centres that pass the fill test
+  auto count_sum = [&](int x, int y, int width, int height) {
+    if (tables_.has_saturated() || filled > kDirectSums) return box_sum(tables_.saturated(), x, y, width, height);
+    std::int32_t sum = 0;
+    for (int r = y; r < y + height; ++r) {
+      const std::int32_t* row = ti.count.ptr<std::int32_t>(r) + x;
+      for (int c = 0; c < width; ++c) sum += std::min(row[c], 255);
+    }
+    return static_cast<double>(sum);
+  };
+  // The background level: the image's mean events per pixel, the floor of the surround's density
+  // (an empty surround must not make any small cluster "infinitely" dense).
+  const double image_density = static_cast<double>(ti.events) / (static_cast<double>(w) * h);
+  double best = 0;
+  cv::Point at(-1, -1);
+  double best_fill = 0, best_surround = 0;
+  // Both boxes lie in the image (hs > hk since surround_scale > 1).
+  const double centre_area = static_cast<double>(k) * k;
+  const double ring_area = static_cast<double>(2 * hs + 1) * (2 * hs + 1) - centre_area;
+  // Centres in raster order (the first best wins ties), in bands of kBlock rows cut into blocks of
+  // kBlock columns: a block whose centres' boxes together hold too few active pixels for any one of
+  // them to pass the fill test is skipped whole (each box's fill ≤ the union's; exact).
+  constexpr int kBlock = 8;
+  std::vector<int>& live = live_blocks_;  // this band's blocks that may hold a passing centre
+  for (int y0 = area.y; y0 < area.y + area.height; y0 += kBlock) {
+    const int rows = std::min(kBlock, area.y + area.height - y0);
+    live.clear();
+    for (int x0 = area.x; x0 < area.x + area.width; x0 += kBlock) {
+      const int cols = std::min(kBlock, area.x + area.width - x0);
+      const double union_fill = box_sum(active, x0 - hk, y0 - hk, cols + 2 * hk, rows + 2 * hk) / (255.0 * centre_area);
+      if (!(union_fill < cc.min_fill)) live.push_back(x0);
+    }
+    for (int y = y0; y < y0 + rows && !live.empty(); ++y) {
+      for (const int x0 : live) {
+        for (int x = x0; x < std::min(x0 + kBlock, area.x + area.width); ++x) {
+          const double fill = box_sum(active, x - hk, y - hk, k, k) / (255.0 * centre_area);
+          if (fill < cc.min_fill) continue;
+          ++filled;
+          const double inner = count_sum(x - hk, y - hk, k, k);
+          const double surround = (count_sum(x - hs, y - hs, 2 * hs + 1, 2 * hs + 1) - inner) / ring_area;
+          const double contrast = inner / centre_area / std::max(surround, image_density);
+          if (contrast > best) {
+            best = contrast;
+            at = {x, y};
+            best_fill = fill;
+            best_surround = surround;
+          }
+        }
+      }
+    }
+  }
+  res.count_cue_contrast = best;
+  res.count_cue_fill = best_fill;
+  res.count_cue_filled_centres = filled;
+  if (at.x < 0 || best < cc.min_contrast) return std::nullopt;
+  // The blob's box: Algorithm 1 on the events above the surround's level, I − max(surround, mean),
+  // within the surround square around the densest centre (zero elsewhere), from that square.
+  const double level = std::max(best_surround, image_density);
+  const cv::Rect outer = cv::Rect(at.x - hs, at.y - hs, 2 * hs + 1, 2 * hs + 1) & cv::Rect(0, 0, w, h);
+  zero_rect(excess_, excess_bounds_);
+  cv::Mat excess = excess_(outer);
+  ti.count(outer).convertTo(excess, CV_32F, 1.0, -level);
+  cv::max(excess, 0.0, excess);
+  excess_bounds_ = outer;
+  const GaussianFit f = iterative_gaussian_fit(excess_, Eigen::Vector2d(at.x, at.y),
+                                              Eigen::Vector2d(outer.width, outer.height), o);
+  Candidate cand;
+  cand.source = DetectionSource::kCountContrast;
+  if (f.converged && f.size.maxCoeff() <= o.roi_max_aspect * f.size.minCoeff()) {
+    cand.box = f.roi();
+    cand.center = f.center;
+  } else {
+    cand.box = Box2D{at.x - 0.5 * k + 0.5, at.y - 0.5 * k + 0.5, at.x + 0.5 * k + 0.5, at.y + 0.5 * k + 0.5};
+    cand.center = cand.box.center();
+  }
+  const cv::Rect box = box_pixels(cand.box, w, h);
+  if (box.area() == 0) return std::nullopt;
+  cand.events = static_cast<int>(cv::sum(ti.count(box))[0]);
+  cand.event_density = static_cast<double>(cand.events) / box.area();
+  if (cand.events < o.roi_min_events || cand.event_density < o.min_event_density) return std::nullopt;
+  // Its events must not follow the background's time profile: their mean time stands out from all
+  // events' by θ's margin a‖ω‖ + b‖v‖ + c, in N's units (the margin by which a pixel of S stands out
+  // from mean(N)); early or late, since a late burst of background events (a jerk of the camera)
+  // moves the image's mean time, not the object's.
+  cand.t_mean_s = cv::sum(ti.sum_time_s(box))[0] / cand.events;
+  const double image_t_mean_s = cv::sum(ti.sum_time_s)[0] / ti.events;
+  res.count_cue_time_offset = (cand.t_mean_s - image_t_mean_s) / (ti.t_max_s - ti.t_min_s);
+  if (time_test && !(std::abs(res.count_cue_time_offset) >= in.theta - ti.mean_normalized)) return std::nullopt;
+  cand.score = 1.0 - 1.0 / best;  // the fraction of the centre's events above the background level
+  return cand;
+}
+
+}  // namespace fdv

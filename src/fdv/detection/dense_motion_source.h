@@ -1,0 +1,30 @@
+#pragma once
+/// Candidate source 3 (not in the paper; docs/DETECTION.md, "Dense moving blob"): inside each
+/// confirmed track's gate, the densest patch of active pixels of I (I ≥ min_pixel_events), accepted
+/// when the mean-time image T rises across it as a plane (DenseMotionSourceOptions) and its box
+/// passes the event gates. Runs only when enabled, with priors, and for a window of positive length.
+///
+///   DenseMotionSource source(options);   // once; allocate(width, height) before the first find()
+///   std::optional<Candidate> c = source.find(in, res);   // res.motion_cue_r2 / _span say how close
+#include <optional>
+
+#include "fdv/detection/candidate_source.h"
+#include "fdv/detection/detector_options.h"
+
+namespace fdv {
+
+class DenseMotionSource final : public CandidateSource {
+ public:
+  /// `options` must be valid (DetectorOptions::validate).
+  explicit DenseMotionSource(const DetectorOptions& options) : options_(options) {}
+  void allocate(int width, int height) override;
+  std::optional<Candidate> find(SourceWindow& in, DetectionResult& res) override;
+  /// The candidate within `search` (clipped to the image), gate or not; sets res.motion_cue_*.
+  std::optional<Candidate> find_in(const SourceWindow& in, const cv::Rect& search, DetectionResult& res);
+
+ private:
+  DetectorOptions options_;
+  cv::Mat active_, active_integral_;  ///< I's active pixels (1) as CV_32F, and their summed-area table
+};
+
+}  // namespace fdv

@@ -1,0 +1,40 @@
+#pragma once
+/// The winning candidate's centre and time re-estimated from the events themselves
+/// (docs/DETECTION.md, "centre and time"): the centroid and mean time of a time-complete slice of
+/// the object around the box, by mean shift with a flat square kernel. Removes the forward bias of
+/// the segmented pattern's centroid (the pattern is the object's latest sweep).
+///
+///   EventRefiner refiner(options);      // once; allocate(width, height) before the first refine()
+///   if (auto r = refiner.refine(view, box, t_mean_s)) { centre = r->center; t = r->t_mean_s; }
+///
+/// Options: DetectorOptions::refine_box_scale, refine_recentre_passes, roi_min_events.
+/// Does not allocate once allocated. Not thread-safe.
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+#include <optional>
+
+#include "fdv/detection/detection2d.h"
+#include "fdv/detection/detector_options.h"
+#include "fdv/detection/time_images.h"
+
+namespace fdv {
+
+struct RefinedCentre {
+  Eigen::Vector2d center = Eigen::Vector2d::Zero();  ///< undistorted grid [px]
+  double t_mean_s = 0;                               ///< [s since t_start]
+};
+
+class EventRefiner {
+ public:
+  explicit EventRefiner(const DetectorOptions& options) : options_(options) {}
+  void allocate(int width, int height);
+  /// Centroid and mean time of the events in a time-complete slice around `box` (whose events' mean
+  /// time is t_box_s), or nothing when too few or when the centroid leaves the box's reach.
+  std::optional<RefinedCentre> refine(const CompensatedEventsView& window, const Box2D& box, double t_box_s);
+
+ private:
+  DetectorOptions options_;
+  cv::Mat acc_;  ///< the slice's events per pixel: (count, Σt), CV_32FC2
+};
+
+}  // namespace fdv

@@ -1,0 +1,40 @@
+#pragma once
+/// Candidate source 1, the paper's (§IV-B.2-3): Algorithm 1 from the strongest pattern of P, moving-
+/// region retrieval when the fit yields no plausible box, then the evidence gates; a pattern that
+/// fails is blanked and the next strongest is tried, up to max_candidates.
+///
+///   GaussianFitSource source(options);   // once; allocate(width, height) before the first find()
+///   std::optional<Candidate> c = source.find(in, res);
+///
+/// evaluate_pattern() is one pattern's evaluation, which the track-aided source reuses inside the
+/// tracks' gates. Options: DetectorOptions::gaussian_fit and the shared fields.
+#include <optional>
+
+#include "fdv/detection/candidate_source.h"
+#include "fdv/detection/detector_options.h"
+
+namespace fdv {
+
+/// Algorithm 1 from `seed` on `P` with the half-image initial ROI, else moving-region retrieval;
+/// then the evidence gates (roi_min_events, `min_peak` on the box's peak of P, min_event_density),
+/// then smaller initial ROIs (GaussianFitSourceOptions::refit_min_roi_px). Writes res.fit,
+/// res.fit_rejected and the fit / retrieval timings. On failure sets in.why_not and `blank`, the
+/// area to blank before the next attempt.
+std::optional<Candidate> evaluate_pattern(const DetectorOptions& o, SourceWindow& in, const cv::Mat& P, cv::Point seed,
+                                          double min_peak, DetectionResult& res, Box2D& blank);
+
+class GaussianFitSource final : public CandidateSource {
+ public:
+  /// `options` must be valid (DetectorOptions::validate).
+  explicit GaussianFitSource(const DetectorOptions& options) : options_(options) {}
+  void allocate(int width, int height) override;
+  std::optional<Candidate> find(SourceWindow& in, DetectionResult& res) override;
+
+ private:
+  DetectorOptions options_;
+  /// P with failed candidates blanked (P itself stays as pre-processed); zero outside blanked_bounds_.
+  cv::Mat blanked_;
+  cv::Rect blanked_bounds_;
+};
+
+}  // namespace fdv
