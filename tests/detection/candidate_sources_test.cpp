@@ -1,0 +1,235 @@
+// Each candidate source alone, on hand-made event windows whose answer is known in closed form: a
+// symmetric blob's candidate is centred on it, a time plane's fit explains all of T's variance.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "fdv/detection/count_contrast_source.h"
+#include "fdv/detection/dense_motion_source.h"
+#include "fdv/detection/event_refinement.h"
+#include "fdv/detection/gaussian_fit_source.h"
+#include "fdv/detection/track_aided_source.h"
+
+namespace fdv {
+namespace {
+
+constexpr int kWidth = 160, kHeight = 120;
+constexpr double kWindowS = 0.025;
+
+/// Events on a kWidth × kHeight grid, and everything a SourceWindow borrows, built from them as
+/// Detector::detect builds it (θ = mean(N) + c: a static camera).
+struct HandMadeWindow {
+  std::vector<std::int32_t> pixel;
+  std::vector<float> t_s;
+  TimeImages ti;
+  cv::Mat S;
+  std::optional<Preprocessor> pre;
+  RegionScratch scratch;
+  std::vector<Box2D> gates;
+  CompensatedEventsView view;
+  double theta = 0;
+
+  void add(int x, int y, int events, double t) {
+    for (int k = 0; k < events; ++k) {
+      pixel.push_back(y * kWidth + x);
+      t_s.push_back(static_cast<float>(t));
+    }
+  }
+  /// A side × side square of pixels centred on (cx, cy), `events` each at time t(x, y).
+  template <typename TimeOf>
+  void add_square(int cx, int cy, int side, int events, TimeOf t) {
+    for (int y = cy - side / 2; y <= cy + side / 2; ++y)
+      for (int x = cx - side / 2; x <= cx + side / 2; ++x) add(x, y, events, t(x, y));
+  }
+  SourceWindow build(const DetectorOptions& o) {
+    view = {0, from_seconds(kWindowS), kWidth, kHeight, pixel, t_s};
+    build_time_images(view, ti);
+    theta = adaptive_threshold(ti.mean_normalized, 0, 0, o);
+    const SegmentResult seg = segment(ti, theta, o.min_pixel_events, S);
+    pre.emplace(o);
+    const cv::Mat& P = pre->run(S, seg.bounds);
+    scratch.reserve(kWidth, kHeight);
+    return {.events = view,
+            .ti = ti,
+            .S = S,
+            .P = P,
+            .P_support = pre->nonzero_bounds(),
+            .P_max = pre->first_max(),
+            .theta = theta,
+            .window_s = kWindowS,
+            .gates = gates,
+            .region_scratch = scratch};
+  }
+};
+
+/// Sparse early background in the top rows (one event per pixel, below min_pixel_events) and a late
+/// 9x9 blob below them: N = 1 on the blob, 0 elsewhere.
+HandMadeWindow late_blob(int cx, int cy) {
+  HandMadeWindow w;
+  for (int y = 2; y < 40; y += 6)
+    for (int x = 2; x < kWidth; x += 6) w.add(x, y, 1, 0.001);
+  w.add_square(cx, cy, 9, 3, [](int, int) { return 0.024; });
+  return w;
+}
+
+// The blob is symmetric about its centre, and so are S, P and Algorithm 1's weights: the fit's
+// centre is the blob's.
+TEST(GaussianFitSource, ALateSymmetricBlobIsFoundAtItsCentre) {
+  const DetectorOptions o;
+  HandMadeWindow w = late_blob(100, 70);
+  SourceWindow in = w.build(o);
+  GaussianFitSource source(o);
+  source.allocate(kWidth, kHeight);
+  DetectionResult res;
+  const std::optional<Candidate> c = source.find(in, res);
+  ASSERT_TRUE(c) << to_string(in.why_not);
+  EXPECT_EQ(c->source, DetectionSource::kGaussianFit);
+  EXPECT_NEAR(c->center.x(), 100.0, 1e-3);
+  EXPECT_NEAR(c->center.y(), 70.0, 1e-3);
+  EXPECT_NEAR(c->score, 1.0, 1e-6);        // a solid patch at N = 1
+  EXPECT_NEAR(c->t_mean_s, 0.024, 1e-6);   // the blob's own events only
+  EXPECT_EQ(c->events % 3, 0);             // whole blob pixels, 3 events each
+  EXPECT_EQ(res.candidates, 1);
+}
+
+TEST(GaussianFitSource, NothingAboveThresholdMeansNoCandidate) {
+  const DetectorOptions o;
+  HandMadeWindow w = late_blob(100, 70);
+  w.pixel.resize(w.pixel.size() - 81 * 3);  // the blob's events were added last
+  w.t_s.resize(w.pixel.size());
+  w.add(50, 50, 2, 0.024);                  // one late pixel: too small a pattern for min_peak
+  SourceWindow in = w.build(o);
+  GaussianFitSource source(o);
+  source.allocate(kWidth, kHeight);
+  DetectionResult res;
+  EXPECT_FALSE(source.find(in, res));
+  EXPECT_EQ(res.candidates, 0);
+}
+
+// Inside a gate the pattern is evaluated as by source 1, at the lower threshold; a gate elsewhere
+// finds nothing, and no gate means the source does not run.
+TEST(TrackAidedSource, FindsTheBlobOnlyInsideAGateThatHoldsIt) {
+  DetectorOptions o;
+  o.track_aided.min_peak = 0.3;
+  HandMadeWindow w = late_blob(60, 50);
+  TrackAidedSource source(o);
+  {
+    SourceWindow in = w.build(o);
+    DetectionResult res;
+    EXPECT_FALSE(source.find(in, res));
+    EXPECT_EQ(res.candidates, 0);
+  }
+  w.gates = {Box2D{120, 80, 150, 110}};
+  {
+    SourceWindow in = w.build(o);
+    DetectionResult res;
+    EXPECT_FALSE(source.find(in, res));
+    EXPECT_FALSE(res.track_aided);
+  }
+  w.gates.push_back(Box2D{45, 35, 75, 65});
+  SourceWindow in = w.build(o);
+  DetectionResult res;
+  const std::optional<Candidate> c = source.find(in, res);
+  ASSERT_TRUE(c);
+  EXPECT_TRUE(res.track_aided);
+  EXPECT_NEAR(c->center.x(), 60.0, 1e-3);
+  EXPECT_NEAR(c->center.y(), 50.0, 1e-3);
+}
+
+// An 11x11 blob whose mean time rises along x by g per pixel: T is exactly a plane, so its R² is 1
+// and its rise across the (2r+1)-wide square is g·(2r+1)/Δt of the window; equal counts make the
+// centroid of I the blob's centre, and the box is centred there.
+TEST(DenseMotionSource, ATimePlaneBlobIsFoundAtItsCentroid) {
+  const DetectorOptions o;
+  constexpr double kSlopeS = 0.0005;  // [s/px]
+  HandMadeWindow w;
+  w.add_square(80, 60, 11, 3, [&](int x, int) { return 0.0125 + kSlopeS * (x - 80); });
+  w.gates = {Box2D{60, 40, 100, 80}};
+  SourceWindow in = w.build(o);
+  DenseMotionSource source(o);
+  source.allocate(kWidth, kHeight);
+  DetectionResult res;
+  const std::optional<Candidate> c = source.find(in, res);
+  ASSERT_TRUE(c) << "R² " << res.motion_cue_r2 << ", span " << res.motion_cue_span;
+  EXPECT_TRUE(res.motion_cue_ran);
+  EXPECT_TRUE(res.track_aided);
+  EXPECT_EQ(c->source, DetectionSource::kDenseMotion);
+  EXPECT_NEAR(res.motion_cue_r2, 1.0, 1e-6);
+  EXPECT_NEAR(res.motion_cue_span, kSlopeS * (2 * o.dense_motion.radius_px + 1) / kWindowS, 1e-5);
+  EXPECT_NEAR(c->center.x(), 80.0, 1e-9);
+  EXPECT_NEAR(c->center.y(), 60.0, 1e-9);
+  EXPECT_NEAR(c->t_mean_s, 0.0125, 1e-6);
+
+  // The same blob with times alternating as a checkerboard has no linear trend (Σ x·(−1)^x = 0 over
+  // a symmetric row): R² ≈ 0, as a static blob's.
+  HandMadeWindow flat;
+  flat.add_square(80, 60, 11, 3, [](int x, int y) { return (x + y) % 2 ? 0.0075 : 0.0175; });
+  flat.gates = w.gates;
+  SourceWindow flat_in = flat.build(o);
+  DetectionResult flat_res;
+  EXPECT_FALSE(source.find(flat_in, flat_res));
+  EXPECT_TRUE(flat_res.motion_cue_ran);
+  EXPECT_LT(flat_res.motion_cue_r2, 0.01);
+}
+
+// A 9x9 blob of 10 events per pixel with an empty surround: its contrast is its density over the
+// image's mean, its fill 1, and Algorithm 1 on the uniform excess is centred on it. The blob fires
+// evenly (mean time mid-window) while the background fires late, so it passes the time test.
+TEST(CountContrastSource, ADenseBlobOnAnEmptySurroundIsFoundAtItsCentre) {
+  const DetectorOptions o;
+  HandMadeWindow w;
+  for (int x = 0; x < kWidth; x += 2) {  // 160 single late events, far from the blob
+    w.add(x, 5, 1, 0.024);
+    w.add(x, 110, 1, 0.024);
+  }
+  for (int y = 66; y <= 74; ++y)
+    for (int x = 96; x <= 104; ++x)
+      for (int k = 0; k < 10; ++k) w.add(x, y, 1, (k + 0.5) * 0.0025);
+  SourceWindow in = w.build(o);
+  CountContrastSource source(o);
+  source.allocate(kWidth, kHeight);
+  DetectionResult res;
+  const std::optional<Candidate> c = source.find(in, res);
+  ASSERT_TRUE(c) << "contrast " << res.count_cue_contrast << ", time offset " << res.count_cue_time_offset;
+  EXPECT_EQ(c->source, DetectionSource::kCountContrast);
+  const double image_density = static_cast<double>(w.pixel.size()) / (kWidth * kHeight);
+  EXPECT_DOUBLE_EQ(res.count_cue_contrast, 10.0 / image_density);
+  EXPECT_DOUBLE_EQ(res.count_cue_fill, 1.0);
+  EXPECT_NEAR(c->center.x(), 100.0, 1e-4);
+  EXPECT_NEAR(c->center.y(), 70.0, 1e-4);
+  EXPECT_DOUBLE_EQ(c->score, 1.0 - 1.0 / res.count_cue_contrast);
+  EXPECT_LT(res.count_cue_time_offset, -(in.theta - w.ti.mean_normalized));
+
+  // Disabled: nothing runs.
+  DetectorOptions off;
+  off.count_contrast.enabled = false;
+  CountContrastSource disabled(off);
+  disabled.allocate(kWidth, kHeight);
+  DetectionResult off_res;
+  EXPECT_FALSE(disabled.find(in, off_res));
+  EXPECT_FALSE(off_res.count_cue_ran);
+}
+
+// Events of a square object symmetric about its centre and about the window's middle time: the
+// refined centre and time are that centre and time, from a box centred off it.
+TEST(EventRefiner, SymmetricEventsGiveTheirCentroidAndMeanTime) {
+  const DetectorOptions o;
+  HandMadeWindow w;
+  for (int y = 47; y <= 53; ++y)
+    for (int x = 37; x <= 43; ++x)
+      for (const double t : {0.005, 0.0125, 0.020}) w.add(x, y, 1, t);
+  w.view = {0, from_seconds(kWindowS), kWidth, kHeight, w.pixel, w.t_s};  // not time-sorted
+  EventRefiner refiner(o);
+  refiner.allocate(kWidth, kHeight);
+  const std::optional<RefinedCentre> r = refiner.refine(w.view, Box2D{38, 46, 46, 54}, 0.0125);
+  ASSERT_TRUE(r);
+  EXPECT_NEAR(r->center.x(), 40.0, 1e-9);
+  EXPECT_NEAR(r->center.y(), 50.0, 1e-9);
+  EXPECT_NEAR(r->t_mean_s, 0.0125, 1e-7);
+}
+
+}  // namespace
+}  // namespace fdv
