@@ -50,7 +50,7 @@ struct TrackAidedSourceOptions {
   std::string validate() const;
 };
 
-/// Source 3, not in the paper (docs/DETECTION.md, "Dense moving blob"): inside the tracks' gates,
+/// Source 3, not in the paper (docs/DETECTION.md, "Dense-motion cue"): inside the tracks' gates,
 /// the densest patch of active pixels of I, accepted when its mean-time image T rises across it as
 /// a plane T ≈ a + g·(x − x_c) (count-weighted least squares over the (2r+1)² square around it). A
 /// moving object fires late on its leading side, so T rises along its image velocity; compensated
