@@ -12,9 +12,10 @@
 #include "apps/commands.h"
 #include "apps/experiment.h"
 #include "fdv/estimation/collision.h"
-#include "fdv/eval/experiment.h"
 #include "fdv/eval/run_results.h"
+#include "fdv/sim/dataset_cache.h"
 #include "fdv/sim/scenario_config.h"
+#include "fdv/tables/experiment.h"
 
 namespace fdv::cli {
 namespace {
@@ -38,7 +39,7 @@ void demo(const DemoArgs& args) {
   const std::string dataset = (fs::path(args.out) / "dataset").string();
   const std::string results = (fs::path(args.out) / "results").string();
   // Simulated again only when the folder does not hold this scenario and seed already.
-  ensure_simulated(sim::make_preset(args.scenario, args.seed), dataset);
+  sim::ensure_simulated(sim::make_preset(args.scenario, args.seed), dataset);
   RunArgs run;
   run.input = dataset;
   run.out = results;

@@ -11,9 +11,9 @@
 #include "apps/commands.h"
 #include "apps/experiment.h"
 #include "fdv/core/error.h"
-#include "fdv/eval/experiment.h"
 #include "fdv/eval/run_results.h"
 #include "fdv/eval/statistics.h"
+#include "fdv/tables/experiment.h"
 
 namespace fdv::cli {
 namespace {

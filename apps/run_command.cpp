@@ -15,10 +15,11 @@
 #include "apps/experiment.h"
 #include "apps/reader_flags.h"
 #include "fdv/core/error.h"
-#include "fdv/eval/experiment.h"
 #include "fdv/eval/statistics.h"
 #include "fdv/io/config/backend_config.h"
 #include "fdv/pipeline/perception.h"
+#include "fdv/pipeline/replay.h"
+#include "fdv/tables/experiment.h"
 
 namespace fdv::cli {
 namespace fs = std::filesystem;

@@ -15,9 +15,9 @@
 #include <memory>
 
 #include "apps/commands.h"
-#include "fdv/eval/experiment.h"
-#include "fdv/eval/markdown_block.h"
-#include "fdv/eval/paper_tables.h"
+#include "fdv/tables/experiment.h"
+#include "fdv/tables/markdown_block.h"
+#include "fdv/tables/paper_tables.h"
 
 namespace fdv::cli {
 namespace {

@@ -5,8 +5,9 @@
 #include <map>
 
 #include "fdv/core/calibration.h"
-#include "fdv/eval/experiment.h"
 #include "fdv/io/recording.h"
+#include "fdv/pipeline/replay.h"
+#include "fdv/tables/experiment.h"
 #include "test_support.h"
 
 namespace fdv {

@@ -27,8 +27,9 @@
 ///
 /// Pitfalls: events must lie in [t_start, t_end) (others are counted and dropped); `imu` is in the
 /// IMU frame (rotated into E with calib.R_E_I()); `odometry` carries the body velocity in W and the
-/// attitude q_W_B; `depth` must be registered into the event camera (fdv/depth). A compensator
-/// keeps its buffers between calls (no allocation once warmed up). Not thread-safe: one per thread.
+/// attitude q_W_B; `depth` must be registered into the event camera (fdv/depth's DepthRegistrar).
+/// A compensator keeps its buffers between calls (no allocation once warmed up). Not thread-safe:
+/// one per thread.
 #include <array>
 #include <cstdint>
 #include <memory>
@@ -40,7 +41,6 @@
 
 #include "fdv/core/calibration.h"
 #include "fdv/core/sensor_data.h"
-#include "fdv/depth/depth_registration.h"
 
 namespace fdv {
 

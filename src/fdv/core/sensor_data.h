@@ -68,4 +68,22 @@ OdometrySample interpolate_odometry(const std::vector<OdometrySample>& samples, 
 /// The same between two samples a.t <= t <= b.t.
 OdometrySample interpolate_between(const OdometrySample& a, const OdometrySample& b, TimeNs t);
 
+/// A depth image resampled onto the event camera's raw pixel grid (made by fdv/depth's
+/// DepthRegistrar; compensation reads per-event depth from it).
+struct RegisteredDepth {
+  TimeNs t = 0;  ///< time of the source depth frame
+  int width = 0;
+  int height = 0;
+  std::vector<float> depth_m;  ///< z along E's optical axis [m], row-major, 0 = no depth
+  // What happened to the source pixels (they sum to width·height of the depth frame):
+  std::uint64_t registered = 0;       ///< landed on an event pixel (z-test winners and losers)
+  std::uint64_t occluded = 0;         ///< of those, lost the z-test to a nearer surface
+  std::uint64_t invalid_input = 0;    ///< 0, NaN or out of range in the depth frame
+  std::uint64_t no_inverse = 0;       ///< depth lens map not invertible at that pixel
+  std::uint64_t behind_camera = 0;    ///< z ≤ 0 in E
+  std::uint64_t outside_image = 0;    ///< projected outside the event image
+  float at(int x, int y) const { return depth_m[static_cast<std::size_t>(y) * width + x]; }
+  bool empty() const { return depth_m.empty(); }
+};
+
 }  // namespace fdv

@@ -29,7 +29,7 @@ namespace fdv::sim {
 
 /// Revision of what the simulator writes for a given configuration. Bump it with any code change
 /// that alters its output (events, depth, IMU, odometry, truth), so that cached datasets
-/// (fdv::ensure_simulated) are simulated again instead of silently reused.
+/// (sim::ensure_simulated) are simulated again instead of silently reused.
 inline constexpr int kSimulatorRevision = 2;  // 2: spatially correlated depth noise
 
 /// Receives the simulated streams. Every callback has an empty default.

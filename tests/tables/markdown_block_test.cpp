@@ -1,5 +1,5 @@
 // Replacing one command's marked block of a results document and nothing else.
-#include "fdv/eval/markdown_block.h"
+#include "fdv/tables/markdown_block.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "fdv/eval/paper_tables.h"
+#include "fdv/tables/paper_tables.h"
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -7,8 +7,9 @@
 #include <sstream>
 
 #include "fdv/core/error.h"
-#include "fdv/eval/experiment.h"
 #include "fdv/eval/statistics.h"
+#include "fdv/sim/dataset_cache.h"
+#include "fdv/tables/experiment.h"
 
 namespace fdv {
 namespace {
@@ -55,7 +56,7 @@ struct Dataset {
 
 Dataset dataset(const std::string& scene, std::uint64_t seed, const PaperTableOptions& options) {
   Dataset d;
-  d.dir = ensure_simulated(scene, seed, options.cache_dir);
+  d.dir = sim::ensure_simulated(scene, seed, options.cache_dir);
   d.truth = load_dataset_truth(d.dir);
   return d;
 }

@@ -1,4 +1,4 @@
-#include "fdv/eval/experiment.h"
+#include "fdv/tables/experiment.h"
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -10,92 +10,10 @@
 
 #include "fdv/core/error.h"
 #include "fdv/eval/relative_contrast.h"
-#include "fdv/io/time_ordered_merger.h"
-#include "fdv/sim/dataset_sink.h"
-#include "fdv/sim/simulator.h"
+#include "fdv/pipeline/replay.h"
 
 namespace fdv {
 namespace fs = std::filesystem;
-
-PerceptionCounters replay(std::unique_ptr<RecordingReader> reader, const Calibration& calib,
-                          const PerceptionOptions& options, const PerceptionCallbacks& callbacks,
-                          ReadReport* reader_report) {
-  Perception perception(calib, options, callbacks);
-  std::vector<std::unique_ptr<RecordingReader>> sources;
-  sources.push_back(std::move(reader));
-  TimeOrderedMerger merger(std::move(sources));
-  StreamItem item;
-  while (merger.next(item)) {
-    switch (item.kind) {
-      case StreamKind::kEvents:
-        perception.push_events(item.events);
-        break;
-      case StreamKind::kImu:
-        perception.push_imu(*item.imu);
-        break;
-      case StreamKind::kDepth:
-        perception.push_depth(*item.depth);
-        break;
-      case StreamKind::kOdometry:
-        perception.push_odometry(*item.odometry);
-        break;
-      case StreamKind::kGroundTruth:
-        break;  // evaluation only, never the pipeline
-    }
-  }
-  perception.finish();
-  if (reader_report) *reader_report = merger.source(0).report();
-  return perception.counters();
-}
-
-namespace {
-std::string read_text(const fs::path& path) {
-  std::ifstream in(path);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-}  // namespace
-
-std::string ensure_simulated(const sim::ScenarioConfig& config, const std::string& dir) {
-  // The configuration and the simulator's revision: either changed = another dataset.
-  const std::string fingerprint =
-      fmt::format("# fdv simulator revision {}\n{}", sim::kSimulatorRevision, sim::to_yaml(config));
-  const fs::path marker = fs::path(dir) / kSimulationMarker;
-  if (fs::exists(marker) && read_text(marker) == fingerprint) {
-    spdlog::debug("reusing the simulated dataset {}", dir);
-    return dir;
-  }
-  if (fs::exists(dir))
-    spdlog::info(
-        "{}: incomplete, or made with another configuration or simulator revision: simulating "
-        "again",
-        dir);
-  fs::remove_all(dir);
-  {
-    sim::Simulator simulator(config);
-    sim::DatasetSink sink(dir, simulator.calibration());
-    spdlog::info("simulating '{}' (seed {}) into {}", config.name, config.seed, dir);
-    simulator.run(sink);
-    sink.finish(simulator.manifest_yaml());
-  }
-  // The marker last, via a rename, so that a folder with a marker is always complete.
-  const fs::path tmp = marker.string() + ".tmp";
-  {
-    std::ofstream out(tmp);
-    out << fingerprint;
-    if (!out) throw InputError(tmp.string(), "", "cannot write the cache marker");
-  }
-  fs::rename(tmp, marker);
-  return dir;
-}
-
-std::string ensure_simulated(const std::string& preset, std::uint64_t seed,
-                             const std::string& cache_dir) {
-  const sim::ScenarioConfig config = sim::make_preset(preset, seed);
-  return ensure_simulated(config,
-                          (fs::path(cache_dir) / fmt::format("{}_seed{}", preset, seed)).string());
-}
 
 GroundTruthBoxOptions compensated_image_frame(CompensationMethod used, TimeNs t_start) {
   GroundTruthBoxOptions frame;

@@ -1,7 +1,7 @@
 // The Markdown of Table I: figures and notes come from the table, not from fixed text.
 #include <gtest/gtest.h>
 
-#include "fdv/eval/paper_tables.h"
+#include "fdv/tables/paper_tables.h"
 
 namespace fdv {
 namespace {

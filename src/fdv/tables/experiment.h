@@ -1,19 +1,17 @@
 #pragma once
-/// Running the pipeline for an experiment: replaying a recording through fdv::Perception, a cache
-/// of simulated datasets, and one run over a simulated dataset that keeps what the evaluation
-/// needs (detections, per-window timings, relative contrast, converged estimates, usable flagged)
-/// in memory.
+/// One run of the pipeline over a simulated dataset that keeps what the paper's tables need
+/// (detections, per-window timings, relative contrast, converged estimates, usable flagged) in
+/// memory, and the seed lists of `fdv table1/2`.
 ///
-///   const std::string dir = ensure_simulated("scene2_ball", 101, "out/cache");   // simulates once
+///   const std::string dir = sim::ensure_simulated("scene2_ball", 101, "out/cache");
 ///   const DatasetTruth truth = load_dataset_truth(dir);
 ///   ExperimentOptions o;
-///   o.perception.compensation.method = "rotation";
+///   o.perception.compensation.method = CompensationMethod::kRotation;
 ///   o.relative_contrast = true;
 ///   ExperimentRun run = run_experiment(truth, o);
 ///   detection_metrics(truth, run.windows);  summarize(run.relative_contrast);
 ///
-/// Unlike the rest of eval (core only), this file drives the pipeline, the simulator and the
-/// readers. Timings are wall-clock and depend on the machine's load; they are never unit-tested.
+/// Timings are wall-clock and depend on the machine's load; they are never unit-tested.
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -22,30 +20,11 @@
 #include "fdv/eval/dataset_truth.h"
 #include "fdv/eval/detection_metrics.h"
 #include "fdv/eval/estimate_metrics.h"
-#include "fdv/io/recording.h"
 #include "fdv/pipeline/perception.h"
 #include "fdv/sim/scenario_config.h"
 
 namespace fdv {
 
-/// Feeds every stream of `reader` in time order into a Perception built from `calib`, `options`
-/// and `callbacks`, then finishes it. Ground truth streams are never fed. Returns the counters.
-PerceptionCounters replay(std::unique_ptr<RecordingReader> reader, const Calibration& calib,
-                          const PerceptionOptions& options, const PerceptionCallbacks& callbacks,
-                          ReadReport* reader_report = nullptr);
-
-/// The dataset folder of simulator preset `preset` at `seed` under `cache_dir`
-/// (CACHE/PRESET_seedSEED), simulated (sim::make_preset + sim::DatasetSink, as `fdv simulate`)
-/// only when the folder is missing or incomplete. Complete = the marker file kSimulationMarker,
-/// written last, holds the preset's full configuration as it is now and sim::kSimulatorRevision; a
-/// folder from an interrupted run, a since-changed preset or another simulator revision is
-/// simulated again. Not safe against two
-/// processes filling the same folder at once. Throws ConfigError for an unknown preset.
-std::string ensure_simulated(const std::string& preset, std::uint64_t seed,
-                             const std::string& cache_dir);
-/// The same for any configuration, into `dir`.
-std::string ensure_simulated(const sim::ScenarioConfig& config, const std::string& dir);
-inline constexpr const char* kSimulationMarker = "simulation_complete.yaml";
 
 /// The camera a window's compensated image shows the ball from, for the method that was used:
 /// none = the camera at each instant; rotation = its orientation held at t_start (rotation undone,

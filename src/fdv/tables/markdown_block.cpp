@@ -1,4 +1,4 @@
-#include "fdv/eval/markdown_block.h"
+#include "fdv/tables/markdown_block.h"
 
 #include <filesystem>
 #include <fstream>

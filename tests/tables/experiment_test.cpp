@@ -1,6 +1,7 @@
 // The experiment helpers that do not need a full run: the dataset cache (on a tiny scene), the
 // relative contrast restricted to windows with a ball in flight, and the seed list.
-#include "fdv/eval/experiment.h"
+#include "fdv/sim/dataset_cache.h"
+#include "fdv/tables/experiment.h"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -34,28 +35,28 @@ sim::ScenarioConfig tiny_scene() {
 TEST(EnsureSimulated, SimulatesOnceThenReusesUntilIncompleteOrChanged) {
   const std::string dir = test::scratch_dir("ensure_simulated") + "/tiny";
   const fs::path sentinel = fs::path(dir) / "sentinel";  // disappears when the folder is re-made
-  EXPECT_EQ(ensure_simulated(tiny_scene(), dir), dir);
-  ASSERT_TRUE(fs::exists(fs::path(dir) / kSimulationMarker));
+  EXPECT_EQ(sim::ensure_simulated(tiny_scene(), dir), dir);
+  ASSERT_TRUE(fs::exists(fs::path(dir) / sim::kSimulationMarker));
   EXPECT_NO_THROW(load_dataset_truth(dir));  // a complete dataset with truth
 
   std::ofstream(sentinel) << "x";
-  ensure_simulated(tiny_scene(), dir);
+  sim::ensure_simulated(tiny_scene(), dir);
   EXPECT_TRUE(fs::exists(sentinel)) << "a complete folder must be reused";
 
-  fs::remove(fs::path(dir) / kSimulationMarker);  // as after an interrupted simulation
-  ensure_simulated(tiny_scene(), dir);
+  fs::remove(fs::path(dir) / sim::kSimulationMarker);  // as after an interrupted simulation
+  sim::ensure_simulated(tiny_scene(), dir);
   EXPECT_FALSE(fs::exists(sentinel)) << "a folder without the marker must be simulated again";
-  EXPECT_TRUE(fs::exists(fs::path(dir) / kSimulationMarker));
+  EXPECT_TRUE(fs::exists(fs::path(dir) / sim::kSimulationMarker));
 
   std::ofstream(sentinel) << "x";
   sim::ScenarioConfig other = tiny_scene();
   other.seed = 2;
-  ensure_simulated(other, dir);
+  sim::ensure_simulated(other, dir);
   EXPECT_FALSE(fs::exists(sentinel)) << "another configuration must be simulated again";
 
   // The same configuration from an earlier simulator revision (its marker says so): made again.
   std::ofstream(sentinel) << "x";
-  const fs::path marker = fs::path(dir) / kSimulationMarker;
+  const fs::path marker = fs::path(dir) / sim::kSimulationMarker;
   std::string text;
   {
     std::ifstream in(marker);
@@ -66,13 +67,13 @@ TEST(EnsureSimulated, SimulatesOnceThenReusesUntilIncompleteOrChanged) {
   ASSERT_NE(at, std::string::npos) << "the marker names the simulator revision";
   text.replace(at, now.size(), fmt::format("revision {}\n", sim::kSimulatorRevision - 1));
   std::ofstream(marker, std::ios::trunc) << text;
-  ensure_simulated(other, dir);
+  sim::ensure_simulated(other, dir);
   EXPECT_FALSE(fs::exists(sentinel))
       << "a dataset from another simulator revision must be simulated again";
 }
 
 TEST(EnsureSimulated, PresetFolderNameAndUnknownPreset) {
-  EXPECT_THROW(ensure_simulated("no_such_preset", 1, test::scratch_dir("ensure_simulated_bad")),
+  EXPECT_THROW(sim::ensure_simulated("no_such_preset", 1, test::scratch_dir("ensure_simulated_bad")),
                ConfigError);
 }
 
