@@ -70,19 +70,19 @@ TEST(Scene, VectorRendererEqualsScalar) {
     const float spread = trial % 2 ? 0.01f : 0.6f;
     const float cx = static_cast<float>(rng.uniform(-1, 1)),
                 cy = static_cast<float>(rng.uniform(-1, 1));
-    simd::vf d[3], inv[3], fp;
-    for (int k = 0; k < simd::kLanes; ++k) {
+    lanes::vf d[3], inv[3], fp;
+    for (int k = 0; k < lanes::kLanes; ++k) {
       d[0][k] = 1.0f;
       d[1][k] = cx + spread * static_cast<float>(rng.uniform(-1, 1));
       d[2][k] = cy + spread * static_cast<float>(rng.uniform(-1, 1));
       fp[k] = static_cast<float>(rng.uniform(1e-4, 3e-3));
     }
     for (int a = 0; a < 3; ++a) inv[a] = 1.0f / d[a];
-    simd::vf t;
-    simd::vi surf;
+    lanes::vf t;
+    lanes::vi surf;
     scene.cast_static_v(o, d, inv, scene.all_panels(), t, surf);
-    const simd::vf radiance = scene.static_radiance_v(surf[0], t, o, d, fp);
-    for (int k = 0; k < simd::kLanes; ++k) {
+    const lanes::vf radiance = scene.static_radiance_v(surf[0], t, o, d, fp);
+    for (int k = 0; k < lanes::kLanes; ++k) {
       const float dk[3] = {d[0][k], d[1][k], d[2][k]}, ik[3] = {inv[0][k], inv[1][k], inv[2][k]};
       const RayHit hit = scene.cast_static(o, dk, ik, scene.all_panels());
       ASSERT_EQ(hit.surface, surf[k]);

@@ -196,7 +196,7 @@ EventCameraSim::Frame EventCameraSim::make_frame(TimeNs t) const {
 
 void EventCameraSim::render_tile(const Tile& tile, const Frame& f, float* log_i,
                                  std::int16_t* label, float& rho_max) const {
-  using namespace simd;
+  using namespace lanes;
   // Per-frame ball constants.
   struct BallConst {
     float oc[3], oc_len, alpha, r;
@@ -288,7 +288,7 @@ void EventCameraSim::render_tile(const Tile& tile, const Frame& f, float* log_i,
           }
         }
       }
-      const vf L = simd::fast_log(intensity + dark_);
+      const vf L = fast_log(intensity + dark_);
       for (int k = 0; k < n; ++k) {
         log_i[j + k] = L[k];
         label[j + k] = lab[k];

@@ -25,9 +25,9 @@
 #include <cstdint>
 #include <vector>
 
+#include "fdv/core/lanes.h"
 #include "fdv/sim/fast_math.h"
 #include "fdv/sim/scenario_config.h"
-#include "fdv/sim/simd.h"
 
 namespace fdv::sim {
 
@@ -151,10 +151,10 @@ class Scene {
 
   // ---- kLanes rays at once (same results as the scalar functions above, lane by lane)
 
-  /// Nearest static surface for simd::kLanes rays from one origin.
-  void cast_static_v(const float* o, const simd::vf* d, const simd::vf* inv, std::uint64_t panels,
-                     simd::vf& t_out, simd::vi& surface_out) const {
-    using namespace simd;
+  /// Nearest static surface for lanes::kLanes rays from one origin.
+  void cast_static_v(const float* o, const lanes::vf* d, const lanes::vf* inv, std::uint64_t panels,
+                     lanes::vf& t_out, lanes::vi& surface_out) const {
+    using namespace lanes;
     vf t = splat(1e30f);
     vi surf = splat_i(-1);
     for (int a = 0; a < 3; ++a) {
@@ -181,10 +181,10 @@ class Scene {
     surface_out = surf;
   }
 
-  /// Image irradiance of simd::kLanes hits on the same surface (see static_radiance()).
-  simd::vf static_radiance_v(int surface, simd::vf t, const float* o, const simd::vf* d,
-                             simd::vf footprint_scale) const {
-    using namespace simd;
+  /// Image irradiance of lanes::kLanes hits on the same surface (see static_radiance()).
+  lanes::vf static_radiance_v(int surface, lanes::vf t, const float* o, const lanes::vf* d,
+                              lanes::vf footprint_scale) const {
+    using namespace lanes;
     const Surface& s = surfaces_[surface];
     const vf da = max(abs(d[s.axis]), splat(1e-6f));
     const vf u = o[s.u_axis] + t * d[s.u_axis];
@@ -217,13 +217,13 @@ class Scene {
     const float x = (kFadeEnd - ratio) * 3.0f;  // 1 -> 0
     return x * x * (3 - 2 * x);
   }
-  static simd::vf fade_v(simd::vf ratio) {
-    using namespace simd;
+  static lanes::vf fade_v(lanes::vf ratio) {
+    using namespace lanes;
     const vf x = max(min((kFadeEnd - ratio) * 3.0f, splat(1.0f)), splat(0.0f));
     return select(ratio <= kFadeStart, splat(1.0f), x * x * (3 - 2 * x));
   }
-  simd::vf value_noise_v(simd::vf x, simd::vf y) const {
-    using namespace simd;
+  lanes::vf value_noise_v(lanes::vf x, lanes::vf y) const {
+    using namespace lanes;
     const vi ix = floor_i(x), iy = floor_i(y);
     const vf fx = x - to_float(ix), fy = y - to_float(iy);
     const vi x0 = ix & (kNoiseSize - 1), x1 = (ix + 1) & (kNoiseSize - 1);
