@@ -9,7 +9,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "fdv/core/lanes.h"
-#include "fdv/core/parallel_parts.h"
+#include "fdv/core/thread_pool.h"
 
 namespace fdv::internal {
 namespace {

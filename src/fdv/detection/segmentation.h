@@ -55,7 +55,7 @@ class Preprocessor {
   explicit Preprocessor(const DetectorOptions& o);
   /// S: CV_32F, zero outside `s_bounds`. Returns P (this object's buffer, valid until the next
   /// call), the size of S, zero outside nonzero_bounds().
-  /// `threads` (OpenCV's pool, at most 8): bands of rows run in parallel, with the same result.
+  /// `threads` (run_parts, at most 8): bands of rows run in parallel, with the same result.
   const cv::Mat& run(const cv::Mat& S, const cv::Rect& s_bounds, int threads = 1);
   /// Sizes the buffers for images of `size` (P = 0); run() does it when S's size differs.
   void allocate(cv::Size size);

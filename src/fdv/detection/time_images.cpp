@@ -7,7 +7,7 @@
 #include <limits>
 
 #include "fdv/core/lanes.h"
-#include "fdv/core/parallel_parts.h"
+#include "fdv/core/thread_pool.h"
 
 namespace fdv {
 namespace {

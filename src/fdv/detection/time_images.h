@@ -46,7 +46,7 @@ struct CompensatedEventsView {
   /// t_s is non-decreasing (the compensators keep the input's time order and report it): lets the
   /// detector binary-search time slices. False is always safe.
   bool time_sorted = false;
-  /// Threads (OpenCV's pool, fdv/core/parallel_parts.h, at most 8) for build_time_images (pixel
+  /// Threads (run_parts in fdv/core/thread_pool.h, at most 8) for build_time_images (pixel
   /// ranges), the segmentation and the pre-processing (bands of rows). Results are identical for
   /// any count.
   int threads = 1;

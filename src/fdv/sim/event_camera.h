@@ -23,12 +23,12 @@
 
 #include "fdv/core/calibration.h"
 #include "fdv/core/sensor_data.h"
+#include "fdv/core/thread_pool.h"
 #include "fdv/sim/event_labels.h"
 #include "fdv/sim/pixel_model.h"
 #include "fdv/sim/random.h"
 #include "fdv/sim/scenario_config.h"
 #include "fdv/sim/scene.h"
-#include "fdv/sim/thread_pool.h"
 #include "fdv/sim/trajectory.h"
 
 namespace fdv::sim {

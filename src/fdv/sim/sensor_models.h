@@ -17,10 +17,10 @@
 
 #include "fdv/core/calibration.h"
 #include "fdv/core/sensor_data.h"
+#include "fdv/core/thread_pool.h"
 #include "fdv/sim/random.h"
 #include "fdv/sim/scenario_config.h"
 #include "fdv/sim/scene.h"
-#include "fdv/sim/thread_pool.h"
 #include "fdv/sim/trajectory.h"
 
 namespace fdv::sim {

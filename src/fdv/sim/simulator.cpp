@@ -8,10 +8,10 @@
 #include <optional>
 
 #include "fdv/core/error.h"
+#include "fdv/core/thread_pool.h"
 #include "fdv/sim/event_camera.h"
 #include "fdv/sim/scene.h"
 #include "fdv/sim/sensor_models.h"
-#include "fdv/sim/thread_pool.h"
 
 namespace fdv::sim {
 namespace {
