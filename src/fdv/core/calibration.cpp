@@ -119,12 +119,7 @@ Calibration read_project_yaml(const YAML::Node& root, const std::string& file) {
 
 Calibration load_project_yaml(std::string_view text, const std::string& file) {
   const YAML::Node root = parse_config_yaml(text, file);
-  try {
-    return read_project_yaml(root, file);
-  } catch (const YAML::Exception& e) {
-    // A safety net: the readers above check node kinds before converting.
-    throw InputError(file, yaml_position(e.mark), yaml_reason(e));
-  }
+  return yaml_errors_as_input_errors(file, [&] { return read_project_yaml(root, file); });
 }
 
 // ---- OpenCV FileStorage layout, read without OpenCV (its parser hangs and overflows the stack

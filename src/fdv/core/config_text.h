@@ -5,6 +5,7 @@
 ///
 ///   const std::string text = read_config_file(path);           // size-checked
 ///   const YAML::Node root = parse_config_yaml(text, path);      // InputError on bad syntax
+///   return yaml_errors_as_input_errors(path, [&] { return read_options(root, path); });
 ///
 /// Nesting depth is bounded by the parsers themselves: yaml-cpp 0.7.0 throws DeepRecursion past
 /// 500 levels (about 498 nested `[`), tinyxml2 9.0.0 fails past 100 element levels; both
@@ -81,6 +82,17 @@ inline YAML::Node parse_config_yaml(std::string_view text, const std::string& na
     return YAML::Load(std::string(text));
   } catch (const YAML::DeepRecursion& e) {
     throw InputError(name, yaml_position(e.mark), "nested deeper than the YAML parser's limit");
+  } catch (const YAML::Exception& e) {
+    throw InputError(name, yaml_position(e.mark), yaml_reason(e));
+  }
+}
+
+/// read(), with a yaml-cpp error thrown by it turned into InputError(name, "line L, column C",
+/// reason): the safety net behind readers that check node kinds before converting.
+template <class Read>
+auto yaml_errors_as_input_errors(const std::string& name, const Read& read) -> decltype(read()) {
+  try {
+    return read();
   } catch (const YAML::Exception& e) {
     throw InputError(name, yaml_position(e.mark), yaml_reason(e));
   }

@@ -7,6 +7,7 @@
 #include <set>
 
 #include "fdv/core/error.h"
+#include "fdv/core/numeric.h"
 #include "fdv/core/time.h"
 #include "fdv/sim/geometry.h"
 
@@ -37,7 +38,7 @@ class Checker {
     if (!ok && !problem_) problem_ = std::make_pair(key, reason);
   }
   void positive(double v, const std::string& key) {
-    need(std::isfinite(v) && v > 0, key, fmt::format("must be a positive number, got {}", v));
+    need(positive_finite(v), key, fmt::format("must be a positive number, got {}", v));
   }
   void non_negative(double v, const std::string& key) {
     need(std::isfinite(v) && v >= 0, key, fmt::format("must be a number >= 0, got {}", v));

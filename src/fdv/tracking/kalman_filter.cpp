@@ -5,12 +5,9 @@
 #include <cmath>
 
 #include "fdv/core/error.h"
+#include "fdv/core/numeric.h"
 
 namespace fdv {
-
-namespace {
-bool positive_finite(double v) { return std::isfinite(v) && v > 0; }
-}  // namespace
 
 std::string ImageFilterOptions::validate() const {
   if (!positive_finite(measurement_sigma_px)) return "measurement_sigma_px must be > 0";

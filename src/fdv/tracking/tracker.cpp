@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "fdv/core/error.h"
+#include "fdv/core/numeric.h"
 
 namespace fdv {
 
@@ -22,7 +23,7 @@ struct Candidate {
 
 std::string TrackerOptions::validate() const {
   if (auto e = filter.validate(); !e.empty()) return "filter." + e;
-  if (!(gate_chi2 > 0) || !std::isfinite(gate_chi2)) return "gate_chi2 must be > 0";
+  if (!positive_finite(gate_chi2)) return "gate_chi2 must be > 0";
   if (!(gate_max_distance_px > 0)) return "gate_max_distance_px must be > 0";
   if (max_gap_ns <= 0) return "max_gap_ns must be > 0";
   if (tentative_max_gap_ns <= 0) return "tentative_max_gap_ns must be > 0";
