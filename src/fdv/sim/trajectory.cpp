@@ -174,6 +174,21 @@ BallTrajectory::BallTrajectory(const BallConfig& config, const VehicleTrajectory
   if (drag_k_ > 0) integrate(end_s);
 }
 
+namespace {
+
+/// One classical Runge-Kutta step of length h of dp/dt = v, dv/dt = acceleration(v).
+template <class Acceleration>
+void rk4_step(const Acceleration& acceleration, double h, Eigen::Vector3d& p, Eigen::Vector3d& v) {
+  const Eigen::Vector3d k1v = acceleration(v), k1p = v;
+  const Eigen::Vector3d k2v = acceleration(v + 0.5 * h * k1v), k2p = v + 0.5 * h * k1v;
+  const Eigen::Vector3d k3v = acceleration(v + 0.5 * h * k2v), k3p = v + 0.5 * h * k2v;
+  const Eigen::Vector3d k4v = acceleration(v + h * k3v), k4p = v + h * k3v;
+  p += h / 6 * (k1p + 2 * k2p + 2 * k3p + k4p);
+  v += h / 6 * (k1v + 2 * k2v + 2 * k3v + k4v);
+}
+
+}  // namespace
+
 Eigen::Vector3d BallTrajectory::acceleration(const Eigen::Vector3d& v) const {
   return gravity_ - drag_k_ * v.norm() * v;
 }
@@ -184,14 +199,8 @@ void BallTrajectory::fly(const Eigen::Vector3d& v0, double tau, Eigen::Vector3d&
   v = v0;
   const int n = std::max(1, static_cast<int>(std::ceil(tau / node_dt_)));
   const double h = tau / n;
-  for (int i = 0; i < n; ++i) {
-    const Eigen::Vector3d k1v = acceleration(v), k1p = v;
-    const Eigen::Vector3d k2v = acceleration(v + 0.5 * h * k1v), k2p = v + 0.5 * h * k1v;
-    const Eigen::Vector3d k3v = acceleration(v + 0.5 * h * k2v), k3p = v + 0.5 * h * k2v;
-    const Eigen::Vector3d k4v = acceleration(v + h * k3v), k4p = v + h * k3v;
-    p += h / 6 * (k1p + 2 * k2p + 2 * k3p + k4p);
-    v += h / 6 * (k1v + 2 * k2v + 2 * k3v + k4v);
-  }
+  for (int i = 0; i < n; ++i)
+    rk4_step([this](const Eigen::Vector3d& u) { return acceleration(u); }, h, p, v);
 }
 
 void BallTrajectory::integrate(double end_s) {
@@ -203,12 +212,7 @@ void BallTrajectory::integrate(double end_s) {
   node_p_[0] = p, node_v_[0] = v;
   const double h = node_dt_;
   for (int i = 0; i < n; ++i) {
-    const Eigen::Vector3d k1v = acceleration(v), k1p = v;
-    const Eigen::Vector3d k2v = acceleration(v + 0.5 * h * k1v), k2p = v + 0.5 * h * k1v;
-    const Eigen::Vector3d k3v = acceleration(v + 0.5 * h * k2v), k3p = v + 0.5 * h * k2v;
-    const Eigen::Vector3d k4v = acceleration(v + h * k3v), k4p = v + h * k3v;
-    p += h / 6 * (k1p + 2 * k2p + 2 * k3p + k4p);
-    v += h / 6 * (k1v + 2 * k2v + 2 * k3v + k4v);
+    rk4_step([this](const Eigen::Vector3d& u) { return acceleration(u); }, h, p, v);
     node_p_[i + 1] = p, node_v_[i + 1] = v;
   }
 }
