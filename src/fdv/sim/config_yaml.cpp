@@ -1,19 +1,24 @@
 // YAML loading and dumping of ScenarioConfig. Every field is named once, in describe(); the
-// loader and the dumper are two visitors over that description, so they cannot disagree.
-#include <fmt/format.h>
+// loader and the dumper are the shared field-list visitors (fdv/core/options_yaml.h), so they
+// cannot disagree.
 #include <yaml-cpp/yaml.h>
 
-#include <cmath>
-#include <fstream>
-#include <set>
-#include <sstream>
+#include <array>
 
 #include "fdv/core/config_text.h"
 #include "fdv/core/error.h"
+#include "fdv/core/options_yaml.h"
 #include "fdv/sim/scenario_config.h"
 
 namespace fdv::sim {
-namespace {
+
+// The text forms of MotionKind for the field-list visitors (to_string is in scenario_config.h).
+constexpr std::array<MotionKind, 4> all_values(MotionKind) {
+  return {MotionKind::kHover, MotionKind::kForward, MotionKind::kSwing, MotionKind::kConstant};
+}
+
+// The describe() functions are in fdv::sim, not an anonymous namespace: the visitors find them
+// by argument-dependent lookup.
 
 template <class V>
 void describe(V& v, EventCameraConfig& c);
@@ -35,212 +40,6 @@ template <class V>
 void describe(V& v, BallConfig& c);
 template <class V>
 void describe(V& v, ScenarioConfig& c);
-
-// ------------------------------------------------------------------------------------------ load
-
-/// Longest list (balls, panels) read item by item: validate() allows at most 64 panels and
-/// 8 balls; a longer list is refused before its items are built.
-constexpr std::size_t kMaxListItems = 64;
-
-class Loader {
- public:
-  Loader(const YAML::Node& node, const std::string& file, std::string prefix)
-      : node_(node), file_(file), prefix_(std::move(prefix)) {}
-
-  template <class T>
-  void operator()(const char* key, T& value) {
-    known_.insert(key);
-    const YAML::Node n = node_[key];
-    if (!n) return;
-    guarded(path(key), [&] { read(n, value, path(key)); });
-  }
-
-  template <class T>
-  void section(const char* key, T& sub) {
-    known_.insert(key);
-    const YAML::Node n = node_[key];
-    if (!n) return;
-    if (!n.IsMap()) fail(path(key), "expected a mapping of keys");
-    Loader inner(n, file_, path(key) + ".");
-    guarded(path(key), [&] {
-      describe(inner, sub);
-      inner.check_unknown();
-    });
-  }
-
-  template <class T>
-  void list(const char* key, std::vector<T>& items) {
-    known_.insert(key);
-    const YAML::Node n = node_[key];
-    if (!n) return;
-    if (!n.IsSequence()) fail(path(key), "expected a list");
-    if (n.size() > kMaxListItems)
-      fail(path(key), fmt::format("{} items, at most {} are read", n.size(), kMaxListItems));
-    std::vector<T> out;
-    for (std::size_t i = 0; i < n.size(); ++i) {
-      const std::string item_key = fmt::format("{}[{}]", path(key), i);
-      if (!n[i].IsMap()) fail(item_key, "expected a mapping of keys");
-      T item = i < items.size() ? items[i] : T{};
-      Loader inner(n[i], file_, item_key + ".");
-      guarded(item_key, [&] {
-        describe(inner, item);
-        inner.check_unknown();
-      });
-      out.push_back(std::move(item));
-    }
-    items = std::move(out);
-  }
-
-  void check_unknown() const {
-    if (!node_.IsMap()) return;
-    for (const auto& kv : node_) {
-      if (!kv.first.IsScalar())
-        fail(path("?"), "a key must be a plain name, not a list or map" + at(kv.first.Mark()));
-      const std::string key = kv.first.Scalar();
-      if (known_.count(key)) continue;
-      std::string list;
-      for (const auto& k : known_) list += (list.empty() ? "" : ", ") + k;
-      fail(path(key), "unknown key (known here: " + list + ")");
-    }
-  }
-
- private:
-  std::string path(const std::string& key) const { return prefix_ + key; }
-  [[noreturn]] void fail(const std::string& key, const std::string& reason) const {
-    throw InputError(file_, "key " + key, reason);
-  }
-  static std::string at(const YAML::Mark& m) {
-    return m.is_null() ? "" : " (line " + std::to_string(m.line + 1) + ")";
-  }
-  /// Runs `f`; a yaml-cpp exception in it (a safety net: the readers check node kinds before
-  /// converting) becomes InputError naming `key`.
-  template <class F>
-  void guarded(const std::string& key, F&& f) const {
-    try {
-      f();
-    } catch (const YAML::Exception& e) {
-      fail(key, yaml_reason(e) + at(e.mark));
-    }
-  }
-
-  double number(const YAML::Node& n, const std::string& key) const {
-    if (!n.IsScalar()) fail(key, "expected a number");
-    double v;
-    try {
-      v = n.as<double>();
-    } catch (const YAML::Exception&) {
-      fail(key, "'" + n.Scalar() + "' is not a number");
-    }
-    if (!std::isfinite(v)) fail(key, "must be finite");
-    return v;
-  }
-  void read(const YAML::Node& n, double& v, const std::string& key) const { v = number(n, key); }
-  void read(const YAML::Node& n, int& v, const std::string& key) const {
-    const double x = number(n, key);
-    if (x != std::floor(x) || std::abs(x) > 2e9)
-      fail(key, "'" + n.Scalar() + "' is not an integer");
-    v = static_cast<int>(x);
-  }
-  void read(const YAML::Node& n, std::uint64_t& v, const std::string& key) const {
-    if (!n.IsScalar()) fail(key, "expected a non-negative integer");
-    try {
-      v = n.as<std::uint64_t>();
-    } catch (const YAML::Exception&) {
-      fail(key, "'" + n.Scalar() + "' is not a non-negative integer");
-    }
-  }
-  void read(const YAML::Node& n, bool& v, const std::string& key) const {
-    if (!n.IsScalar()) fail(key, "expected true or false");
-    try {
-      v = n.as<bool>();
-    } catch (const YAML::Exception&) {
-      fail(key, "'" + n.Scalar() + "' is not true or false");
-    }
-  }
-  void read(const YAML::Node& n, std::string& v, const std::string& key) const {
-    if (!n.IsScalar()) fail(key, "expected a string");
-    v = n.Scalar();
-  }
-  template <int N>
-  void read_fixed(const YAML::Node& n, double* out, const std::string& key) const {
-    if (!n.IsSequence() || n.size() != N)
-      fail(key, fmt::format("expected a list of {} numbers", N));
-    for (int i = 0; i < N; ++i) out[i] = number(n[i], fmt::format("{}[{}]", key, i));
-  }
-  void read(const YAML::Node& n, Eigen::Vector3d& v, const std::string& key) const {
-    read_fixed<3>(n, v.data(), key);
-  }
-  void read(const YAML::Node& n, Eigen::Vector2d& v, const std::string& key) const {
-    read_fixed<2>(n, v.data(), key);
-  }
-  void read(const YAML::Node& n, std::array<double, 5>& v, const std::string& key) const {
-    read_fixed<5>(n, v.data(), key);
-  }
-  void read(const YAML::Node& n, MotionKind& v, const std::string& key) const {
-    std::string s;
-    read(n, s, key);
-    for (auto k :
-         {MotionKind::kHover, MotionKind::kForward, MotionKind::kSwing, MotionKind::kConstant})
-      if (s == to_string(k)) {
-        v = k;
-        return;
-      }
-    fail(key, "'" + s + "' is not one of hover, forward, swing, constant");
-  }
-
-  const YAML::Node node_;
-  const std::string& file_;
-  std::string prefix_;
-  std::set<std::string> known_;
-};
-
-// ------------------------------------------------------------------------------------------ dump
-
-class Dumper {
- public:
-  explicit Dumper(YAML::Emitter& out) : out_(out) {}
-
-  template <class T>
-  void operator()(const char* key, T& value) {
-    out_ << YAML::Key << key << YAML::Value;
-    write(value);
-  }
-  template <class T>
-  void section(const char* key, T& sub) {
-    out_ << YAML::Key << key << YAML::Value << YAML::BeginMap;
-    describe(*this, sub);
-    out_ << YAML::EndMap;
-  }
-  template <class T>
-  void list(const char* key, std::vector<T>& items) {
-    out_ << YAML::Key << key << YAML::Value << YAML::BeginSeq;
-    for (auto& item : items) {
-      out_ << YAML::BeginMap;
-      describe(*this, item);
-      out_ << YAML::EndMap;
-    }
-    out_ << YAML::EndSeq;
-  }
-
- private:
-  // Shortest text that reads back to the same double.
-  void write(double v) { out_ << fmt::format("{}", v); }
-  void write(int v) { out_ << v; }
-  void write(std::uint64_t v) { out_ << v; }
-  void write(bool v) { out_ << v; }
-  void write(const std::string& v) { out_ << v; }
-  void write(MotionKind v) { out_ << to_string(v); }
-  void write_list(const double* v, int n) {
-    out_ << YAML::Flow << YAML::BeginSeq;
-    for (int i = 0; i < n; ++i) out_ << fmt::format("{}", v[i]);
-    out_ << YAML::EndSeq;
-  }
-  void write(const Eigen::Vector3d& v) { write_list(v.data(), 3); }
-  void write(const Eigen::Vector2d& v) { write_list(v.data(), 2); }
-  void write(const std::array<double, 5>& v) { write_list(v.data(), 5); }
-
-  YAML::Emitter& out_;
-};
 
 // ------------------------------------------------------------------------------------ description
 
@@ -411,18 +210,14 @@ void describe(V& v, ScenarioConfig& c) {
   v.list("balls", c.balls);
 }
 
-}  // namespace
-
 void apply_scenario_yaml(ScenarioConfig& config, const YAML::Node& node, const std::string& file) {
   if (!node || node.IsNull()) return;
   if (!node.IsMap()) throw InputError(file, "", "a scenario file must be a mapping of keys");
-  Loader loader(node, file, "");
-  try {
+  YamlLoader loader(node, file);
+  yaml_errors_as_input_errors(file, [&] {
     describe(loader, config);
     loader.check_unknown();
-  } catch (const YAML::Exception& e) {
-    throw InputError(file, yaml_position(e.mark), yaml_reason(e));
-  }
+  });
 }
 
 YAML::Node parse_scenario_yaml(std::string_view text, const std::string& file) {
@@ -443,14 +238,6 @@ void apply_scenario_yaml(ScenarioConfig& config, const std::string& path) {
   apply_scenario_yaml_text(config, read_config_file(path), path);
 }
 
-std::string to_yaml(const ScenarioConfig& config) {
-  ScenarioConfig copy = config;
-  YAML::Emitter out;
-  out << YAML::BeginMap;
-  Dumper dumper(out);
-  describe(dumper, copy);
-  out << YAML::EndMap;
-  return out.c_str();
-}
+std::string to_yaml(const ScenarioConfig& config) { return options_to_yaml(config); }
 
 }  // namespace fdv::sim
