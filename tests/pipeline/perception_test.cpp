@@ -380,5 +380,48 @@ TEST(Perception, TheTrajectoryEstimateKeepsAHeadOnBallInOneTrack) {
   EXPECT_GE(longest(with), longest(without) + 4);
 }
 
+TEST(Perception, CountersOfASmallSyntheticRunMatchAHandCount) {
+  // 64x48 ideal camera, no IMU: the requested rotation falls back to none in every window.
+  Calibration calib;
+  calib.event_camera = {.width = 64, .height = 48, .fx = 60, .fy = 60, .cx = 32, .cy = 24, .distortion = {}};
+  PerceptionOptions options;
+  options.compensation.method = "rotation";
+  options.windows.max_events_per_window = 100;  // window 0's 150 events: every 2nd kept
+  options.windows.max_empty_windows = 2;
+  options.detection.min_window_events = 1000;  // every window "too few events"
+  options.estimate_trajectories = false;
+  Collected out;
+  Perception p(calib, options, collect(out));
+  std::vector<Event> events;
+  const TimeNs w = 25 * kNsPerMs;
+  for (int i = 0; i < 150; ++i) events.push_back({i * 100 * kNsPerUs, 10, 10, true});      // window 0
+  for (int i = 0; i < 20; ++i) events.push_back({w + i * kNsPerMs, 20, 20, false});        // window 1
+  for (int i = 0; i < 5; ++i) events.push_back({w + (20 + i) * kNsPerMs, 70, 20, true});  // x outside the sensor
+  events.push_back({8 * w + kNsPerMs, 30, 30, true});  // windows 2, 3 empty, 4-7 skipped, window 8
+  p.push_events(events);
+  p.finish();
+
+  const PerceptionCounters& c = p.counters();
+  EXPECT_EQ(c.events, 176u);
+  EXPECT_EQ(c.windows, 5u);
+  EXPECT_EQ(c.windows_skipped, 4u);
+  EXPECT_EQ(c.events_in_windows, 75u + 25u + 1u);
+  EXPECT_EQ(c.events_dropped.overload, 75u);
+  EXPECT_EQ(c.events_dropped.outside_sensor, 5u);
+  EXPECT_EQ(c.events_dropped.total(), 80u);
+  EXPECT_EQ(c.events, c.events_in_windows + 75u);  // every event pushed is in a window or decimated
+  EXPECT_EQ(c.windows_flagged.imu_missing, 5u);
+  EXPECT_EQ(c.windows_flagged.imu_gap + c.windows_flagged.odometry_missing + c.windows_flagged.depth_missing +
+                c.windows_flagged.depth_stale + c.windows_flagged.depth_wrong_size,
+            0u);
+  EXPECT_EQ(c.windows_by_status, (std::map<DetectionStatus, std::uint64_t>{{DetectionStatus::kTooFewEvents, 5}}));
+  EXPECT_EQ(c.windows_by_method, (std::map<CompensationMethod, std::uint64_t>{{CompensationMethod::kNone, 5}}));
+  EXPECT_EQ(c.detections, 0u);
+  // The callbacks saw the same windows.
+  ASSERT_EQ(out.results.size(), 5u);
+  EXPECT_EQ(out.results[0].decimated, 75u);
+  EXPECT_EQ(out.results.back().skipped_before, 4u);
+}
+
 }  // namespace
 }  // namespace fdv

@@ -46,6 +46,27 @@ std::string PerceptionOptions::validate() const {
   return {};
 }
 
+void PerceptionCounters::count_window(const WindowResult& w) {
+  ++windows;
+  windows_skipped += w.skipped_before;
+  if (w.detection) ++detections;
+  events_in_windows += w.events;
+  const CompensationReport& r = w.compensation;
+  events_dropped.overload += w.decimated + r.dropped_burst;
+  events_dropped.outside_window += r.dropped_outside_window;
+  events_dropped.outside_sensor += r.dropped_outside_sensor;
+  events_dropped.no_inverse += r.dropped_no_inverse;
+  events_dropped.left_image += r.dropped_left_image;
+  windows_flagged.imu_missing += r.imu_missing;
+  windows_flagged.imu_gap += r.imu_gap;
+  windows_flagged.odometry_missing += r.odometry_missing;
+  windows_flagged.depth_missing += r.depth_missing;
+  windows_flagged.depth_stale += r.depth_stale;
+  windows_flagged.depth_wrong_size += r.depth_wrong_size;
+  ++windows_by_status[w.status];
+  ++windows_by_method[r.used];
+}
+
 Perception::Perception(const Calibration& calibration, PerceptionOptions options,
                        PerceptionCallbacks callbacks)
     : calibration_(calibration),
@@ -212,8 +233,6 @@ void Perception::process_window(PendingWindow& w) {
   result.events = w.events.size();
   result.decimated = w.decimated;
   result.skipped_before = w.skipped_before;
-  ++counters_.windows;
-  counters_.windows_skipped += w.skipped_before;
 
   CompensationInput in;
   in.events = w.events;
@@ -257,7 +276,6 @@ void Perception::process_window(PendingWindow& w) {
   const auto tracking_start = Clock::now();
   std::vector<TrackerDetection> inputs;
   if (det.detection) {
-    ++counters_.detections;
     const Detection2D& d = *det.detection;
     inputs.push_back({d.t_ns, d.center_raw, d.center_normalized,
                       Eigen::Vector2d(d.box_raw.width(), d.box_raw.height()), d.events});
@@ -318,6 +336,7 @@ void Perception::process_window(PendingWindow& w) {
     for (int id : to_solve) estimate(id, w.t_end);
   result.timings.total_ms = ms_since(start);
   result.detector = &detector_;
+  counters_.count_window(result);
   if (callbacks_.on_window) callbacks_.on_window(result);
 }
 

@@ -136,14 +136,36 @@ struct PerceptionCallbacks {
   std::function<void(const std::string&)> on_warning;
 };
 
-/// Counts of what the pipeline received, used and refused.
+/// Counts of what the pipeline received, used and refused (`fdv run` writes them into
+/// summary.json's "counts"). The per-window counts are taken as each window's result is complete,
+/// just before on_window.
 struct PerceptionCounters {
-  std::uint64_t events = 0, windows = 0, detections = 0;
+  /// Events pushed. Every one lands in a window: once finish() has run, events =
+  /// events_in_windows + the windower's decimated ones.
+  std::uint64_t events = 0;
+  std::uint64_t events_in_windows = 0;  ///< WindowResult::events summed (after the windower's decimation)
+  std::uint64_t windows = 0, detections = 0;
   std::uint64_t windows_skipped = 0;  ///< empty windows of long gaps not emitted (EventWindowerOptions)
+  /// Events dropped in the windows, by reason (CompensationReport's dropped_*).
+  struct DroppedEvents {
+    /// The windower's overload policy (WindowResult::decimated) and the compensation's burst cap.
+    std::uint64_t overload = 0;
+    std::uint64_t outside_window = 0, outside_sensor = 0, no_inverse = 0, left_image = 0;
+    std::uint64_t total() const { return overload + outside_window + outside_sensor + no_inverse + left_image; }
+  } events_dropped;
+  /// Windows whose compensation raised each fallback flag (CompensationReport).
+  struct FallbackFlags {
+    std::uint64_t imu_missing = 0, imu_gap = 0, odometry_missing = 0;
+    std::uint64_t depth_missing = 0, depth_stale = 0, depth_wrong_size = 0;
+  } windows_flagged;
+  std::map<DetectionStatus, std::uint64_t> windows_by_status;    ///< only statuses that occurred
+  std::map<CompensationMethod, std::uint64_t> windows_by_method;  ///< compensation used, as above
   std::uint64_t imu = 0, imu_out_of_order = 0;
   std::uint64_t odometry = 0, odometry_out_of_order = 0;
   std::uint64_t depth_frames = 0, depth_rejected_registration = 0, depth_observations = 0;
   std::uint64_t estimates = 0;
+  /// Counts one processed window (Perception does, before on_window).
+  void count_window(const WindowResult& w);
 };
 
 class Perception {
