@@ -5,14 +5,13 @@
 #include <spdlog/spdlog.h>
 
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
 
 #include "apps/commands.h"
 #include "apps/experiment.h"
 #include "fdv/estimation/collision.h"
-#include "fdv/eval/run_results.h"
+#include "fdv/results/reader.h"
 #include "fdv/sim/dataset_cache.h"
 #include "fdv/sim/scenario_config.h"
 #include "fdv/tables/experiment.h"
@@ -25,14 +24,6 @@ struct DemoArgs {
   std::string scenario = "hover_headon";
   std::uint64_t seed = 1;
 };
-
-std::vector<nlohmann::json> read_lines(const std::string& path) {
-  std::vector<nlohmann::json> out;
-  std::ifstream in(path);
-  std::string line;
-  while (std::getline(in, line)) out.push_back(nlohmann::json::parse(line));
-  return out;
-}
 
 void demo(const DemoArgs& args) {
   namespace fs = std::filesystem;
@@ -91,15 +82,15 @@ void demo(const DemoArgs& args) {
             *timing.first_error_m, *timing.final_error_m);
     }
   }
-  const auto predictions = read_lines(results + "/predictions.jsonl");
+  const std::vector<PredictionRow> predictions = read_predictions(results);
   const double safety_radius_m = PredictionOptions{}.safety_radius_m;
   if (!predictions.empty()) {
-    const auto& p = predictions.back();
+    const PredictionRow& p = predictions.back();
     std::cout << fmt::format("  predicted miss distance {:.3f} m at t = {:.3f} s (last prediction, made at t = {:.3f} s)\n",
-                             p["miss_distance"].get<double>(), p["closest_t"].get<double>(), p["t"].get<double>());
-    if (p.contains("time_to_contact"))
+                             p.miss_distance_m, p.closest_t_s, p.t_s);
+    if (p.time_to_contact_s)
       std::cout << fmt::format("  predicted contact with the {} m safety sphere at t = {:.3f} s\n", safety_radius_m,
-                               p["t"].get<double>() + p["time_to_contact"].get<double>());
+                               p.t_s + *p.time_to_contact_s);
     else
       std::cout << fmt::format("  predicted to pass outside the {} m safety sphere\n", safety_radius_m);
   }

@@ -11,22 +11,12 @@
 #include "apps/commands.h"
 #include "apps/experiment.h"
 #include "fdv/core/error.h"
-#include "fdv/eval/run_results.h"
 #include "fdv/eval/statistics.h"
+#include "fdv/results/reader.h"
 #include "fdv/tables/experiment.h"
 
 namespace fdv::cli {
 namespace {
-
-nlohmann::json read_json_file(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path, "", "cannot open");
-  try {
-    return nlohmann::json::parse(in);
-  } catch (const nlohmann::json::exception& e) {
-    throw InputError(path, "", e.what());
-  }
-}
 
 const char* mode_name(EstimatorMode m) { return m == EstimatorMode::kFusion ? "fusion" : "mono"; }
 
@@ -44,7 +34,7 @@ nlohmann::json relative_contrast_of(const DatasetTruth& truth, const std::string
 
 nlohmann::json evaluate(const std::string& results, const std::string& dataset) {
   const DatasetTruth truth = load_dataset_truth(dataset);
-  const nlohmann::json summary = read_json_file(results + "/summary.json");
+  const RunSummary summary = read_summary(results);
   nlohmann::json metrics;
   metrics["results"] = results;
   metrics["truth"] = dataset;
@@ -58,7 +48,7 @@ nlohmann::json evaluate(const std::string& results, const std::string& dataset) 
     if (!csv) throw InputError(results + "/detection_windows.csv", "", "cannot write");
   }
   metrics["relative_contrast"] =
-      relative_contrast_of(truth, summary.value("method", "rotation_translation"));
+      relative_contrast_of(truth, summary.method);
 
   // APE of each (track, method)'s final converged estimate over its observed interval (Table II).
   const std::vector<EstimateRecord> estimates = read_estimates(results);

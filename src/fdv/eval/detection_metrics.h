@@ -8,7 +8,7 @@
 ///   m.recall(), summarize(m.center_errors_px).median, m.false_per_window()
 ///
 /// The windows come from a run in memory (run_experiment) or from a results folder
-/// (read_detections in fdv/eval/run_results.h).
+/// (read_detections in fdv/results/reader.h).
 #include <nlohmann/json_fwd.hpp>
 #include <optional>
 #include <ostream>

@@ -1,6 +1,6 @@
 // Reading a `fdv run` results folder back: the fields evaluation uses, and errors with file and
 // line.
-#include "fdv/eval/run_results.h"
+#include "fdv/results/reader.h"
 
 #include <gtest/gtest.h>
 

@@ -1,0 +1,44 @@
+#pragma once
+/// Reads a `fdv run` results folder (schema.h) back into its rows, and into the records
+/// evaluation scores (fdv/eval: WindowDetections, EstimateRecord).
+///
+///   const std::vector<WindowRow> windows = read_windows(dir);
+///   const RunSummary summary = read_summary(dir);
+///   DetectionMetrics m = detection_metrics(truth, read_detections(dir));
+///
+/// Throws InputError naming the file and line ("detections.jsonl:line 7") for a malformed line,
+/// and naming the file when a file that must exist is missing.
+#include <string>
+#include <vector>
+
+#include "fdv/eval/detection_metrics.h"
+#include "fdv/eval/estimate_metrics.h"
+#include "fdv/results/schema.h"
+
+namespace fdv {
+
+/// RESULTS/detections.jsonl, one row per window. Throws InputError when the file is missing.
+std::vector<WindowRow> read_windows(const std::string& results_dir);
+/// RESULTS/depth.jsonl (empty when absent).
+std::vector<DepthRow> read_depth(const std::string& results_dir);
+/// RESULTS/trajectories.jsonl, every solve (empty when absent: a run without 3D estimation). A
+/// method other than "fusion" or "mono" is an error.
+std::vector<TrajectoryRow> read_trajectories(const std::string& results_dir);
+/// RESULTS/predictions.jsonl (empty when absent).
+std::vector<PredictionRow> read_predictions(const std::string& results_dir);
+/// A TUM trajectory file (track_ID_{fusion,mono}.tum). Throws InputError when it is missing.
+std::vector<TumPose> read_tum(const std::string& path);
+/// RESULTS/summary.json. Throws InputError when it is missing or malformed.
+RunSummary read_summary(const std::string& results_dir);
+
+/// The windows as detection metrics take them (times in ns).
+std::vector<WindowDetections> window_detections(const std::vector<WindowRow>& rows);
+/// The converged solves as estimate metrics take them, in file order.
+std::vector<EstimateRecord> estimate_records(const std::vector<TrajectoryRow>& rows);
+
+/// window_detections(read_windows(results_dir)).
+std::vector<WindowDetections> read_detections(const std::string& results_dir);
+/// estimate_records(read_trajectories(results_dir)).
+std::vector<EstimateRecord> read_estimates(const std::string& results_dir);
+
+}  // namespace fdv

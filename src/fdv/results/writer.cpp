@@ -1,0 +1,72 @@
+#include "fdv/results/writer.h"
+
+#include <fmt/format.h>
+
+#include "fdv/core/error.h"
+
+namespace fdv {
+
+ResultsWriter::ResultsWriter(const std::filesystem::path& dir) : dir_(dir) {
+  std::filesystem::create_directories(dir);
+  for (auto [name, stream] : {std::pair{kDetectionsFile, &detections_}, {kDepthFile, &depth_},
+                              {kTrajectoriesFile, &trajectories_}, {kPredictionsFile, &predictions_}}) {
+    stream->open(dir / name);
+    if (!*stream) throw InputError((dir / name).string(), "", "cannot create output file");
+  }
+}
+
+void ResultsWriter::write(const WindowRow& row) { detections_ << nlohmann::json(row).dump() << "\n"; }
+void ResultsWriter::write(const DepthRow& row) { depth_ << nlohmann::json(row).dump() << "\n"; }
+void ResultsWriter::write(const TrajectoryRow& row) { trajectories_ << nlohmann::json(row).dump() << "\n"; }
+void ResultsWriter::write(const PredictionRow& row) { predictions_ << nlohmann::json(row).dump() << "\n"; }
+
+void ResultsWriter::window(const WindowResult& w) {
+  write(window_row(w));
+  const auto& t = w.timings;
+  timing_["compensation"].push_back(t.compensation_ms);
+  timing_["time_images"].push_back(t.detection.time_images_ms);
+  timing_["segmentation"].push_back(t.detection.segmentation_ms);
+  timing_["preprocess"].push_back(t.detection.preprocess_ms);
+  timing_["gaussian_fit"].push_back(t.detection.fit_ms);
+  // Stages that run only in some windows: timed where they ran ("count" says in how many).
+  if (t.detection.retrieval_ms > 0) timing_["region_retrieval"].push_back(t.detection.retrieval_ms);
+  if (t.detection.count_cue_ms > 0) timing_["count_cue"].push_back(t.detection.count_cue_ms);
+  timing_["detection_total"].push_back(t.detection.total_ms);
+  timing_["tracking"].push_back(t.tracking_ms);
+  timing_["window_total"].push_back(t.total_ms);
+}
+
+void ResultsWriter::depth(const DepthResult& d) {
+  write(depth_row(d));
+  timing_["depth_segmentation"].push_back(d.ms);
+}
+
+void ResultsWriter::estimate(const EstimateResult& e) {
+  write(trajectory_row(e));
+  const bool fusion = e.mode == EstimatorMode::kFusion;
+  timing_[fusion ? "estimation_fusion" : "estimation_mono"].push_back(e.ms);
+  if (e.estimate->usable) (fusion ? final_fusion_ : final_mono_)[e.track_id] = *e.estimate;
+}
+
+void ResultsWriter::prediction(const PredictionResult& p) { write(prediction_row(p)); }
+
+std::map<std::string, Summary> ResultsWriter::timing_ms() const {
+  std::map<std::string, Summary> out;
+  for (const auto& [stage, values] : timing_) out[stage] = summarize(values);
+  return out;
+}
+
+void ResultsWriter::finish(const RunSummary& summary) {
+  for (std::ofstream* f : {&detections_, &depth_, &trajectories_, &predictions_}) f->close();
+  for (const auto& [name, finals] : {std::pair{"fusion", &final_fusion_}, {"mono", &final_mono_}})
+    for (const auto& [id, est] : *finals) {
+      std::ofstream f(dir_ / fmt::format("track_{}_{}.tum", id, name));
+      for (TimeNs t = est.t_first; t <= est.t_last; t += 5 * kNsPerMs) {
+        const Eigen::Vector3d p = est.trajectory.position(t);
+        f << fmt::format("{:.9f} {:.6f} {:.6f} {:.6f} 0 0 0 1\n", to_seconds(t), p.x(), p.y(), p.z());
+      }
+    }
+  std::ofstream(dir_ / kSummaryFile) << nlohmann::json(summary).dump(2) << "\n";
+}
+
+}  // namespace fdv
