@@ -23,7 +23,7 @@ const char* mode_name(EstimatorMode m) { return m == EstimatorMode::kFusion ? "f
 /// η of the run's compensation method, re-run in memory (the results folder has no images).
 nlohmann::json relative_contrast_of(const DatasetTruth& truth, const std::string& method) {
   ExperimentOptions options;
-  options.perception.compensation.method = method;
+  options.perception.compensation.method = *parse_compensation_method(method);
   options.relative_contrast = true;
   const Summary s = summarize(run_experiment(truth, options).relative_contrast);
   return {

@@ -14,7 +14,8 @@ struct RunArgs {
   std::string input, calib, config, method, out;
   bool visualize = false;
   bool assume_static = false;
-  std::optional<int> threads;  ///< overrides compensation.threads
+  std::optional<int> threads;  ///< overrides the options' threads
+  bool print_config = false;   ///< print the effective options as YAML and exit
   ReaderOptions reader;
 };
 /// `fdv run`: the pipeline over a recording, results into args.out (README, docs/OUTPUTS.md).

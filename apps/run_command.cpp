@@ -12,7 +12,8 @@
 #include "apps/experiment.h"
 #include "apps/reader_flags.h"
 #include "fdv/core/error.h"
-#include "fdv/io/config/backend_config.h"
+#include "fdv/core/field_list.h"
+#include "fdv/pipeline/options_yaml.h"
 #include "fdv/pipeline/perception.h"
 #include "fdv/pipeline/replay.h"
 #include "fdv/results/writer.h"
@@ -36,12 +37,11 @@ PerceptionOptions load_options(const RunArgs& args) {
   if (!args.config.empty()) o = load_perception_options_file(args.config);
   // Command-line flags override the file.
   if (!args.method.empty()) {
-    if (!parse_compensation_method(args.method))
-      throw ConfigError("unknown --method '" + args.method +
-                        "' (none, rotation, rotation_translation, contrast_max)");
-    o.compensation.method = args.method;
+    const auto method = parse_compensation_method(args.method);
+    if (!method) throw ConfigError("unknown --method '" + args.method + "' (" + enum_choices(CompensationMethod{}) + ")");
+    o.compensation.method = *method;
   }
-  if (args.threads) o.compensation.threads = *args.threads;
+  if (args.threads) o.threads = *args.threads;
   o.assume_static_vehicle = args.assume_static;
   return o;
 }
@@ -89,6 +89,11 @@ std::vector<std::string> after_run_warnings(const PerceptionCounters& c, bool co
 }  // namespace
 
 void run_recording(const RunArgs& args) {
+  if (args.print_config) {
+    fmt::print("{}", to_yaml(load_options(args)));
+    return;
+  }
+  if (args.input.empty() || args.out.empty()) throw CLI::RequiredError("run needs INPUT and --out");
   auto reader = open_recording(args.input, args.reader);
   const RecordingInfo info = reader->info();
   std::vector<std::string> warnings;
@@ -123,25 +128,25 @@ void run_recording(const RunArgs& args) {
     return std::find(info.streams.begin(), info.streams.end(), k) != info.streams.end();
   };
   // The best method the available sensors allow, and say which.
-  const auto requested = *parse_compensation_method(options.compensation.method);
+  const CompensationMethod requested = options.compensation.method;
   if (pixel_only) {
     // No 3D estimate, even for a vehicle declared static.
     options.estimate_trajectories = false;
     if (args.assume_static) warn("--assume-static ignored: no calibration, so no 3D estimation");
   }
   if (pixel_only && requested != CompensationMethod::kNone) {
-    options.compensation.method = "none";
+    options.compensation.method = CompensationMethod::kNone;
   } else if (!declares(StreamKind::kImu) &&
              (requested == CompensationMethod::kRotation || requested == CompensationMethod::kRotationTranslation)) {
     warn(fmt::format("no IMU in the input: '{}' compensation impossible, using 'none'", to_string(requested)));
-    options.compensation.method = "none";
+    options.compensation.method = CompensationMethod::kNone;
   } else if (requested == CompensationMethod::kRotationTranslation &&
              (!declares(StreamKind::kDepth) || !declares(StreamKind::kOdometry) || !calib.depth_camera)) {
     warn("no depth frames, depth camera or odometry: translational compensation impossible, using 'rotation'");
-    options.compensation.method = "rotation";
+    options.compensation.method = CompensationMethod::kRotation;
   }
   spdlog::info("{} ({}, {}x{}), calibration {}, compensation '{}'", args.input, info.format, info.width,
-               info.height, calib_source, options.compensation.method);
+               info.height, calib_source, to_string(options.compensation.method));
 
   ResultsWriter out(args.out);
   const fs::path png_dir = fs::path(args.out) / "windows";
@@ -157,7 +162,7 @@ void run_recording(const RunArgs& args) {
   callbacks.on_warning = warn;
   ReadReport reader_report;
   const PerceptionCounters c = replay(std::move(reader), calib, options, callbacks, &reader_report);
-  for (const std::string& w : after_run_warnings(c, options.compensation.method != "none")) warn(w);
+  for (const std::string& w : after_run_warnings(c, options.compensation.method != CompensationMethod::kNone)) warn(w);
   for (const auto& [reason, e] : reader_report.dropped())
     warn(fmt::format("the reader dropped {} record(s): {} (first at {})", e.count, reason, e.first_where));
 
@@ -168,12 +173,13 @@ void run_recording(const RunArgs& args) {
   summary.height = info.height;
   summary.calibration = calib_source;
   summary.method_requested = to_string(requested);
-  summary.method = options.compensation.method;
-  summary.threads = options.compensation.threads;
+  summary.method = to_string(options.compensation.method);
+  summary.threads = options.threads;
   summary.reader_report = reader_report.to_json();
   summary.counts = c;
   summary.timing_ms = out.timing_ms();
   summary.warnings = warnings;
+  summary.options = to_json(options);
   out.finish(summary);
   spdlog::info("{} windows, {} detections; results in {}", c.windows, c.detections, args.out);
 }
@@ -181,17 +187,19 @@ void run_recording(const RunArgs& args) {
 void add_run_command(CLI::App& app) {
   auto* cmd = app.add_subcommand("run", "detect, track and estimate 3D trajectories over a recording");
   static RunArgs args;
-  cmd->add_option("input", args.input, "recording file or dataset folder")->required();
+  cmd->add_option("input", args.input, "recording file or dataset folder (required unless --print-config)");
   cmd->add_option("--calib", args.calib, "calibration file (project YAML or OpenCV XML/YAML)");
   cmd->add_option("--config", args.config,
                   "YAML options of every stage (docs/DETECTION.md, docs/ESTIMATION.md)");
   cmd->add_option("--method", args.method, "compensation: none, rotation, rotation_translation, contrast_max");
-  cmd->add_option("--out", args.out, "output folder")->required();
+  cmd->add_option("--out", args.out, "output folder (required unless --print-config)");
+  cmd->add_flag("--print-config", args.print_config,
+                "print the effective options (--config and the flags above) as YAML, and exit");
   cmd->add_flag("--visualize", args.visualize, "write a PNG per window (N, segmentation, detection)");
   cmd->add_flag("--assume-static", args.assume_static, "no odometry: treat the camera as static");
   cmd->add_option("--threads", args.threads,
                   "threads per window for the warp, time images, segmentation and pre-processing "
-                  "(compensation.threads; same results for any count)")
+                  "(YAML threads; same results for any count)")
       ->check(CLI::Range(1, 64));
   add_reader_flags(cmd, args.reader);
   cmd->callback([] { run_recording(args); });

@@ -92,7 +92,7 @@ void BM_Compensate(benchmark::State& state, const char* method, bool textured, i
   const CvThreads cv_threads(threads);
   const BenchWindow& w = bench_window();
   CompensationOptions opt;
-  opt.method = method;
+  opt.method = *parse_compensation_method(method);
   opt.threads = threads;
   auto comp = make_compensator(bench_calibration(), opt);
   const std::span<const Event> events = bench_events(textured);
@@ -125,7 +125,7 @@ void BM_CompensateAndTimeImages(benchmark::State& state, const char* method, boo
   const CvThreads cv_threads(threads);
   const BenchWindow& w = bench_window();
   CompensationOptions opt;
-  opt.method = method;
+  opt.method = *parse_compensation_method(method);
   opt.threads = threads;
   auto comp = make_compensator(bench_calibration(), opt);
   const std::span<const Event> events = bench_events(textured);
@@ -163,7 +163,7 @@ FDV_PAIR("rotation_translation", true, rotation_translation_textured);
 void BM_DepthPreparation(benchmark::State& state) {
   const BenchWindow& w = bench_window();
   CompensationOptions opt;
-  opt.method = "rotation_translation";
+  opt.method = CompensationMethod::kRotationTranslation;
   auto comp = make_compensator(bench_calibration(), opt);
   RegisteredDepth depth = w.depth;
   const std::vector<Event> one{{0, 1, 1, true}};
@@ -212,7 +212,7 @@ void BM_TimeImages(benchmark::State& state, bool reference, int threads) {
   const CvThreads cv_threads(threads);
   const BenchWindow& w = bench_window();
   CompensationOptions opt;
-  opt.method = "rotation";
+  opt.method = CompensationMethod::kRotation;
   auto comp = make_compensator(bench_calibration(), opt);
   const std::size_t half = w.events.size() / 2;
   std::vector<std::int32_t> px[2];
@@ -289,7 +289,7 @@ void BM_Detector(benchmark::State& state, bool noisy, int threads) {
   const test::BlobScene s = bench_scene(noisy);
   const std::vector<Event> ev = test::make_scene(calib.event_camera, s);
   CompensationOptions opt;
-  opt.method = "none";
+  opt.method = CompensationMethod::kNone;
   auto comp = make_compensator(calib, opt);
   const CompensatedWindow& cw = comp->compensate({.events = ev, .t_start_ns = s.t0, .t_end_ns = s.t0 + s.duration});
   Detector detector(DetectorOptions{}, calib.event_camera);
@@ -339,7 +339,7 @@ const StageInputs& stage_inputs() {
     const test::BlobScene s = bench_scene(false);
     const std::vector<Event> ev = test::make_scene(calib.event_camera, s);
     CompensationOptions opt;
-    opt.method = "none";
+    opt.method = CompensationMethod::kNone;
     auto comp = make_compensator(calib, opt);
     build_time_images(view_of(comp->compensate({.events = ev, .t_start_ns = s.t0, .t_end_ns = s.t0 + s.duration})), r.ti);
     const DetectorOptions o;
@@ -411,7 +411,7 @@ void BM_FrontEnd(benchmark::State& state, bool noisy, int threads) {
   for (auto& sample : imu) sample.gyro_rad_s.setZero();
   OdometrySample at_rest;
   CompensationOptions opt;
-  opt.method = "rotation_translation";
+  opt.method = CompensationMethod::kRotationTranslation;
   opt.threads = threads;
   auto comp = make_compensator(calib, opt);
   Detector detector(DetectorOptions{}, calib.event_camera);

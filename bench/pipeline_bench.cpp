@@ -184,8 +184,8 @@ int run(const Args& a) {
       1e6;
 
   PerceptionOptions opt;
-  opt.compensation.method = a.method;
-  opt.compensation.threads = a.threads;
+  opt.compensation.method = *parse_compensation_method(a.method);
+  opt.threads = a.threads;
   std::map<std::string, Distribution> stage;
   Distribution work, work_cpu, depth_ms, estimate_ms;
   std::uint64_t windows = 0, decimated = 0, dropped_burst = 0, detections = 0,

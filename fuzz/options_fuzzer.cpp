@@ -3,7 +3,7 @@
 #include <cstdint>
 #include <string_view>
 
-#include "fdv/io/config/backend_config.h"
+#include "fdv/pipeline/options_yaml.h"
 #include "fuzz/fuzz_support.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

@@ -10,7 +10,7 @@ int main() {
   calibration.event_camera = {.width = 64, .height = 48, .fx = 60, .fy = 60, .cx = 32, .cy = 24};
 
   fdv::PerceptionOptions options;
-  options.compensation.method = "none";  // no IMU in this stream
+  options.compensation.method = fdv::CompensationMethod::kNone;  // no IMU in this stream
   options.estimate_trajectories = false;  // nor odometry
 
   std::size_t window_callbacks = 0;

@@ -192,6 +192,32 @@ TEST_F(Cli, TheRequestedMethodIsReportedWhetherItComesFromTheConfigFileOrTheComm
   EXPECT_EQ(s.at("method"), "rotation");
 }
 
+TEST_F(Cli, SummaryHoldsTheEffectiveOptionsAndPrintConfigReadsBackIdentically) {
+  const fs::path out = test::scratch_dir("cli_options");
+  std::ofstream(out / "config.yaml") << "threads: 2\ntracking: {max_tracks: 3, max_gap_ms: 80}\n";
+  const std::string config = " --config " + (out / "config.yaml").string();
+  Ran r = fdv("run " + dataset_.string() + config + " --method rotation --out " + (out / "run").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const json options = read_json(out / "run" / "summary.json").at("options");
+  EXPECT_EQ(options.at("threads"), 2);
+  EXPECT_EQ(options.at("tracking").at("max_tracks"), 3);
+  EXPECT_EQ(options.at("tracking").at("max_gap_ms"), 80.0);
+  EXPECT_EQ(options.at("compensation").at("method"), "rotation");
+  for (const char* section : {"compensation", "detector", "depth_registration", "tracking", "depth_segmentation",
+                              "estimation", "prediction"})
+    EXPECT_TRUE(options.at(section).is_object()) << section;
+
+  // --print-config: what --config reads back to the same options (flags included), and nothing else.
+  r = fdv("run --print-config" + config + " --method rotation");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("threads: 2\n"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("  method: rotation\n"), std::string::npos) << r.output;
+  std::ofstream(out / "printed.yaml") << r.output;
+  const Ran again = fdv("run --print-config --config " + (out / "printed.yaml").string());
+  ASSERT_EQ(again.exit_code, 0) << again.output;
+  EXPECT_EQ(again.output, r.output);
+}
+
 TEST_F(Cli, MissingStreamsFallBackAndSaySo) {
   // No IMU: no compensation is possible ("none"), said.
   fs::path in = dataset_without(dataset_, {"imu.csv"}, "no_imu");

@@ -65,7 +65,7 @@ TEST(ContrastMax, RecoversAConstantImageShift) {
   const Eigen::Vector2d flow(300.0, -200.0);  // 7.5 px and −5 px over 25 ms
   const auto ev = moving_texture(flow, 240, 180, 11);
   CompensationOptions opt;
-  opt.method = "contrast_max";
+  opt.method = CompensationMethod::kContrastMax;
   opt.contrast_max.warm_start = false;
   auto comp = make_compensator(c, opt);
   const CompensatedWindow& out = comp->compensate({.events = ev, .t_start_ns = 0, .t_end_ns = 25 * kNsPerMs});
@@ -84,7 +84,7 @@ TEST(ContrastMax, RecoversAConstantImageShift) {
     std::sort(v.begin(), v.end());
     return std::unique(v.begin(), v.end()) - v.begin();
   };
-  opt.method = "none";
+  opt.method = CompensationMethod::kNone;
   auto none = make_compensator(c, opt);
   const auto n_none = distinct(none->compensate({.events = ev, .t_start_ns = 0, .t_end_ns = 25 * kNsPerMs}).pixel());
   const auto n_cm = distinct(comp->compensate({.events = ev, .t_start_ns = 0, .t_end_ns = 25 * kNsPerMs}).pixel());
@@ -98,7 +98,7 @@ TEST(ContrastMax, ObservedPositionUndoesTheFittedWarp) {
   c.event_camera = {240, 180, 200.0, 200.0, 120.0, 90.0, {}};
   const auto ev = moving_texture({300.0, -200.0}, 240, 180, 11);
   CompensationOptions opt;
-  opt.method = "contrast_max";
+  opt.method = CompensationMethod::kContrastMax;
   auto comp = make_compensator(c, opt);
   const CompensatedWindow& out = comp->compensate({.events = ev, .t_start_ns = 0, .t_end_ns = 25 * kNsPerMs});
   ASSERT_EQ(out.size(), ev.size()) << out.report.brief();

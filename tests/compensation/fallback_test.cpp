@@ -48,7 +48,7 @@ TEST(Fallback, MissingImuFallsBackToNoneAndSaysSo) {
   const auto old_imu = test::constant_imu({0, 1, 0}, t0 - 200 * kNsPerMs, t0 - 100 * kNsPerMs, kNsPerMs);
   for (const char* m : {"rotation", "rotation_translation"}) {
     CompensationOptions opt;
-    opt.method = m;
+    opt.method = *parse_compensation_method(m);
     auto comp = make_compensator(c, opt);
     for (std::span<const ImuSample> imu : {std::span<const ImuSample>{}, std::span<const ImuSample>(old_imu)}) {
       const RegisteredDepth d = flat_depth(c, 3.0f, t0);
@@ -73,7 +73,7 @@ TEST(Fallback, ImuGapIsFlaggedAndTheMeanStillUsed) {
   for (const auto& s : test::constant_imu({0.5, -1.0, 2.0}, t0 - 10 * kNsPerMs, t0 + 60 * kNsPerMs, kNsPerMs))
     if (s.t <= t0 + 2 * kNsPerMs || s.t >= t0 + 40 * kNsPerMs) imu.push_back(s);
   CompensationOptions opt;
-  opt.method = "rotation";
+  opt.method = CompensationMethod::kRotation;
   auto comp = make_compensator(c, opt);
   const CompensatedWindow& out = comp->compensate({.events = some_events(t0, 100), .t_start_ns = t0, .t_end_ns = t1, .imu = imu});
   EXPECT_TRUE(out.report.imu_gap);
@@ -89,7 +89,7 @@ TEST(Fallback, RotationTranslationWithoutOdometryOrDepthIsRotation) {
   const auto ev = some_events(t0, 300);
   const auto imu = test::constant_imu({0, 0.5, 0}, t0 - 5 * kNsPerMs, t1 + 5 * kNsPerMs, kNsPerMs);
   CompensationOptions opt;
-  opt.method = "rotation_translation";
+  opt.method = CompensationMethod::kRotationTranslation;
   opt.max_depth_age_ns = 100 * kNsPerMs;
   auto comp = make_compensator(c, opt);
   const RegisteredDepth fresh = flat_depth(c, 3.0f, t0);
@@ -144,7 +144,7 @@ TEST(Fallback, PixelsWithoutDepthUseTheMedianAndAreCounted) {
   const OdometrySample odo = moving(0, {0, 0, 4.0});  // forward: expansion away from the centre
 
   CompensationOptions opt;
-  opt.method = "rotation_translation";
+  opt.method = CompensationMethod::kRotationTranslation;
   opt.hole_fill_radius_px = 1;
   auto comp = make_compensator(c, opt);
   const CompensatedWindow& out = comp->compensate({ev, t0, t1, imu, odo, &d});
@@ -184,7 +184,7 @@ TEST(Fallback, DepthPreparedOnArrivalGivesTheSameWindow) {
   const auto imu = test::constant_imu({0.2, -0.1, 0.3}, -5 * kNsPerMs, 30 * kNsPerMs, kNsPerMs);
   const OdometrySample odo = moving(0, {0.5, 0, 4.0});
   CompensationOptions opt;
-  opt.method = "rotation_translation";
+  opt.method = CompensationMethod::kRotationTranslation;
   auto inside = make_compensator(c, opt), on_arrival = make_compensator(c, opt);
   const CompensatedWindow& a = inside->compensate({ev, t0, t1, imu, odo, &d});
   EXPECT_TRUE(a.report.depth_prepared_here);
@@ -205,7 +205,7 @@ TEST(Fallback, DepthPreparedOnArrivalGivesTheSameWindow) {
   EXPECT_TRUE(inside->compensate({ev, t0, t1, imu, odo, &later}).report.depth_prepared_here);
   // Strategies without depth ignore it; a frame of the wrong size is not prepared (compensate
   // reports it and falls back, as before).
-  opt.method = "rotation";
+  opt.method = CompensationMethod::kRotation;
   make_compensator(c, opt)->prepare_depth_frame(d);
   RegisteredDepth wrong = flat_depth(c, 3.0f, t0);
   wrong.width = 100;
@@ -224,7 +224,7 @@ TEST(Fallback, BurstIsDecimatedAndCounted) {
   for (int i = 0; i < 400'000; ++i)
     ev.push_back({10 * kNsPerMs + i * 2'500 / 1'000, static_cast<std::uint16_t>(i % 320), static_cast<std::uint16_t>((i / 320) % 240), true});
   CompensationOptions opt;
-  opt.method = "none";
+  opt.method = CompensationMethod::kNone;
   opt.max_events_per_window = 100'000;
   auto comp = make_compensator(c, opt);
   const CompensatedWindow& out = comp->compensate({.events = ev, .t_start_ns = t0, .t_end_ns = t1});

@@ -136,7 +136,7 @@ class ReferenceEquivalence : public ::testing::TestWithParam<Case> {};
 TEST_P(ReferenceEquivalence, RandomEventsWithEveryKindOfDrop) {
   const Calibration c = rig();
   CompensationOptions opt;
-  opt.method = GetParam().method;
+  opt.method = *parse_compensation_method(GetParam().method);
   opt.missing_depth = GetParam().policy;
   auto comp = make_compensator(c, opt);
   const std::vector<Event> events = random_events(100'000, 3);
@@ -161,7 +161,7 @@ TEST_P(ReferenceEquivalence, ExactSyntheticScene) {
   // in order: the fast path of the optimised loop, slot changes every millisecond.
   const Calibration c = rig();
   CompensationOptions opt;
-  opt.method = GetParam().method;
+  opt.method = *parse_compensation_method(GetParam().method);
   opt.missing_depth = GetParam().policy;
   auto comp = make_compensator(c, opt);
   const Eigen::Vector3d omega_E(0.8, -1.1, 2.0), v_E(1.0, 0.3, 2.5);
@@ -191,7 +191,7 @@ TEST(ReferenceEquivalence, BurstDecimationVisitsTheSameEvents) {
   // exactly those events must agree.
   const Calibration c = rig();
   CompensationOptions opt;
-  opt.method = "rotation";
+  opt.method = CompensationMethod::kRotation;
   opt.max_events_per_window = 30'000;
   auto comp = make_compensator(c, opt);
   const std::vector<Event> events = random_events(100'000, 9);
@@ -223,7 +223,7 @@ TEST(ThreadedWarp, AnyThreadCountGivesTheSameWindowAsOne) {
   const CompensationInput in{events, kT0, kT0 + kWindow, m.imu, m.odometry, &depth};
   for (const char* method : {"none", "rotation", "rotation_translation"}) {
     CompensationOptions opt;
-    opt.method = method;
+    opt.method = *parse_compensation_method(method);
     auto one = make_compensator(c, opt);
     const CompensatedWindow& a = one->compensate(in);
     for (int threads : {2, 3, 7}) {

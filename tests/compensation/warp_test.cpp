@@ -110,7 +110,7 @@ TEST(Warp, RotationTranslationLandsEveryEventOnItsPointAtT0) {
   const Inputs inp = inputs_for(calib, omega_E, v_E, t0);
 
   CompensationOptions opt;
-  opt.method = "rotation_translation";
+  opt.method = CompensationMethod::kRotationTranslation;
   opt.rotation_refresh_ns = 10 * kNsPerUs;  // near-continuous rotation: isolates the geometry
   opt.hole_fill_radius_px = 0;
   auto comp = make_compensator(calib, opt);
@@ -163,7 +163,7 @@ TEST(Warp, RotationTranslationIsExactOnPixelCentres) {
   }
   const Inputs inp = inputs_for(calib, omega_E, v_E, t0);
   CompensationOptions opt;
-  opt.method = "rotation_translation";
+  opt.method = CompensationMethod::kRotationTranslation;
   opt.rotation_refresh_ns = 1 * kNsPerUs;  // R_e at the event's time to within 0.5 µs
   opt.hole_fill_radius_px = 0;
   auto comp = make_compensator(calib, opt);
@@ -205,7 +205,7 @@ TEST(Warp, ObservedPositionUndoesTheWarpOfEveryEvent) {
   const Inputs inp = inputs_for(calib, omega_E, v_E, t0);
   for (const char* method : {"none", "rotation", "rotation_translation"}) {
     CompensationOptions opt;
-    opt.method = method;
+    opt.method = *parse_compensation_method(method);
     opt.rotation_refresh_ns = 1 * kNsPerUs;
     auto comp = make_compensator(calib, opt);
     const CompensatedWindow& out = comp->compensate({ev, t0, t0 + dt, inp.imu, inp.odometry, &depth});
@@ -234,7 +234,7 @@ TEST(Warp, FlippedSignsDoNotCompensate) {
   const TimeNs t0 = 0, dt = 25 * kNsPerMs;
   const test::SyntheticWindow w = test::make_window(calib.event_camera, omega_E, v_E, t0, dt, 50 * kNsPerUs);
   CompensationOptions opt;
-  opt.method = "rotation_translation";
+  opt.method = CompensationMethod::kRotationTranslation;
   opt.rotation_refresh_ns = 10 * kNsPerUs;
   opt.hole_fill_radius_px = 0;
   opt.max_depth_age_ns = kNsPerS;
@@ -253,7 +253,7 @@ TEST(Warp, RotationCompensatesPureRotationAtTheDefaultRefresh) {
   const test::SyntheticWindow w = test::make_window(calib.event_camera, omega_E, v_E, t0, dt, 50 * kNsPerUs);
   const Inputs inp = inputs_for(calib, omega_E, v_E, t0);
   CompensationOptions opt;
-  opt.method = "rotation";  // default 1 ms refresh, R_e taken at each slot's middle
+  opt.method = CompensationMethod::kRotation;  // default 1 ms refresh, R_e taken at each slot's middle
   auto comp = make_compensator(calib, opt);
   const CompensatedWindow& out = comp->compensate({w.events, t0, t0 + dt, inp.imu, std::nullopt, nullptr});
   EXPECT_EQ(out.report.used, CompensationMethod::kRotation);
@@ -277,13 +277,13 @@ TEST(Warp, RotationAloneLeavesTheTranslationalFlow) {
   const test::SyntheticWindow w = test::make_window(calib.event_camera, omega_E, v_E, t0, dt, 50 * kNsPerUs);
   const Inputs inp = inputs_for(calib, omega_E, v_E, t0);
   CompensationOptions opt;
-  opt.method = "rotation";
+  opt.method = CompensationMethod::kRotation;
   auto rot = make_compensator(calib, opt);
   const CompensationInput in{{}, t0, t0 + dt, inp.imu, inp.odometry, &w.depth};
   // Mean translational displacement over the window ≈ f·|v_xy|/z·Δt/2 ≈ 402·2/4.5·0.0125 ≈ 2 px
   // plus the expansion from v_z: well above the compensated error.
   EXPECT_GT(warp_errors(w, *rot, in, calib.event_camera).median_point_error(), 1.0);
-  opt.method = "rotation_translation";
+  opt.method = CompensationMethod::kRotationTranslation;
   opt.hole_fill_radius_px = 0;
   auto rt = make_compensator(calib, opt);
   EXPECT_LT(warp_errors(w, *rt, in, calib.event_camera).max_point_error(), kPointTolPx);
@@ -296,7 +296,7 @@ TEST(Warp, NoneIsExactlyTheUndistortion) {
   for (int i = 0; i < 200; ++i)
     ev.push_back({i * 100'000, static_cast<std::uint16_t>((i * 37) % 640), static_cast<std::uint16_t>((i * 53) % 480), true});
   CompensationOptions opt;
-  opt.method = "none";
+  opt.method = CompensationMethod::kNone;
   auto comp = make_compensator(calib, opt);
   const CompensatedWindow& out = comp->compensate({.events = ev, .t_start_ns = 0, .t_end_ns = 25 * kNsPerMs});
   std::size_t k = 0;
@@ -320,7 +320,7 @@ TEST(Warp, RoundsToTheNearestPixelNotDown) {
   Calibration calib;
   calib.event_camera = {64, 48, 400.0, 400.0, 32.0, 24.0, {}};
   CompensationOptions opt;
-  opt.method = "rotation";
+  opt.method = CompensationMethod::kRotation;
   opt.rotation_refresh_ns = kNsPerMs;
   // An event at t0 + 0.5 ms falls in slot 0, whose rotation is taken at 0.5 ms: θ = ω_y·0.5 ms.
   const std::vector<Event> ev{{500'000, 32, 24, true}};
@@ -361,7 +361,7 @@ TEST(Warp, CountsEveryDroppedEventByReason) {
   ASSERT_GE(outside_x, 0);
   ev.push_back({t0 + 10, static_cast<std::uint16_t>(outside_x), 240, true});
   CompensationOptions opt;
-  opt.method = "none";
+  opt.method = CompensationMethod::kNone;
   auto comp = make_compensator(calib, opt);
   const CompensationReport& r = comp->compensate({.events = ev, .t_start_ns = t0, .t_end_ns = t1}).report;
   EXPECT_EQ(r.events_in, 8u);
@@ -377,7 +377,7 @@ TEST(Warp, EmptyWindowIsFine) {
   calib.event_camera = test_camera();
   for (const char* m : {"none", "rotation", "rotation_translation", "contrast_max"}) {
     CompensationOptions opt;
-    opt.method = m;
+    opt.method = *parse_compensation_method(m);
     auto comp = make_compensator(calib, opt);
     const CompensatedWindow& out = comp->compensate({.events = {}, .t_start_ns = 0, .t_end_ns = 25 * kNsPerMs});
     EXPECT_EQ(out.size(), 0u) << m;
@@ -418,9 +418,9 @@ TEST(CompensationMethod, NamesRoundTripAndUnknownNamesAreRejected) {
   Calibration calib;
   calib.event_camera = test_camera();
   CompensationOptions opt;
-  opt.method = "betterflow";
+  opt.method = static_cast<CompensationMethod>(17);  // not a method: from a bad cast
   EXPECT_THROW(make_compensator(calib, opt), ConfigError);
-  opt.method = "rotation";
+  opt.method = CompensationMethod::kRotation;
   opt.rotation_refresh_ns = 0;
   EXPECT_THROW(make_compensator(calib, opt), ConfigError);
 }

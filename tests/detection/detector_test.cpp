@@ -30,7 +30,7 @@ class DetectorTest : public ::testing::Test {
     Calibration c;
     c.event_camera = lens();
     CompensationOptions o;
-    o.method = "none";
+    o.method = CompensationMethod::kNone;
     compensator_ = make_compensator(c, o);
   }
   DetectionResult run(const std::vector<Event>& ev, TimeNs t0, TimeNs t1) {
@@ -88,7 +88,7 @@ TEST(DetectorBox, SquareBoxHoldsTheWholeFastBallNotJustItsLatestSweep) {
   Calibration c;
   c.event_camera = lens();
   CompensationOptions co;
-  co.method = "none";
+  co.method = CompensationMethod::kNone;
   const auto compensator = make_compensator(c, co);
   for (const bool square : {true, false}) {
     DetectorOptions o;
@@ -183,7 +183,7 @@ TEST(DetectorRefine, RecentredRegionRemovesTheClutterPullAlongTheMotion) {
   Calibration c;
   c.event_camera = lens();
   CompensationOptions none;
-  none.method = "none";
+  none.method = CompensationMethod::kNone;
   auto comp = make_compensator(c, none);
   const CompensatedWindow& w = comp->compensate({.events = ev, .t_start_ns = s.t0, .t_end_ns = s.t0 + s.duration});
   auto along_error = [&](int passes) {

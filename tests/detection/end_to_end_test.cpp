@@ -79,7 +79,7 @@ TEST(EndToEnd, FlyingCameraFindsTheMovingObject) {
   Detector detector(DetectorOptions{}, calib.event_camera);
 
   CompensationOptions opt;
-  opt.method = "rotation_translation";
+  opt.method = CompensationMethod::kRotationTranslation;
   opt.hole_fill_radius_px = 0;
   auto comp = make_compensator(calib, opt);
   const CompensatedWindow& w = comp->compensate({s.events, 0, dt, imu, odo, &s.depth});

@@ -118,7 +118,7 @@ Counts run(const char* method, std::size_t max_events_per_window, const Detector
   Calibration calib;
   calib.event_camera = camera();
   CompensationOptions copt;
-  copt.method = method;
+  copt.method = *parse_compensation_method(method);
   auto comp = make_compensator(calib, copt);
   Detector detector(detector_options, calib.event_camera);
   EventWindower windower({.window_ns = kWindow, .max_events_per_window = max_events_per_window});

@@ -267,7 +267,7 @@ TEST(Perception, NoOdometryMeansNo3DEstimateUnlessTheVehicleIsDeclaredStatic) {
   SimulatedThrow s = simulated_throw();
   s.data.odometry.clear();
   PerceptionOptions rotation_only;
-  rotation_only.compensation.method = "rotation";  // translation needs the velocity
+  rotation_only.compensation.method = CompensationMethod::kRotation;  // translation needs the velocity
   const Collected none = run(0, s, rotation_only);
   EXPECT_TRUE(none.fusion.empty());
   EXPECT_TRUE(none.mono.empty());
@@ -305,7 +305,7 @@ TEST(Perception, NoDepthGivesEventOnlyEstimatesAndOneWarning) {
   SimulatedThrow s = simulated_throw();
   s.data.depth.clear();
   PerceptionOptions rotation_only;
-  rotation_only.compensation.method = "rotation";
+  rotation_only.compensation.method = CompensationMethod::kRotation;
   const Collected c = run(0, s, rotation_only);
   ASSERT_FALSE(c.fusion.empty());
   for (const TrajectoryEstimate& e : c.fusion) EXPECT_EQ(e.method, EstimateMethod::kEventOnly);
@@ -385,7 +385,7 @@ TEST(Perception, CountersOfASmallSyntheticRunMatchAHandCount) {
   Calibration calib;
   calib.event_camera = {.width = 64, .height = 48, .fx = 60, .fy = 60, .cx = 32, .cy = 24, .distortion = {}};
   PerceptionOptions options;
-  options.compensation.method = "rotation";
+  options.compensation.method = CompensationMethod::kRotation;
   options.windows.max_events_per_window = 100;  // window 0's 150 events: every 2nd kept
   options.windows.max_empty_windows = 2;
   options.detection.min_window_events = 1000;  // every window "too few events"

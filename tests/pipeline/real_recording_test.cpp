@@ -28,7 +28,7 @@ TEST(RealRecording, TheThrownBallIsFoundInFlightAndThePersonIsNotReported) {
   FDV_REQUIRE_REAL_FILE(path);
   const Calibration calib = load_calibration(test::real_data("davis346_00000133_calibration.xml"));
   PerceptionOptions options;
-  options.compensation.method = "rotation";  // events and IMU only
+  options.compensation.method = CompensationMethod::kRotation;  // events and IMU only
   std::map<std::uint64_t, Detection2D> detections;
   std::uint64_t windows = 0;
   PerceptionCallbacks callbacks;

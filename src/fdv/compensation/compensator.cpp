@@ -21,8 +21,7 @@ std::string_view to_string(CompensationMethod m) {
 }
 
 std::optional<CompensationMethod> parse_compensation_method(std::string_view name) {
-  for (auto m : {CompensationMethod::kNone, CompensationMethod::kRotation, CompensationMethod::kRotationTranslation,
-                 CompensationMethod::kContrastMax})
+  for (const CompensationMethod m : all_values(CompensationMethod{}))
     if (name == to_string(m)) return m;
   return std::nullopt;
 }
@@ -32,8 +31,8 @@ std::string_view to_string(MissingDepthPolicy p) {
 }
 
 std::optional<MissingDepthPolicy> parse_missing_depth_policy(std::string_view name) {
-  if (name == "median_depth") return MissingDepthPolicy::kMedianDepth;
-  if (name == "rotation_only") return MissingDepthPolicy::kRotationOnly;
+  for (const MissingDepthPolicy p : all_values(MissingDepthPolicy{}))
+    if (name == to_string(p)) return p;
   return std::nullopt;
 }
 
@@ -49,11 +48,11 @@ std::string ContrastMaxOptions::validate() const {
 
 std::string CompensationOptions::validate() const {
   std::ostringstream why;
-  if (!parse_compensation_method(method))
-    why << "method '" << method << "' is unknown (none, rotation, rotation_translation, contrast_max)";
-  else if (rotation_refresh_ns <= 0) why << "rotation_refresh must be positive, got " << rotation_refresh_ns << " ns";
-  else if (max_imu_gap_ns <= 0) why << "max_imu_gap must be positive, got " << max_imu_gap_ns << " ns";
-  else if (max_depth_age_ns < 0) why << "max_depth_age must not be negative, got " << max_depth_age_ns << " ns";
+  if (!parse_compensation_method(to_string(method)))
+    why << "method " << static_cast<int>(method) << " is unknown";
+  else if (rotation_refresh_ns <= 0) why << "rotation_refresh_ms must be positive, got " << rotation_refresh_ns << " ns";
+  else if (max_imu_gap_ns <= 0) why << "max_imu_gap_ms must be positive, got " << max_imu_gap_ns << " ns";
+  else if (max_depth_age_ns < 0) why << "max_depth_age_ms must not be negative, got " << max_depth_age_ns << " ns";
   else if (hole_fill_radius_px < 0 || hole_fill_radius_px > 10)
     why << "hole_fill_radius_px must be in [0, 10], got " << hole_fill_radius_px;
   else if (max_events_per_window < 1) why << "max_events_per_window must be positive";
@@ -104,7 +103,7 @@ Eigen::Vector3d camera_velocity_E(const Calibration& calibration, const Odometry
 
 std::unique_ptr<Compensator> make_compensator(const Calibration& calibration, const CompensationOptions& options) {
   if (const auto why = options.validate(); !why.empty()) throw ConfigError("compensation: " + why);
-  const CompensationMethod m = *parse_compensation_method(options.method);
+  const CompensationMethod m = options.method;
   auto map = std::make_shared<const UndistortionMap>(calibration.event_camera);
   if (m == CompensationMethod::kContrastMax)
     return std::make_unique<internal::ContrastMaxCompensator>(calibration, options, std::move(map));

@@ -3,7 +3,7 @@
 /// [t_start, t_end) is warped to where the static scene point that caused it was seen at t_start.
 ///
 ///   Calibration calib = load_calibration(...);
-///   CompensationOptions opt;                         // opt.method = "rotation_translation"
+///   CompensationOptions opt;                         // opt.method = kRotationTranslation
 ///   std::unique_ptr<Compensator> comp = make_compensator(calib, opt);
 ///   CompensationInput in{.events = win.events, .t_start_ns = win.t_start, .t_end_ns = win.t_end,
 ///                        .imu = imu_around_window, .odometry = odo_at_t_start, .depth = &registered};
@@ -12,7 +12,7 @@
 ///   //                  .time_sorted = out.report.events_out_of_order == 0}
 ///   if (out.report.used != out.report.requested) note(out.report.brief());
 ///
-/// Strategies (by name): "none" (undistortion only), "rotation" (Falanga et al. 2020: mean IMU
+/// Strategies (CompensationMethod; YAML names): "none" (undistortion only), "rotation" (Falanga et al. 2020: mean IMU
 /// rate, Rodrigues rotation refreshed every 1 ms), "rotation_translation" (the paper, eqs. 6-8:
 /// rotation plus translation from the odometry velocity and per-event depth), "contrast_max"
 /// (BetterFlow-like baseline: a 4-parameter global warp fitted by contrast maximisation).
@@ -50,6 +50,11 @@ enum class CompensationMethod { kNone, kRotation, kRotationTranslation, kContras
 std::string_view to_string(CompensationMethod m);
 /// Inverse of to_string(); nothing for an unknown name.
 std::optional<CompensationMethod> parse_compensation_method(std::string_view name);
+/// Every method, in to_string()'s order (the field list's text form: fdv/core/field_list.h).
+constexpr std::array<CompensationMethod, 4> all_values(CompensationMethod) {
+  return {CompensationMethod::kNone, CompensationMethod::kRotation, CompensationMethod::kRotationTranslation,
+          CompensationMethod::kContrastMax};
+}
 
 /// What to do with an event whose pixel has no registered depth (rotation_translation).
 enum class MissingDepthPolicy {
@@ -58,6 +63,9 @@ enum class MissingDepthPolicy {
 };
 std::string_view to_string(MissingDepthPolicy p);
 std::optional<MissingDepthPolicy> parse_missing_depth_policy(std::string_view name);
+constexpr std::array<MissingDepthPolicy, 2> all_values(MissingDepthPolicy) {
+  return {MissingDepthPolicy::kMedianDepth, MissingDepthPolicy::kRotationOnly};
+}
 
 /// Contrast-maximisation baseline (Gallego et al. 2018 objective, Mitrokhin et al. 2018 model).
 struct ContrastMaxOptions {
@@ -75,7 +83,7 @@ struct ContrastMaxOptions {
 };
 
 struct CompensationOptions {
-  std::string method = "rotation_translation";  ///< strategy name, see to_string(CompensationMethod)
+  CompensationMethod method = CompensationMethod::kRotationTranslation;
   TimeNs rotation_refresh_ns = 1 * kNsPerMs;    ///< R_e (and slot) refresh period, paper §IV-A "every millisecond"
   /// IMU spacing above which a window is flagged as having an IMU gap; with no usable sample
   /// within this distance of the window the IMU counts as missing (fallback to "none").
@@ -91,15 +99,36 @@ struct CompensationOptions {
   /// Overload guard: above this many events a window is decimated uniformly in time order and the
   /// dropped events are counted (5 M ev/s over 25 ms is 125 k events; 16x that is a burst).
   std::size_t max_events_per_window = 2'000'000;
-  /// Threads for the per-event warp of none / rotation / rotation_translation (OpenCV's pool,
-  /// fdv/core/parallel_parts.h): the events are split into this many parts; fdv::Perception passes
-  /// the count on to the time images, the segmentation and the pre-processing. Results are
-  /// identical for any count. 1 = the calling thread only; 2 shortens a window's front end by about
-  /// a third when a second core is free (docs/BENCHMARKS.md, Threads).
+  /// Threads for the per-event warp of none / rotation / rotation_translation: the events are split
+  /// into this many parts; results are identical for any count. Not a YAML key: fdv::Perception
+  /// sets it from PerceptionOptions::threads (YAML `threads`), which the detector uses too.
   int threads = 1;
   ContrastMaxOptions contrast_max;
   std::string validate() const;
 };
+
+/// The field lists (fdv/core/field_list.h): YAML section `compensation`.
+template <class V>
+void describe(V& v, ContrastMaxOptions& o) {
+  v("max_fit_events", o.max_fit_events, "events", "events used for the fit (uniformly subsampled above this)");
+  v("blur_sigma_px", o.blur_sigma_px, "px", "Gaussian smoothing of the image of warped events");
+  v("max_iterations", o.max_iterations, "-", "L-BFGS iterations");
+  v("max_expansion_per_s", o.max_expansion_per_s, "1/s", "bound on the expansion rate |h_z| (avoids event collapse)");
+  v("warm_start", o.warm_start, "-", "start from the previous window's parameters");
+}
+template <class V>
+void describe(V& v, CompensationOptions& o) {
+  v("method", o.method, "-", "strategy: none, rotation, rotation_translation (the paper), contrast_max");
+  v.ms("rotation_refresh_ms", o.rotation_refresh_ns, "rotation (and slot) refresh period, paper §IV-A");
+  v.ms("max_imu_gap_ms", o.max_imu_gap_ns, "IMU spacing flagged as a gap; no sample this close: IMU missing");
+  v.ms("max_depth_age_ms", o.max_depth_age_ns, "registered depth farther than this from the window's middle is not used");
+  v("missing_depth", o.missing_depth, "-", "an event pixel without depth: median_depth or rotation_only");
+  v("hole_fill_radius_px", o.hole_fill_radius_px, "px", "depth holes up to this radius take the nearest surface");
+  v.section("contrast_max", o.contrast_max, "the contrast-maximisation baseline");
+  v.removed("threads", "moved to the top-level key threads (used by the compensation and the detector)");
+  v.removed("max_events_per_window",
+            "moved to the top-level key max_events_per_window (the event windower's overload guard, which acts first)");
+}
 
 /// Everything one window needs. Spans and the depth pointer are borrowed for the call only.
 struct CompensationInput {

@@ -29,6 +29,13 @@ struct DepthRegistrationOptions {
   std::string validate() const;
 };
 
+/// The field list (fdv/core/field_list.h): YAML section `depth_registration`.
+template <class V>
+void describe(V& v, DepthRegistrationOptions& o) {
+  v("min_depth_m", o.min_depth_m, "m", "depth below this is invalid input");
+  v("max_depth_m", o.max_depth_m, "m", "depth above this is invalid input");
+}
+
 struct DepthRegistrationResult {
   RegisteredDepth depth;  ///< empty when rejected
   std::string rejected;   ///< empty when accepted, else the reason (the frame is not used)

@@ -90,6 +90,34 @@ struct DepthSegmentationOptions {
   std::string validate() const;
 };
 
+/// The field lists (fdv/core/field_list.h): YAML section `depth_segmentation`.
+template <class V>
+void describe(V& v, DepthNoiseModel& o) {
+  v("subpixel_px", o.subpixel_px, "px", "s: stereo matching subpixel accuracy");
+  v("focal_px", o.focal_px, "px", "f: depth camera focal length");
+  v("baseline_m", o.baseline_m, "m", "B: stereo baseline; σ(z) = z²·s / (f·B)");
+}
+template <class V>
+void describe(V& v, DepthSegmentationOptions& o) {
+  v("roi_scale", o.roi_scale, "-", "ROI = the track's box scaled about its centre (paper §IV-C.2: twice)");
+  v("bin_width_m", o.bin_width_m, "m", "histogram bin width");
+  v("min_depth_m", o.min_depth_m, "m", "valid depth range, lower end");
+  v("max_depth_m", o.max_depth_m, "m", "valid depth range, upper end");
+  v("min_peak_pixels", o.min_peak_pixels, "px", "a significant peak's 3-bin sum holds at least this many pixels");
+  v("min_peak_fraction", o.min_peak_fraction, "-", "... and this fraction of the ROI's valid pixels");
+  v("max_peaks", o.max_peaks, "-", "peaks tried from near to far when nearer ones fail the gates");
+  v("window_sigmas", o.window_sigmas, "-", "segmentation half-window about the peak: radius + this·σ(z)");
+  v("object_radius_m", o.object_radius_m, "m", "known object radius; 0 = estimated from the pixels");
+  v("default_window_radius_m", o.default_window_radius_m, "m", "radius for the window when it is unknown");
+  v("spread_gate", o.spread_gate, "-", "reject when the depths' std exceeds this × the expected std");
+  v("max_fill_ratio", o.max_fill_ratio, "-", "reject when the pixels exceed this × the box's inscribed ellipse");
+  v("max_centroid_offset", o.max_centroid_offset, "-", "the centroid must lie in the box's ellipse scaled by this");
+  v("radius_ratio_gate", o.radius_ratio_gate, "-", "known radius only: the image radius within [1/k, k] of it");
+  v("radius_relative_sigma", o.radius_relative_sigma, "-", "relative std of an estimated radius");
+  v("min_sigma_m", o.min_sigma_m, "m", "floor of the observation's sigma");
+  v.section("noise", o.noise, "the depth camera's noise model");
+}
+
 /// Where to look: the track's box at the depth frame's time (raw event pixels), optionally the
 /// depth the current trajectory estimate expects there (consistency with the event track).
 struct DepthQuery {

@@ -8,8 +8,10 @@
 ///   o.dense_motion.enabled = false;   // YAML: detector.motion_cue
 ///   if (const std::string why = o.validate(); !why.empty()) fail(why);
 ///
-/// The `detector:` YAML keys are the flat names of docs/DETECTION.md's parameter table (e.g.
-/// `motion_cue_radius_px` fills dense_motion.radius_px); validate()'s messages name those keys.
+/// The `detector:` YAML keys are flat: each source's field list (describe() below) gives its
+/// fields their YAML names (e.g. `motion_cue_radius_px` fills dense_motion.radius_px), and
+/// describe(v, DetectorOptions&) lists the sources' keys beside the shared ones, so files written
+/// before the split still load. validate()'s messages name those keys.
 #include <string>
 
 namespace fdv {
@@ -41,6 +43,16 @@ struct GaussianFitSourceOptions {
   std::string validate() const;
 };
 
+/// The field list (fdv/core/field_list.h): flat keys of the `detector` section.
+template <class V>
+void describe(V& v, GaussianFitSourceOptions& o) {
+  v("min_peak", o.min_peak, "-", "source 1: evidence, the strongest pattern's value in the filtered S; tuned");
+  v("max_candidates", o.max_candidates, "-", "source 1: patterns tried per window; provisional");
+  v("roi_max_fraction", o.roi_max_fraction, "-", "a fitted side longer than this fraction of the image is implausible");
+  v("refit_min_roi_px", o.refit_min_roi_px, "px", "smaller initial ROIs: halve L⁰ while its shorter side ≥ this (0 = off, the paper); tuned");
+  v("refit_local_scale", o.refit_local_scale, "-", "a smaller-ROI box must stand out within this × its side (0 = no test); tuned");
+}
+
 /// Source 2: inside each confirmed track's gate (DetectionPrior), the strongest pattern of P,
 /// evaluated as source 1's but at a lower evidence threshold; its box must stay centred in the gate.
 struct TrackAidedSourceOptions {
@@ -49,6 +61,11 @@ struct TrackAidedSourceOptions {
   double min_peak = 0.25;
   std::string validate() const;
 };
+
+template <class V>
+void describe(V& v, TrackAidedSourceOptions& o) {
+  v("prior_min_peak", o.min_peak, "-", "source 2: evidence threshold inside a confirmed track's gate (1 = off); tuned");
+}
 
 /// Source 3, not in the paper (docs/DETECTION.md, "Dense-motion cue"): inside the tracks' gates,
 /// the densest patch of active pixels of I, accepted when its mean-time image T rises across it as
@@ -72,6 +89,16 @@ struct DenseMotionSourceOptions {
   double min_span = 0.1;
   std::string validate() const;
 };
+
+template <class V>
+void describe(V& v, DenseMotionSourceOptions& o) {
+  v("motion_cue", o.enabled, "-", "source 3, dense moving blob inside track gates (false = the paper)");
+  v("motion_cue_density_px", o.density_px, "px", "side of the box whose active pixels are the density (odd)");
+  v("motion_cue_radius_px", o.radius_px, "px", "r: half-side of the plane fit's square");
+  v("motion_cue_min_pixels", o.min_pixels, "px", "active pixels the square must hold");
+  v("motion_cue_min_r2", o.min_r2, "-", "fraction of T's variance the plane must explain");
+  v("motion_cue_min_span", o.min_span, "-", "the plane's rise across the square / Δt");
+}
 
 /// Source 4, not in the paper (docs/DETECTION.md, "Count-contrast cue"): a compact blob of the count
 /// image I much denser than its surroundings. A slow object that fires evenly over the window (a
@@ -98,6 +125,16 @@ struct CountContrastSourceOptions {
   bool in_gates = true;
   std::string validate() const;
 };
+
+template <class V>
+void describe(V& v, CountContrastSourceOptions& o) {
+  v("count_cue", o.enabled, "-", "source 4, count-contrast blob (false = the paper)");
+  v("count_cue_box_px", o.box_px, "px", "k: side of the centre box (odd); about the smallest eligible ball");
+  v("count_cue_surround_scale", o.surround_scale, "-", "the surround box's side / k (> 1)");
+  v("count_cue_min_contrast", o.min_contrast, "-", "centre density / max(surround density, image mean)");
+  v("count_cue_min_fill", o.min_fill, "-", "fraction of the centre box's pixels with I ≥ min_pixel_events");
+  v("count_cue_in_gates", o.in_gates, "-", "search confirmed tracks' gates first, without the time test");
+}
 
 struct DetectorOptions {
   // Adaptive threshold θ(ω, v) = mean(N) + a‖ω‖ + b‖v‖ + c (§IV-B.1).
@@ -166,5 +203,35 @@ struct DetectorOptions {
   /// The shared fields' rules, then each source's; "" when valid.
   std::string validate() const;
 };
+
+/// The shared keys, then each source's (flat: see above).
+template <class V>
+void describe(V& v, DetectorOptions& o) {
+  v("threshold_a_s_per_rad", o.threshold_a_s_per_rad, "1/(rad/s)", "a in θ = mean(N) + a‖ω‖ + b‖v‖ + c (§IV-B.1), ≥ 0; tuned");
+  v("threshold_b_s_per_m", o.threshold_b_s_per_m, "1/(m/s)", "b in θ, ≥ 0; tuned");
+  v("threshold_c", o.threshold_c, "-", "c in θ, in [-1, 1] (N is in [0, 1]); tuned");
+  v("min_pixel_events", o.min_pixel_events, "events", "events per pixel to join S (1 = the paper); tuned");
+  v("mean_filter_px", o.mean_filter_px, "px", "mean filter size (odd), paper §IV-B.2; provisional");
+  v("opening_px", o.opening_px, "px", "opening's structuring element (odd), paper §IV-B.2; provisional");
+  v("fit_max_iterations", o.fit_max_iterations, "-", "K of Algorithm 1; provisional");
+  v("fit_delta_center_px", o.fit_delta_center_px, "px", "δ_C: the fit has converged below this centre change");
+  v("fit_delta_size_px", o.fit_delta_size_px, "px", "δ_L: ... and below this change of each side");
+  v("fit_min_size_px", o.fit_min_size_px, "px", "floor of L");
+  v("region_min_area_px", o.region_min_area_px, "px", "moving-region retrieval ignores smaller components");
+  v("roi_max_aspect", o.roi_max_aspect, "-", "a box's long side / short side above this is implausible");
+  v("roi_min_events", o.roi_min_events, "events", "fewer compensated events in a box is implausible");
+  v("min_event_density", o.min_event_density, "events/px", "evidence gate of a candidate box; tuned");
+  v("prior_gate_scale", o.prior_gate_scale, "-", "a confirmed track's predicted box × this = its gate");
+  v("prior_min_gate_px", o.prior_min_gate_px, "px", "smallest gate half-side");
+  v("refine_box_scale", o.refine_box_scale, "-", "centre and time re-estimated from the events in the box × this (0 = off)");
+  v("refine_recentre_passes", o.refine_recentre_passes, "-", "mean-shift re-centring passes of that region (0 = stays on the box)");
+  v("square_box", o.square_box, "-", "report the box as a square of its longer side on the refined centre");
+  v("min_window_events", o.min_window_events, "events", "fewer compensated events in a window: no detection");
+  v("max_segmented_fraction", o.max_segmented_fraction, "-", "more of the image above θ: no detection (flooded)");
+  describe(v, o.gaussian_fit);
+  describe(v, o.track_aided);
+  describe(v, o.dense_motion);
+  describe(v, o.count_contrast);
+}
 
 }  // namespace fdv

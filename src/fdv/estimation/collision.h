@@ -32,6 +32,13 @@ struct PredictionOptions {
   std::string validate() const;
 };
 
+/// The field list (fdv/core/field_list.h): YAML section `prediction`.
+template <class V>
+void describe(V& v, PredictionOptions& o) {
+  v("horizon_s", o.horizon_s, "s", "how far ahead to look");
+  v("safety_radius_m", o.safety_radius_m, "m", "radius around the body origin that counts as contact");
+}
+
 struct ClosestApproach {
   TimeNs t = 0;  ///< time of closest approach (within [vehicle.t, vehicle.t + horizon])
   double time_from_now_s = 0;  ///< t - vehicle.t

@@ -110,6 +110,36 @@ struct EstimatorOptions {
   std::string validate() const;
 };
 
+/// The field list (fdv/core/field_list.h): YAML section `estimation`. `mode` is not a key: the
+/// pipeline runs fusion, and the monocular baseline beside it (PerceptionOptions).
+template <class V>
+void describe(V& v, EstimatorOptions& o) {
+  v.removed("mode", "not configurable: the pipeline runs fusion, and the monocular baseline beside it when "
+                    "monocular_baseline is true");
+  v("gravity", o.gravity_W, "m/s²", "gravity in W, [x, y, z] (W's z axis up)");
+  v("event_sigma_px", o.event_sigma_px, "px", "detection centre noise (σ_n = event_sigma_px / event_focal_px)");
+  v("event_focal_px", o.event_focal_px, "px", "the event camera's focal length; 0 = from the calibration");
+  v("huber_event", o.huber_event, "σ", "Huber threshold of an event residual (whitened norm)");
+  v("huber_depth", o.huber_depth, "σ", "Huber threshold of a depth residual");
+  v("min_event_observations", o.min_event_observations, "-", "fusion needs at least this many event observations");
+  v("min_depth_observations", o.min_depth_observations, "-", "... and this many depth observations");
+  v("min_residuals", o.min_residuals, "-", "... and this many scalar residuals");
+  v("min_event_observations_event_only", o.min_event_observations_event_only, "-",
+    "event observations for an event-only estimate");
+  v.ms("max_lateness_ms", o.max_lateness_ns, "observations older than the newest by more are refused");
+  v("max_observations", o.max_observations, "-", "most observations held (the oldest dropped beyond)");
+  v("min_depth_in_front_m", o.min_depth_in_front_m, "m", "least depth in front of every camera");
+  v("max_range_m", o.max_range_m, "m", "most depth in front of the event camera at any observation");
+  v("mono_prior_depth_m", o.mono_prior_depth_m, "m", "monocular initialisation: depth assumed along the bearings");
+  v("min_reciprocal_condition", o.min_reciprocal_condition, "-", "λ_min/λ_max of JᵀJ below this = degenerate");
+  v("max_position_sigma_m", o.max_position_sigma_m, "m", "usable: largest position std at the horizon below this");
+  v("usable_horizon_s", o.usable_horizon_s, "s", "... propagated this far beyond the newest observation");
+  v("compute_covariance", o.compute_covariance, "-", "compute the (p0, v0) covariance");
+  v("max_iterations", o.max_iterations, "-", "Ceres Levenberg-Marquardt iterations");
+  v("function_tolerance", o.function_tolerance, "-", "Ceres function tolerance");
+  v("parameter_tolerance", o.parameter_tolerance, "-", "Ceres parameter tolerance");
+}
+
 /// Result of one solve, in the spirit of ceres::Solver::Summary.
 struct TrajectoryEstimate {
   bool usable = false;  ///< converged, well constrained, in front of the cameras

@@ -30,8 +30,11 @@ void trim_history(std::vector<T>& v) {
 }  // namespace
 
 std::string PerceptionOptions::validate() const {
+  // Window and top-level messages name the YAML keys (fdv/pipeline/options_yaml.h renames the
+  // windower's window_ns to window_ms).
+  if (auto why = windows.validate(); !why.empty()) return why;
+  if (threads < 1 || threads > 64) return "threads must be in [1, 64], got " + std::to_string(threads);
   const std::pair<const char*, std::string> parts[] = {
-      {"windows", windows.validate()},
       {"compensation", compensation.validate()},
       {"detection", detection.validate()},
       {"depth_registration", depth_registration.validate()},
@@ -41,8 +44,8 @@ std::string PerceptionOptions::validate() const {
   };
   for (const auto& [name, why] : parts)
     if (!why.empty()) return std::string(name) + ": " + why;
-  if (max_lateness_ns < 0) return "max_lateness_ns must not be negative";
-  if (odometry_max_extrapolation_ns < 0) return "odometry_max_extrapolation_ns must not be negative";
+  if (max_lateness_ns < 0) return "max_lateness_ms must not be negative";
+  if (odometry_max_extrapolation_ns < 0) return "odometry_max_extrapolation_ms must not be negative";
   return {};
 }
 
@@ -74,6 +77,7 @@ Perception::Perception(const Calibration& calibration, PerceptionOptions options
         if (options.estimation.event_focal_px <= 0)
           options.estimation.event_focal_px = 0.5 * (calibration.event_camera.fx + calibration.event_camera.fy);
         options.estimation.mode = EstimatorMode::kFusion;
+        options.compensation.threads = options.threads;
         if (const auto why = options.validate(); !why.empty()) throw ConfigError(why);
         if (const auto why = options.estimation.validate(); !why.empty())
           throw ConfigError("estimation: " + why);
@@ -257,7 +261,7 @@ void Perception::process_window(PendingWindow& w) {
   view.time_sorted = cw.report.events_out_of_order == 0;  // lets the detector binary-search time slices
   view.omega_rad_s = cw.report.has_omega ? cw.report.omega_E.norm() : 0.0;
   view.speed_m_s = cw.report.has_velocity ? cw.report.v_E.norm() : 0.0;
-  view.threads = options_.compensation.threads;  // time images, segmentation, pre-processing
+  view.threads = options_.threads;  // time images, segmentation, pre-processing
   // The detection's centre is reported in the camera at its time (paired below with that pose).
   view.observed_at = [this](const Eigen::Vector2d& px, double t_s) { return compensator_->observed_position(px, t_s); };
   // Where confirmed tracks expect their objects at the window's middle (track-aided detection).

@@ -79,8 +79,49 @@ struct PerceptionOptions {
   /// With no odometry at all, 3D estimation assumes the vehicle is static at the world origin
   /// (W = B) only when this is set; otherwise estimation is skipped and a warning is given.
   bool assume_static_vehicle = false;
+  /// Threads per window for the compensation's warp and the detector's time images, segmentation
+  /// and pre-processing (Perception sets compensation.threads from it). Results are identical for
+  /// any count; 1 = the calling thread only; 2 shortens a window's front end by about a third when
+  /// a second core is free (docs/BENCHMARKS.md, Threads).
+  int threads = 1;
   std::string validate() const;
 };
+
+/// The field list (fdv/core/field_list.h): the top-level keys of `fdv run --config` and one
+/// section per stage. YAML in and out: fdv/pipeline/options_yaml.h.
+template <class V>
+void describe(V& v, PerceptionOptions& o) {
+  v.ms("window_ms", o.windows.window_ns, "Δt: length of an event window (paper §III-A)");
+  v("max_events_per_window", o.windows.max_events_per_window, "events",
+    "overload guard: a fuller window is decimated uniformly in time order (counted)");
+  v("max_empty_windows", o.windows.max_empty_windows, "-",
+    "empty windows reported in a row in a gap; the rest of the gap is skipped");
+  v("threads", o.threads, "-", "threads per window (compensation and detection; same results for any count)");
+  v("estimate_trajectories", o.estimate_trajectories, "-", "false: detection, tracking and depth only, no 3D");
+  v("monocular_baseline", o.monocular_baseline, "-", "run Su & Shen's events-only estimator beside the fusion");
+  v("estimate_aided_association", o.estimate_aided_association, "-",
+    "a usable fusion estimate keeps a detection it predicts that the image gate rejects");
+  v("depth_since_first_detection", o.depth_since_first_detection, "-",
+    "on confirmation, segment the depth frames since the track's first detection");
+  v.ms("max_lateness_ms", o.max_lateness_ns, "how long a completed window may wait for IMU and odometry");
+  v.ms("odometry_max_extrapolation_ms", o.odometry_max_extrapolation_ns,
+       "odometry extrapolation allowed beyond the newest sample");
+  v("assume_static_vehicle", o.assume_static_vehicle, "-",
+    "with no odometry at all, estimate in 3D with the vehicle static at the origin");
+  v.section("compensation", o.compensation, "ego-motion compensation (docs/DETECTION.md)");
+  v.section("detector", o.detection, "detection (docs/DETECTION.md)");
+  v.section("depth_registration", o.depth_registration, "depth registration into the event camera");
+  v.section("tracking", o.tracking, "2D association and Kalman filter");
+  v.section("depth_segmentation", o.depth_segmentation, "depth segmentation in the track's ROI (docs/ESTIMATION.md)");
+  // event_focal_px 0 means "from the calibration" (Perception fills it in): check the rest.
+  v.section("estimation", o.estimation, "ballistic trajectory estimation (docs/ESTIMATION.md)",
+            [](EstimatorOptions e) {
+              if (e.event_focal_px < 0) return std::string("event_focal_px must be >= 0 (0 = the calibration's)");
+              if (e.event_focal_px == 0) e.event_focal_px = 1.0;
+              return e.validate();
+            });
+  v.section("prediction", o.prediction, "collision prediction");
+}
 
 /// Wall-clock time of each stage of one window [ms] (steady clock).
 struct WindowTimings {

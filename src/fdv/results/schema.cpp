@@ -314,7 +314,8 @@ void to_json(json& j, const RunSummary& s) {
        {"method", s.method},
        {"threads", s.threads},
        {"reader_report", s.reader_report},
-       {"warnings", s.warnings}};
+       {"warnings", s.warnings},
+       {"options", s.options}};
 }
 
 void from_json(const json& j, RunSummary& s) {
@@ -338,6 +339,7 @@ void from_json(const json& j, RunSummary& s) {
   s.threads = j.at("threads");
   s.reader_report = j.at("reader_report");
   s.warnings = j.at("warnings").get<std::vector<std::string>>();
+  s.options = j.value("options", nlohmann::json::object());
 }
 
 WindowRow window_row(const WindowResult& w) {

@@ -146,6 +146,9 @@ struct RunSummary {
   /// "timing_ms": wall-clock time per stage [ms]: count, min, median, p99, max, mean (no rmse).
   std::map<std::string, Summary> timing_ms;
   std::vector<std::string> warnings;  ///< "warnings": every warning of the run, in order
+  /// "options": the effective PerceptionOptions, one object per section with the YAML's keys
+  /// (to_json in fdv/pipeline/options_yaml.h); {} when absent.
+  nlohmann::json options = nlohmann::json::object();
 };
 
 // The JSON form of each row (nlohmann's to_json / from_json, so `nlohmann::json j = row;` and

@@ -65,7 +65,7 @@ ExperimentRun run(const Dataset& d, const PaperTableOptions& options, const std:
                   bool contrast) {
   ExperimentOptions o;
   o.perception = options.perception;
-  o.perception.compensation.method = method;
+  o.perception.compensation.method = *parse_compensation_method(method);
   o.relative_contrast = contrast;
   spdlog::info("running '{}' on {}", method, d.dir);
   return run_experiment(d.truth, o);

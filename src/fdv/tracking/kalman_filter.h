@@ -44,6 +44,16 @@ struct ImageFilterOptions {
   std::string validate() const;
 };
 
+/// The field list (fdv/core/field_list.h): YAML section `tracking.filter`.
+template <class V>
+void describe(V& v, ImageFilterOptions& o) {
+  v("measurement_sigma_px", o.measurement_sigma_px, "px", "detection centre noise, std per axis");
+  v("jerk_psd_px2_s5", o.jerk_psd_px2_s5, "px²/s⁵", "white-jerk power spectral density per axis");
+  v("init_velocity_sigma_px_s", o.init_velocity_sigma_px_s, "px/s", "prior std of a new track's image velocity");
+  v("init_acceleration_sigma_px_s2", o.init_acceleration_sigma_px_s2, "px/s²",
+    "prior std of a new track's image acceleration");
+}
+
 /// Prediction of the filter at a time t (nothing in the filter changes).
 struct ImagePrediction {
   TimeNs t = 0;

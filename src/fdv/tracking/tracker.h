@@ -63,6 +63,19 @@ struct TrackerOptions {
   std::string validate() const;
 };
 
+/// The field list (fdv/core/field_list.h): YAML section `tracking`.
+template <class V>
+void describe(V& v, TrackerOptions& o) {
+  v.section("filter", o.filter, "the image-plane Kalman filter (constant acceleration)");
+  v("gate_chi2", o.gate_chi2, "-", "Mahalanobis gate on the 2-dof innovation (χ²₂ 99.9 %)");
+  v("gate_max_distance_px", o.gate_max_distance_px, "px", "hard cap on the innovation length");
+  v.ms("max_gap_ms", o.max_gap_ns, "a confirmed track without an update this long is deleted");
+  v.ms("tentative_max_gap_ms", o.tentative_max_gap_ns, "the same for a tentative track");
+  v("confirm_hits", o.confirm_hits, "-", "updates (the first detection included) that confirm a track");
+  v("box_smoothing", o.box_smoothing, "-", "weight of a new box size in the track's smoothed size");
+  v("max_tracks", o.max_tracks, "-", "most tracks held at once");
+}
+
 enum class TrackStatus { kTentative, kConfirmed };
 
 /// A track's predicted state at some time (raw pixels).
