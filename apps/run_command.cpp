@@ -16,21 +16,13 @@
 #include "fdv/pipeline/options_yaml.h"
 #include "fdv/pipeline/perception.h"
 #include "fdv/pipeline/replay.h"
+#include "fdv/pipeline/sensor_policy.h"
 #include "fdv/results/writer.h"
 #include "fdv/tables/experiment.h"
 
 namespace fdv::cli {
 namespace fs = std::filesystem;
 namespace {
-
-/// A calibration for inputs that come without one: an ideal camera of the sensor's size. Pixel
-/// coordinates then pass through unchanged (no distortion), and only "none" compensation is possible.
-Calibration pixel_only_calibration(int width, int height) {
-  Calibration c;
-  const double f = std::max(width, height);
-  c.event_camera = {width, height, f, f, 0.5 * (width - 1), 0.5 * (height - 1), {}};
-  return c;
-}
 
 PerceptionOptions load_options(const RunArgs& args) {
   PerceptionOptions o;
@@ -101,50 +93,23 @@ void run_recording(const RunArgs& args) {
     spdlog::warn("{}", w);
     warnings.push_back(w);
   };
-  Calibration calib;
-  std::string calib_source;
-  bool pixel_only = false;  // no calibration at all: the camera's rays are unknown
-  if (!args.calib.empty()) {
-    calib = load_calibration(args.calib);
-    calib_source = args.calib;
-  } else if (info.calibration) {
-    calib = *info.calibration;
-    calib_source = "from the recording";
-  } else {
-    if (info.width <= 0 || info.height <= 0)
-      throw InputError(args.input, "", "no calibration and no sensor size: pass --calib FILE");
-    calib = pixel_only_calibration(info.width, info.height);
-    calib_source = "none (pixel coordinates, no compensation)";
-    pixel_only = true;
-    warn("no calibration: detecting in pixel coordinates with no motion compensation and no 3D estimation");
+  // What the input's sensors allow of the requested options (fdv/pipeline/sensor_policy.h).
+  std::optional<Calibration> calib_file;
+  if (!args.calib.empty()) calib_file = load_calibration(args.calib);
+  const PerceptionOptions requested_options = load_options(args);
+  SensorPolicy policy;
+  try {
+    policy = apply_sensor_policy(declared_sensors(info, std::move(calib_file)), requested_options);
+  } catch (const ConfigError& e) {  // a missing or mismatched sensor size: name where it came from
+    throw InputError(args.calib.empty() ? args.input : args.calib, "", e.what());
   }
-  if (info.width > 0 && (calib.event_camera.width != info.width || calib.event_camera.height != info.height))
-    throw InputError(args.calib.empty() ? args.input : args.calib, "",
-                     fmt::format("calibration is {}x{} but the recording is {}x{}", calib.event_camera.width,
-                                 calib.event_camera.height, info.width, info.height));
-
-  PerceptionOptions options = load_options(args);
-  auto declares = [&](StreamKind k) {
-    return std::find(info.streams.begin(), info.streams.end(), k) != info.streams.end();
-  };
-  // The best method the available sensors allow, and say which.
-  const CompensationMethod requested = options.compensation.method;
-  if (pixel_only) {
-    // No 3D estimate, even for a vehicle declared static.
-    options.estimate_trajectories = false;
-    if (args.assume_static) warn("--assume-static ignored: no calibration, so no 3D estimation");
-  }
-  if (pixel_only && requested != CompensationMethod::kNone) {
-    options.compensation.method = CompensationMethod::kNone;
-  } else if (!declares(StreamKind::kImu) &&
-             (requested == CompensationMethod::kRotation || requested == CompensationMethod::kRotationTranslation)) {
-    warn(fmt::format("no IMU in the input: '{}' compensation impossible, using 'none'", to_string(requested)));
-    options.compensation.method = CompensationMethod::kNone;
-  } else if (requested == CompensationMethod::kRotationTranslation &&
-             (!declares(StreamKind::kDepth) || !declares(StreamKind::kOdometry) || !calib.depth_camera)) {
-    warn("no depth frames, depth camera or odometry: translational compensation impossible, using 'rotation'");
-    options.compensation.method = CompensationMethod::kRotation;
-  }
+  for (const std::string& w : policy.warnings) warn(w);
+  const Calibration& calib = policy.calibration;
+  const PerceptionOptions& options = policy.options;
+  const CompensationMethod requested = requested_options.compensation.method;
+  const std::string calib_source = !args.calib.empty() ? args.calib
+                                   : policy.pixel_only ? "none (pixel coordinates, no compensation)"
+                                                       : "from the recording";
   spdlog::info("{} ({}, {}x{}), calibration {}, compensation '{}'", args.input, info.format, info.width,
                info.height, calib_source, to_string(options.compensation.method));
 
