@@ -27,6 +27,7 @@
 #include "fdv/detection/detector.h"
 #include "fdv/detection/reference_time_images.h"
 #include "fdv/detection/segmentation.h"
+#include "fdv/pipeline/detector_input.h"
 #include "fdv/pipeline/event_windower.h"
 #include "tests/detection/synthetic_scene.h"
 
@@ -116,8 +117,6 @@ BENCHMARK_CAPTURE(BM_Compensate, rotation_uniform/threads:2, "rotation", false, 
 BENCHMARK_CAPTURE(BM_Compensate, rotation_translation_uniform/threads:2, "rotation_translation", false, 2)
     ->Unit(benchmark::kMillisecond);
 
-CompensatedEventsView view_of(const CompensatedWindow& w);
-
 /// The compensated window of `method` over `events` (uniform or textured), optimised or reference,
 /// then its time images: the stage pair the first target is about.
 void BM_CompensateAndTimeImages(benchmark::State& state, const char* method, bool textured, bool reference,
@@ -140,7 +139,7 @@ void BM_CompensateAndTimeImages(benchmark::State& state, const char* method, boo
       CompensatedEventsView v{0, kWindow, cam.width, cam.height, r.pixel, r.t_s};
       reference_time_images(v, ti);
     } else {
-      CompensatedEventsView v = view_of(comp->compensate(in));
+      CompensatedEventsView v = detector_input(comp->compensate(in));
       v.threads = threads;
       build_time_images(v, ti);
     }
@@ -200,11 +199,6 @@ void BM_EventWindower(benchmark::State& state) {
   state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations() * stream.size()));
 }
 BENCHMARK(BM_EventWindower)->Unit(benchmark::kMillisecond);
-
-CompensatedEventsView view_of(const CompensatedWindow& w) {
-  return {w.t_start_ns, w.t_end_ns, w.width, w.height, w.pixel(), w.t_s(), w.report.omega_E.norm(), w.report.v_E.norm(),
-          w.report.events_out_of_order == 0};
-}
 
 // Time images alone. Two windows alternate (as in a stream, where each window blanks what the
 // previous one wrote), uniform pixels.
@@ -296,7 +290,7 @@ void BM_Detector(benchmark::State& state, bool noisy, int threads) {
   std::vector<double> ms, wall;
   bool found = true;
   DetectionTimings sum;
-  CompensatedEventsView view = view_of(cw);
+  CompensatedEventsView view = detector_input(cw);
   view.threads = threads;
   for (auto _ : state) {
     const double t0 = thread_cpu_ms(), w0 = wall_ms();
@@ -341,7 +335,7 @@ const StageInputs& stage_inputs() {
     CompensationOptions opt;
     opt.method = CompensationMethod::kNone;
     auto comp = make_compensator(calib, opt);
-    build_time_images(view_of(comp->compensate({.events = ev, .t_start_ns = s.t0, .t_end_ns = s.t0 + s.duration})), r.ti);
+    build_time_images(detector_input(comp->compensate({.events = ev, .t_start_ns = s.t0, .t_end_ns = s.t0 + s.duration})), r.ti);
     const DetectorOptions o;
     r.theta = adaptive_threshold(r.ti.mean_normalized, 0, 0, o);
     cv::Mat scratch;
@@ -420,7 +414,7 @@ void BM_FrontEnd(benchmark::State& state, bool noisy, int threads) {
   std::vector<double> ms, wall;
   for (auto _ : state) {
     const double t0 = thread_cpu_ms(), w0 = wall_ms();
-    CompensatedEventsView view = view_of(comp->compensate(in));
+    CompensatedEventsView view = detector_input(comp->compensate(in));
     view.threads = threads;
     const DetectionResult r = detector.detect(view);
     benchmark::DoNotOptimize(r.status);

@@ -12,17 +12,13 @@
 #include "fdv/compensation/compensator.h"
 #include "fdv/core/error.h"
 #include "fdv/detection/detector.h"
+#include "fdv/pipeline/detector_input.h"
 #include "synthetic_scene.h"
 
 namespace fdv {
 namespace {
 
 PinholeCamera lens() { return {640, 480, 400.0, 401.0, 318.0, 243.0, {-0.1, 0.01, 0.0005, -0.0003, 0.0}}; }
-
-CompensatedEventsView view_of(const CompensatedWindow& w) {
-  return {w.t_start_ns, w.t_end_ns, w.width, w.height, w.pixel(), w.t_s(), w.report.omega_E.norm(), w.report.v_E.norm(),
-          w.report.events_out_of_order == 0};
-}
 
 class DetectorTest : public ::testing::Test {
  protected:
@@ -35,7 +31,7 @@ class DetectorTest : public ::testing::Test {
   }
   DetectionResult run(const std::vector<Event>& ev, TimeNs t0, TimeNs t1) {
     const CompensatedWindow& w = compensator_->compensate({.events = ev, .t_start_ns = t0, .t_end_ns = t1});
-    return detector_.detect(view_of(w));
+    return detector_.detect(detector_input(w));
   }
   std::unique_ptr<Compensator> compensator_;
   Detector detector_;
@@ -105,7 +101,7 @@ TEST(DetectorBox, SquareBoxHoldsTheWholeFastBallNotJustItsLatestSweep) {
       const auto ev = test::make_scene(lens(), s);
       const CompensatedWindow& w =
           compensator->compensate({.events = ev, .t_start_ns = s.t0, .t_end_ns = s.t0 + s.duration});
-      const DetectionResult r = detector.detect(view_of(w));
+      const DetectionResult r = detector.detect(detector_input(w));
       ASSERT_TRUE(r.detection) << to_string(r.status);
       const Box2D& b = r.detection->box_undistorted;
       const Eigen::Vector2d at = s.blob_at(r.detection->t_ns);
@@ -134,8 +130,8 @@ TEST_F(DetectorTest, CentreForTheCameraAtTheDetectionTimeGoesThroughObservedAt) 
   s.velocity_px_s = {300.0, 160.0};
   const auto ev = test::make_scene(lens(), s);
   const CompensatedWindow& w = compensator_->compensate({.events = ev, .t_start_ns = s.t0, .t_end_ns = s.t0 + s.duration});
-  const DetectionResult plain = detector_.detect(view_of(w));
-  CompensatedEventsView view = view_of(w);
+  const DetectionResult plain = detector_.detect(detector_input(w));
+  CompensatedEventsView view = detector_input(w);
   const Eigen::Vector2d flow(800.0, -500.0);
   view.observed_at = [&](const Eigen::Vector2d& px, double t_s) -> Eigen::Vector2d { return px + flow * t_s; };
   const DetectionResult moved = detector_.detect(view);
@@ -190,7 +186,7 @@ TEST(DetectorRefine, RecentredRegionRemovesTheClutterPullAlongTheMotion) {
     DetectorOptions o;
     o.refine_recentre_passes = passes;
     Detector d(o, lens());
-    const DetectionResult r = d.detect(view_of(w));
+    const DetectionResult r = d.detect(detector_input(w));
     EXPECT_TRUE(r.detection) << to_string(r.status);
     return r.detection ? r.detection->center_undistorted.x() - s.blob_at(r.detection->t_ns).x() : 1e9;
   };
@@ -201,7 +197,7 @@ TEST(DetectorRefine, RecentredRegionRemovesTheClutterPullAlongTheMotion) {
   // The refinement's time slice found by binary search (time-sorted window) and by testing every
   // event's time (a window not known to be sorted) bins the same events: the same detection.
   Detector sorted(DetectorOptions{}, lens()), unsorted(DetectorOptions{}, lens());
-  CompensatedEventsView v = view_of(w);
+  CompensatedEventsView v = detector_input(w);
   ASSERT_TRUE(v.time_sorted);
   const DetectionResult a = sorted.detect(v);
   v.time_sorted = false;
@@ -265,7 +261,7 @@ TEST_F(DetectorTest, BurstFarAboveTheNormalRate) {
   paper_options.count_contrast.enabled = false;
   Detector paper(paper_options, lens());
   const DetectionResult late_paper =
-      paper.detect(view_of(compensator_->compensate({.events = late_burst, .t_start_ns = s.t0, .t_end_ns = s.t0 + s.duration})));
+      paper.detect(detector_input(compensator_->compensate({.events = late_burst, .t_start_ns = s.t0, .t_end_ns = s.t0 + s.duration})));
   EXPECT_FALSE(late_paper.detection);
   EXPECT_GT(late_paper.mean_normalized, 0.65);
   EXPECT_EQ(late_paper.status, DetectionStatus::kNothingSegmented);
@@ -282,7 +278,7 @@ TEST_F(DetectorTest, BurstFarAboveTheNormalRate) {
   Detector permissive(o, lens());
   const CompensatedWindow& w = compensator_->compensate(
       {.events = with_burst(ev, 24 * kNsPerMs, 25 * kNsPerMs, 200'000, 6), .t_start_ns = s.t0, .t_end_ns = s.t0 + s.duration});
-  const DetectionResult flooded = permissive.detect(view_of(w));
+  const DetectionResult flooded = permissive.detect(detector_input(w));
   EXPECT_FALSE(flooded.detection);
   EXPECT_EQ(flooded.status, DetectionStatus::kFlooded);
 }
@@ -304,18 +300,18 @@ TEST_F(DetectorTest, NextCandidateIsTriedWhenTheStrongestPatternFailsTheEvidence
   o.min_event_density = 2.0;  // the blob holds tens of events per pixel
   o.gaussian_fit.max_candidates = 1;
   const CompensatedWindow& w = compensator_->compensate({.events = ev, .t_start_ns = s.t0, .t_end_ns = s.t0 + s.duration});
-  const DetectionResult one = Detector(o, lens()).detect(view_of(w));
+  const DetectionResult one = Detector(o, lens()).detect(detector_input(w));
   EXPECT_FALSE(one.detection);
   EXPECT_EQ(one.status, DetectionStatus::kWeakEvidence);
   EXPECT_EQ(one.candidates, 1);
   o.gaussian_fit.max_candidates = 3;
-  const DetectionResult more = Detector(o, lens()).detect(view_of(w));
+  const DetectionResult more = Detector(o, lens()).detect(detector_input(w));
   EXPECT_EQ(more.candidates, 2);
   expect_on_blob(more, s, 2.0);
   EXPECT_GE(more.detection->event_density, 2.0);
   // Without the density gate the decoy wins: it is the strongest pattern.
   o.min_event_density = 0;
-  const DetectionResult ungated = Detector(o, lens()).detect(view_of(w));
+  const DetectionResult ungated = Detector(o, lens()).detect(detector_input(w));
   ASSERT_TRUE(ungated.detection);
   EXPECT_NEAR(ungated.detection->center_undistorted.x(), 461.5, 3.0);
 }
@@ -342,10 +338,10 @@ TEST_F(DetectorTest, SmallerInitialRoiFindsASmallBlobInSparseClutter) {
   o.min_pixel_events = 1;  // the clutter's single-event pixels enter S
   o.gaussian_fit.max_candidates = 1;
   o.gaussian_fit.refit_min_roi_px = 0;  // the paper: one fit from half the image
-  const DetectionResult paper = Detector(o, lens()).detect(view_of(w));
+  const DetectionResult paper = Detector(o, lens()).detect(detector_input(w));
   EXPECT_FALSE(paper.detection) << "the half-image fit should spread over the clutter";
   o.gaussian_fit.refit_min_roi_px = 16;
-  const DetectionResult refit = Detector(o, lens()).detect(view_of(w));
+  const DetectionResult refit = Detector(o, lens()).detect(detector_input(w));
   expect_on_blob(refit, s, 2.5);
   EXPECT_LT(refit.detection->box_undistorted.width(), 40);
 }
@@ -359,23 +355,23 @@ TEST_F(DetectorTest, TrackPriorAdmitsAWeakerPatternOnlyInsideItsGate) {
   o.gaussian_fit.min_peak = 0.99;  // nothing passes the normal gate
   o.track_aided.min_peak = 0.3;
   Detector detector(o, lens());
-  EXPECT_FALSE(detector.detect(view_of(w)).detection);
+  EXPECT_FALSE(detector.detect(detector_input(w)).detection);
   const PinholeCamera cam = lens();
   auto raw_of = [&](const Eigen::Vector2d& uv) {
     return cam.normalized_to_pixel({(uv.x() - cam.cx) / cam.fx, (uv.y() - cam.cy) / cam.fy});
   };
   // The prior where the blob is at mid-window (as a Kalman prediction would put it).
   const DetectionPrior on_blob{raw_of(s.blob_at(s.t0 + s.duration / 2)), {14, 14}};
-  const DetectionResult aided = detector.detect(view_of(w), std::span(&on_blob, 1));
+  const DetectionResult aided = detector.detect(detector_input(w), std::span(&on_blob, 1));
   expect_on_blob(aided, s, 2.0);
   EXPECT_TRUE(aided.detection->track_aided);
   // A prior 100 px away opens a gate with only background in it.
   const DetectionPrior elsewhere{raw_of(s.blob_at(s.t0) + Eigen::Vector2d(100, 100)), {14, 14}};
-  EXPECT_FALSE(detector.detect(view_of(w), std::span(&elsewhere, 1)).detection);
+  EXPECT_FALSE(detector.detect(detector_input(w), std::span(&elsewhere, 1)).detection);
   // A gate 14 px ahead of the blob holds only its leading edge: the pattern is seeded there, but
   // the box the fit finds is centred outside the gate, so it is not taken.
   const DetectionPrior at_edge{raw_of(s.blob_at(s.t0 + s.duration) + Eigen::Vector2d(14, 0)), {2, 2}};
-  EXPECT_FALSE(detector.detect(view_of(w), std::span(&at_edge, 1)).detection);
+  EXPECT_FALSE(detector.detect(detector_input(w), std::span(&at_edge, 1)).detection);
 }
 
 // A far, spinning, textured ball: events all over its disk throughout the window (the scene's
@@ -403,7 +399,7 @@ TEST_F(DetectorTest, DenseMotionCueFindsASlowDenseBlobInsideATrackGateOnly) {
     const CompensatedWindow& w =
         compensator_->compensate({.events = ev, .t_start_ns = scene.t0, .t_end_ns = scene.t0 + scene.duration});
     Detector detector(options, cam);
-    return detector.detect(view_of(w), priors);
+    return detector.detect(detector_input(w), priors);
   };
 
   const DetectionResult found = detect(s, o, std::span(&on_blob, 1));
@@ -538,7 +534,7 @@ TEST_F(DetectorTest, CountContrastCueFindsAnEvenlyFiringBlobOnALateBackground) {
     const CompensatedWindow& w =
         compensator_->compensate({.events = ev, .t_start_ns = s.t0, .t_end_ns = s.t0 + s.duration});
     Detector detector(options, cam);
-    return detector.detect(view_of(w));
+    return detector.detect(detector_input(w));
   };
   DetectorOptions off, on;
   off.count_contrast.enabled = false;
@@ -555,7 +551,7 @@ TEST_F(DetectorTest, CountContrastCueFindsAnEvenlyFiringBlobOnALateBackground) {
     SCOPED_TRACE("few filled centres: their box sums taken directly");
     const CompensatedWindow& w =
         compensator_->compensate({.events = scene, .t_start_ns = s.t0, .t_end_ns = s.t0 + s.duration});
-    expect_count_cue_search_as_brute_force(found, view_of(w), on);
+    expect_count_cue_search_as_brute_force(found, detector_input(w), on);
     EXPECT_GT(found.count_cue_filled_centres, 0);
     EXPECT_LT(found.count_cue_filled_centres, 1000);
   }
@@ -603,14 +599,14 @@ TEST_F(DetectorTest, CountContrastCueFindsAnEvenlyFiringBlobOnALateBackground) {
   const CompensatedWindow& w =
       compensator_->compensate({.events = ev, .t_start_ns = uniform.t0, .t_end_ns = uniform.t0 + uniform.duration});
   Detector detector(on, cam);
-  const DetectionResult flat = detector.detect(view_of(w));
+  const DetectionResult flat = detector.detect(detector_input(w));
   EXPECT_FALSE(flat.detection) << to_string(flat.status);
   EXPECT_TRUE(flat.count_cue_ran);
   EXPECT_GE(flat.count_cue_fill, on.count_contrast.min_fill);
   // The best of ≈ 300 k centres: a 9x9 box's mean count fluctuates by ≈ 0.22 around 4.
   EXPECT_LT(flat.count_cue_contrast, 2.0);
   SCOPED_TRACE("most centres filled: box sums from the whole image's table");
-  expect_count_cue_search_as_brute_force(flat, view_of(w), on);
+  expect_count_cue_search_as_brute_force(flat, detector_input(w), on);
   EXPECT_GT(flat.count_cue_filled_centres, 100'000);
 }
 
@@ -671,18 +667,18 @@ TEST_F(DetectorTest, CountContrastCueWaivesTheTimeTestOnlyInsideATrackGate) {
   o.dense_motion.enabled = false;
   o.count_contrast.enabled = true;
   o.count_contrast.in_gates = false;
-  const DetectionResult image_only = Detector(o, cam).detect(view_of(w), std::span(&on_ball, 1));
+  const DetectionResult image_only = Detector(o, cam).detect(detector_input(w), std::span(&on_ball, 1));
   EXPECT_FALSE(image_only.detection) << to_string(image_only.detection->source);
   EXPECT_GE(image_only.count_cue_contrast, o.count_contrast.min_contrast);
   EXPECT_LT(std::abs(image_only.count_cue_time_offset), 0.1);
   o.count_contrast.in_gates = true;
-  const DetectionResult gated = Detector(o, cam).detect(view_of(w), std::span(&on_ball, 1));
+  const DetectionResult gated = Detector(o, cam).detect(detector_input(w), std::span(&on_ball, 1));
   ASSERT_TRUE(gated.detection) << to_string(gated.status);
   EXPECT_EQ(gated.detection->source, DetectionSource::kCountContrast);
   EXPECT_TRUE(gated.detection->track_aided);
   EXPECT_LT((gated.detection->center_undistorted - s.blob_at(gated.detection->t_ns)).norm(), 2.0);
   // Without a gate: nothing.
-  EXPECT_FALSE(Detector(o, cam).detect(view_of(w)).detection);
+  EXPECT_FALSE(Detector(o, cam).detect(detector_input(w)).detection);
 }
 
 TEST_F(DetectorTest, InvalidOptionsAreRejected) {

@@ -10,6 +10,7 @@
 #include "compensation/synthetic_motion.h"
 #include "fdv/compensation/compensator.h"
 #include "fdv/detection/detector.h"
+#include "fdv/pipeline/detector_input.h"
 
 namespace fdv {
 namespace {
@@ -62,11 +63,6 @@ FlyingScene make_flying_scene(const PinholeCamera& cam, const Eigen::Vector3d& o
   return s;
 }
 
-CompensatedEventsView view_of(const CompensatedWindow& w) {
-  return {w.t_start_ns, w.t_end_ns, w.width, w.height, w.pixel(), w.t_s(), w.report.omega_E.norm(), w.report.v_E.norm(),
-          w.report.events_out_of_order == 0};
-}
-
 TEST(EndToEnd, FlyingCameraFindsTheMovingObject) {
   Calibration calib;
   calib.event_camera = {640, 480, 400.0, 400.0, 320.0, 240.0, {-0.08, 0.01, 0.0, 0.0, 0.0}};
@@ -84,7 +80,7 @@ TEST(EndToEnd, FlyingCameraFindsTheMovingObject) {
   auto comp = make_compensator(calib, opt);
   const CompensatedWindow& w = comp->compensate({s.events, 0, dt, imu, odo, &s.depth});
   ASSERT_EQ(w.report.used, CompensationMethod::kRotationTranslation) << w.report.brief();
-  const DetectionResult r = detector.detect(view_of(w));
+  const DetectionResult r = detector.detect(detector_input(w));
   ASSERT_TRUE(r.detection) << to_string(r.status) << " " << r.fit_rejected;
   // Truth: the object's centre at the detection's time, seen from the camera at t0.
   const Eigen::Vector3d c = s.object_p0 + s.object_v * to_seconds(r.detection->t_ns);
@@ -94,13 +90,14 @@ TEST(EndToEnd, FlyingCameraFindsTheMovingObject) {
 
   // The background collapses only with the full compensation: far fewer pixels reach θ than with
   // rotation only or none (the paper's point, Table I "Dynamic-flight").
-  auto segmented = [&](const char* method) {
+  auto segmented = [&](CompensationMethod method) {
     opt.method = method;
     auto c2 = make_compensator(calib, opt);
-    const DetectionResult rr = detector.detect(view_of(c2->compensate({s.events, 0, dt, imu, odo, &s.depth})));
+    const DetectionResult rr = detector.detect(detector_input(c2->compensate({s.events, 0, dt, imu, odo, &s.depth})));
     return rr.segmented_pixels;
   };
-  const int seg_rt = r.segmented_pixels, seg_rot = segmented("rotation"), seg_none = segmented("none");
+  const int seg_rt = r.segmented_pixels, seg_rot = segmented(CompensationMethod::kRotation),
+            seg_none = segmented(CompensationMethod::kNone);
   std::printf("segmented pixels: rotation_translation %d, rotation %d, none %d\n", seg_rt, seg_rot, seg_none);
   EXPECT_LT(3 * seg_rt, seg_rot);
   EXPECT_LT(seg_rot, seg_none);
