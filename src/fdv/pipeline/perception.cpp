@@ -5,6 +5,8 @@
 
 #include "fdv/core/error.h"
 #include "fdv/estimation/camera_pose.h"
+#include "fdv/pipeline/detector_input.h"
+#include "fdv/pipeline/sensor_policy.h"
 
 namespace fdv {
 namespace {
@@ -179,10 +181,7 @@ void Perception::push_depth(const DepthFrame& frame) {
 void Perception::finish() {
   windower_.flush([this](const EventWindow& w) { enqueue(w); });
   process_ready(true);
-  while (!pending_depth_.empty()) {  // frames after the last window: segment with predictions
-    process_depth(pending_depth_.front());
-    pending_depth_.pop_front();
-  }
+  segment_pending_depth(std::numeric_limits<TimeNs>::max());  // frames after the last window: with predictions
 }
 
 bool Perception::window_ready(const PendingWindow& w, bool flush) const {
@@ -195,23 +194,17 @@ bool Perception::window_ready(const PendingWindow& w, bool flush) const {
 void Perception::process_ready(bool flush) {
   while (!pending_windows_.empty() && window_ready(pending_windows_.front(), flush)) {
     PendingWindow& w = pending_windows_.front();
-    // Depth frames up to this window's end are segmented first when the tracks already cover
-    // their time; the rest wait for the windows that do.
     process_window(w);
     processed_until_ = w.t_end;
     w.events.clear();
     free_buffers_.push_back(std::move(w.events));
     pending_windows_.pop_front();
-    while (!pending_depth_.empty() && pending_depth_.front().t <= processed_until_) {
-      process_depth(pending_depth_.front());
-      pending_depth_.pop_front();
-    }
+    // Depth frames up to this window's end, now that the tracks cover their time; the rest wait
+    // for the windows that do.
+    segment_pending_depth(processed_until_);
   }
   // A frame that arrived after the windows covering its time: segment it now.
-  while (!pending_depth_.empty() && pending_depth_.front().t <= processed_until_) {
-    process_depth(pending_depth_.front());
-    pending_depth_.pop_front();
-  }
+  segment_pending_depth(processed_until_);
 }
 
 std::optional<OdometrySample> Perception::vehicle_state(TimeNs t) const {
@@ -228,6 +221,8 @@ std::optional<Eigen::Isometry3d> Perception::camera_pose(TimeNs t) const {
   return body->T_W_B() * calibration_.T_B_E;
 }
 
+// The stages of one window (paper Fig. 2), each a named step below; the feedback edges from the
+// tracks and the 3D estimates into the front end are named calls too.
 void Perception::process_window(PendingWindow& w) {
   const auto start = Clock::now();
   WindowResult result;
@@ -238,78 +233,106 @@ void Perception::process_window(PendingWindow& w) {
   result.decimated = w.decimated;
   result.skipped_before = w.skipped_before;
 
-  CompensationInput in;
-  in.events = w.events;
-  in.t_start_ns = w.t_start;
-  in.t_end_ns = w.t_end;
-  in.imu = imu_;
-  in.odometry = vehicle_state(w.t_start);
-  in.depth = nullptr;  // the newest frame not newer than the window's end
-  for (const RegisteredDepth& d : recent_depth_)
-    if (d.t <= w.t_end) in.depth = &d;
-  const CompensatedWindow& cw = compensator_->compensate(in);
+  const CompensatedWindow& cw = compensate(w);
   result.compensation = cw.report;
   result.timings.compensation_ms = ms_since(start);
 
-  CompensatedEventsView view;
-  view.t_start_ns = cw.t_start_ns;
-  view.t_end_ns = cw.t_end_ns;
-  view.width = cw.width;
-  view.height = cw.height;
-  view.pixel = cw.pixel();
-  view.t_s = cw.t_s();
-  view.time_sorted = cw.report.events_out_of_order == 0;  // lets the detector binary-search time slices
-  view.omega_rad_s = cw.report.has_omega ? cw.report.omega_E.norm() : 0.0;
-  view.speed_m_s = cw.report.has_velocity ? cw.report.v_E.norm() : 0.0;
-  view.threads = options_.threads;  // time images, segmentation, pre-processing
-  // The detection's centre is reported in the camera at its time (paired below with that pose).
-  view.observed_at = [this](const Eigen::Vector2d& px, double t_s) { return compensator_->observed_position(px, t_s); };
-  // Where confirmed tracks expect their objects at the window's middle (track-aided detection).
-  priors_.clear();
-  for (const Track& track : tracker_.tracks()) {
-    if (!track.confirmed()) continue;
-    const TrackPrediction p = track.predict(w.t_start + (w.t_end - w.t_start) / 2);
-    priors_.push_back({p.centre_px, p.box_size_px});
-  }
-  const DetectionResult det = detector_.detect(view, priors_);
+  detector_priors_from_tracks(w.t_start + (w.t_end - w.t_start) / 2);
+  const DetectionResult det = detect(cw);
   result.status = det.status;
   result.detection = det.detection;
   result.theta = det.theta;
   result.timings.detection = det.timings;
 
   const auto tracking_start = Clock::now();
-  std::vector<TrackerDetection> inputs;
-  if (det.detection) {
-    const Detection2D& d = *det.detection;
-    inputs.push_back({d.t_ns, d.center_raw, d.center_normalized,
-                      Eigen::Vector2d(d.box_raw.width(), d.box_raw.height()), d.events});
-  }
-  // Estimate-aided association: the 3D trajectory of a track vouches for the detections it predicts.
-  vouched_.clear();
-  if (options_.estimate_aided_association)
-    for (const Track& track : tracker_.tracks()) {
-      const auto it = estimators_.find(track.id());
-      if (!track.confirmed() || it == estimators_.end()) continue;
-      for (std::size_t i = 0; i < inputs.size(); ++i)
-        if (const auto m2 = trajectory_mahalanobis2(it->second.fusion.latest(), inputs[i]))
-          vouched_.push_back({track.id(), i, *m2});
-    }
-  const TrackerStep step = tracker_.update(w.t_end, inputs, vouched_);
+  const TrackerStep step = associate(w.t_end, det.detection);
   result.timings.tracking_ms = ms_since(tracking_start);
   for (int id : step.deleted) estimators_.erase(id);
+  for (const TrackAssignment& a : step.assignments)
+    if (a.track_id >= 0) result.track_id = a.track_id;
+  const std::vector<int> to_solve = add_event_observations(step);
+  segment_depth_since_first_detection(step.confirmed);
+  for (int id : to_solve) estimate(id, w.t_end);
+
+  result.timings.total_ms = ms_since(start);
+  result.detector = &detector_;
+  counters_.count_window(result);
+  if (callbacks_.on_window) callbacks_.on_window(result);
+}
+
+// Ego-motion compensation (paper §IV-A) with the IMU history, the vehicle state at the window's
+// start and the newest registered depth frame not newer than the window's end.
+const CompensatedWindow& Perception::compensate(const PendingWindow& w) {
+  CompensationInput in;
+  in.events = w.events;
+  in.t_start_ns = w.t_start;
+  in.t_end_ns = w.t_end;
+  in.imu = imu_;
+  in.odometry = vehicle_state(w.t_start);
+  in.depth = nullptr;
+  for (const RegisteredDepth& d : recent_depth_)
+    if (d.t <= w.t_end) in.depth = &d;
+  return compensator_->compensate(in);
+}
+
+// Feedback, tracks -> detector: where the confirmed tracks expect their objects at time t (the
+// window's middle), for the detector's track-aided look (docs/DETECTION.md).
+void Perception::detector_priors_from_tracks(TimeNs t) {
+  priors_.clear();
+  for (const Track& track : tracker_.tracks()) {
+    if (!track.confirmed()) continue;
+    const TrackPrediction p = track.predict(t);
+    priors_.push_back({p.centre_px, p.box_size_px});
+  }
+}
+
+// Detection (paper §IV-B). Feedback, detector -> compensator: the detector reports its centre
+// through the compensator's inverse warp, in the camera at the detection's time, because
+// add_event_observations pairs it with the camera's pose at that time.
+DetectionResult Perception::detect(const CompensatedWindow& cw) {
+  return detector_.detect(detector_input(cw, *compensator_, options_.threads), priors_);
+}
+
+// Association and Kalman filter on the image plane (paper §IV-C.1), with the 3D estimates' say.
+TrackerStep Perception::associate(TimeNs t, const std::optional<Detection2D>& detection) {
+  tracker_inputs_.clear();
+  if (detection) {
+    const Detection2D& d = *detection;
+    tracker_inputs_.push_back({d.t_ns, d.center_raw, d.center_normalized,
+                               Eigen::Vector2d(d.box_raw.width(), d.box_raw.height()), d.events});
+  }
+  vouch_by_trajectory();
+  return tracker_.update(t, tracker_inputs_, vouched_);
+}
+
+// Feedback, estimator -> association gate: the 3D trajectory of a confirmed track vouches for the
+// detections it predicts, so that a miss of the image-plane gate does not restart the track and
+// its 3D history (PerceptionOptions::estimate_aided_association, docs/ESTIMATION.md §1).
+void Perception::vouch_by_trajectory() {
+  vouched_.clear();
+  if (!options_.estimate_aided_association) return;
+  for (const Track& track : tracker_.tracks()) {
+    const auto it = estimators_.find(track.id());
+    if (!track.confirmed() || it == estimators_.end()) continue;
+    for (std::size_t i = 0; i < tracker_inputs_.size(); ++i)
+      if (const auto m2 = trajectory_mahalanobis2(it->second.fusion.latest(), tracker_inputs_[i]))
+        vouched_.push_back({track.id(), i, *m2});
+  }
+}
+
+// The assigned detections as event observations of their tracks' estimators (paper §IV-C.3).
+// Returns the tracks to solve: those confirmed in this step, and the confirmed ones that got a
+// detection.
+std::vector<int> Perception::add_event_observations(const TrackerStep& step) {
   std::vector<int> to_solve = step.confirmed;
+  if (!options_.estimate_trajectories) return to_solve;
   for (const TrackAssignment& a : step.assignments) {
     if (a.track_id < 0) continue;
-    result.track_id = a.track_id;
-    if (!options_.estimate_trajectories) continue;
-    const TrackerDetection& d = inputs[a.detection];
+    const TrackerDetection& d = tracker_inputs_[a.detection];
     const auto T_W_E = camera_pose(d.t);
     if (!T_W_E) {
-      warn_once("no pose", odometry_.empty()
-                               ? "no odometry: the camera's poses are unknown, so no 3D estimation (if the "
-                                 "vehicle did not move, say so: PerceptionOptions::assume_static_vehicle, "
-                                 "fdv run --assume-static)"
-                               : "odometry does not cover a detection's time: its 3D observation skipped");
+      warn_once("no pose", odometry_.empty() ? kNoOdometryWarning
+                                             : "odometry does not cover a detection's time: its 3D observation skipped");
       continue;
     }
     EventObservation obs;
@@ -324,24 +347,22 @@ void Perception::process_window(PendingWindow& w) {
         std::find(to_solve.begin(), to_solve.end(), a.track_id) == to_solve.end())
       to_solve.push_back(a.track_id);
   }
-  // Tracks confirmed now missed the depth frames segmented while they were tentative: those since
-  // their first detection are still in recent_depth_. The frames still pending (newer than the
-  // windows done, or stuck behind a newer frame that arrived first) are segmented after this window
-  // for every confirmed track, this one included: not here, or the track would get them twice.
-  if (options_.depth_since_first_detection)
-    for (int id : step.confirmed)
-      if (const Track* track = tracker_.find(id))
-        for (const RegisteredDepth& d : recent_depth_) {
-          const bool pending = std::any_of(pending_depth_.begin(), pending_depth_.end(),
-                                           [&](const RegisteredDepth& p) { return p.t == d.t; });
-          if (d.t >= track->first_time() && !pending) segment_depth(d, *track);
-        }
-  if (options_.estimate_trajectories)
-    for (int id : to_solve) estimate(id, w.t_end);
-  result.timings.total_ms = ms_since(start);
-  result.detector = &detector_;
-  counters_.count_window(result);
-  if (callbacks_.on_window) callbacks_.on_window(result);
+  return to_solve;
+}
+
+// Tracks confirmed now missed the depth frames segmented while they were tentative: those since
+// their first detection are still in recent_depth_. The frames still pending (newer than the
+// windows done, or stuck behind a newer frame that arrived first) are segmented after this window
+// for every confirmed track, this one included: not here, or the track would get them twice.
+void Perception::segment_depth_since_first_detection(std::span<const int> confirmed) {
+  if (!options_.depth_since_first_detection) return;
+  for (int id : confirmed)
+    if (const Track* track = tracker_.find(id))
+      for (const RegisteredDepth& d : recent_depth_) {
+        const bool pending = std::any_of(pending_depth_.begin(), pending_depth_.end(),
+                                         [&](const RegisteredDepth& p) { return p.t == d.t; });
+        if (d.t >= track->first_time() && !pending) segment_depth(d, *track);
+      }
 }
 
 Perception::TrackEstimators& Perception::estimators_for(int track_id) {
@@ -367,9 +388,13 @@ std::optional<double> Perception::trajectory_mahalanobis2(const TrajectoryEstima
                                       options_.estimation.event_sigma_px / options_.estimation.event_focal_px);
 }
 
-void Perception::process_depth(const RegisteredDepth& depth) {
-  for (const Track& track : tracker_.tracks())
-    if (track.confirmed() && segment_depth(depth, track)) estimate(track.id(), depth.t);
+void Perception::segment_pending_depth(TimeNs up_to) {
+  while (!pending_depth_.empty() && pending_depth_.front().t <= up_to) {
+    const RegisteredDepth& depth = pending_depth_.front();
+    for (const Track& track : tracker_.tracks())
+      if (track.confirmed() && segment_depth(depth, track)) estimate(track.id(), depth.t);
+    pending_depth_.pop_front();
+  }
 }
 
 bool Perception::segment_depth(const RegisteredDepth& depth, const Track& track) {
@@ -378,21 +403,12 @@ bool Perception::segment_depth(const RegisteredDepth& depth, const Track& track)
   DepthQuery query;
   query.centre_px = p.centre_px;
   query.box_size_px = p.box_size_px;
-  auto it = estimators_.find(track.id());
   const auto T_W_E = camera_pose(depth.t);
-  // Gate the depth on the trajectory only when that trajectory was itself fitted to depth: an
-  // event-only fit knows the range only through gravity's curvature, and its (linearised)
-  // covariance can be confidently wrong; gating on it locked the true depth out (swing).
-  if (it != estimators_.end() && it->second.fusion.latest().usable &&
-      it->second.fusion.latest().method == EstimateMethod::kFusion && T_W_E) {
-    const TrajectoryEstimate& est = it->second.fusion.latest();
-    const Eigen::Vector3d p_E = T_W_E->inverse() * est.trajectory.position(depth.t);
-    query.expected_depth_m = p_E.z();
-    if (const auto cov = est.position_covariance(depth.t)) {
-      const Eigen::Vector3d axis_W = T_W_E->linear().col(2);
-      query.expected_depth_sigma_m = std::sqrt(std::max(0.0, axis_W.dot(*cov * axis_W)));
+  if (T_W_E)
+    if (const auto expected = expected_depth_from_estimate(track.id(), depth.t, *T_W_E)) {
+      query.expected_depth_m = expected->depth_m;
+      query.expected_depth_sigma_m = expected->sigma_m;
     }
-  }
   DepthResult r;
   r.t = depth.t;
   r.track_id = track.id();
@@ -410,7 +426,27 @@ bool Perception::segment_depth(const RegisteredDepth& depth, const Track& track)
   return accepted;
 }
 
+// Feedback, estimator -> depth segmentation: the track's trajectory sets the expected depth of
+// the segmentation's gate (docs/ESTIMATION.md §2, gate 5), only when that trajectory was itself
+// fitted to depth: an event-only fit knows the range only through gravity's curvature, and its
+// (linearised) covariance can be confidently wrong; gating on it locked the true depth out (swing).
+std::optional<Perception::ExpectedDepth> Perception::expected_depth_from_estimate(
+    int track_id, TimeNs t, const Eigen::Isometry3d& T_W_E) const {
+  const auto it = estimators_.find(track_id);
+  if (it == estimators_.end()) return std::nullopt;
+  const TrajectoryEstimate& est = it->second.fusion.latest();
+  if (!est.usable || est.method != EstimateMethod::kFusion) return std::nullopt;
+  const Eigen::Vector3d p_E = T_W_E.inverse() * est.trajectory.position(t);
+  ExpectedDepth expected{p_E.z(), 0.0};
+  if (const auto cov = est.position_covariance(t)) {
+    const Eigen::Vector3d axis_W = T_W_E.linear().col(2);
+    expected.sigma_m = std::sqrt(std::max(0.0, axis_W.dot(*cov * axis_W)));
+  }
+  return expected;
+}
+
 void Perception::estimate(int track_id, TimeNs t) {
+  if (!options_.estimate_trajectories) return;
   TrackEstimators& e = estimators_for(track_id);
   // Solved only with a new observation; emitted only with a fit (not while it waits for the
   // minimum number of observations).

@@ -16,6 +16,15 @@
 /// frame: registration into the event camera (also feeding the translational compensation) ->
 /// segmentation in the ROI of each live track -> DepthObservation. Per track: a fusion estimator
 /// (events + depth) and the monocular baseline (events only), re-solved on each new observation.
+/// In the code, process_window is these stages as named steps, and each feedback edge from the
+/// back end into the front end a named call (detector_priors_from_tracks, the detector's inverse
+/// warp through detector_input, vouch_by_trajectory, expected_depth_from_estimate).
+///
+/// Missing sensors: a Perception does what its options say. To fall back as `fdv run` does when the
+/// input lacks IMU, depth, odometry or a calibration (compensation method, no 3D, pixel-only
+/// calibration, and a warning each), build it from apply_sensor_policy (fdv/pipeline/sensor_policy.h):
+///   const SensorPolicy p = apply_sensor_policy(declared_sensors(reader->info()), options);
+///   Perception perception(p.calibration, p.options, callbacks);   // and show p.warnings
 ///
 /// Ordering: each stream must be pushed in its own time order; streams may be interleaved in any
 /// order within `max_lateness_ns`: a completed window waits until IMU and odometry have reached its
@@ -244,11 +253,30 @@ class Perception {
   void advance_stream_time(TimeNs t);
   void process_ready(bool flush);
   bool window_ready(const PendingWindow& w, bool flush) const;
+  struct ExpectedDepth {
+    double depth_m = 0;  ///< z of the object's centre in E
+    double sigma_m = 0;  ///< its std from the trajectory's position covariance (0 without one)
+  };
+
+  /// One window through every stage: the steps below, in this order.
   void process_window(PendingWindow& w);
-  void process_depth(const RegisteredDepth& depth);
+  const CompensatedWindow& compensate(const PendingWindow& w);
+  void detector_priors_from_tracks(TimeNs t);  ///< fills priors_
+  DetectionResult detect(const CompensatedWindow& cw);
+  TrackerStep associate(TimeNs t, const std::optional<Detection2D>& detection);
+  void vouch_by_trajectory();  ///< fills vouched_ for tracker_inputs_
+  std::vector<int> add_event_observations(const TrackerStep& step);
+  void segment_depth_since_first_detection(std::span<const int> confirmed);
+  /// Every depth segmentation of the pending frames starts here: the frames up to `up_to`, for
+  /// every confirmed track, each accepted observation then solved.
+  void segment_pending_depth(TimeNs up_to);
   /// The depth observation of one track in one registered frame (and its on_depth report); true
   /// when the track's fusion estimator accepted it.
   bool segment_depth(const RegisteredDepth& depth, const Track& track);
+  std::optional<ExpectedDepth> expected_depth_from_estimate(int track_id, TimeNs t,
+                                                            const Eigen::Isometry3d& T_W_E) const;
+  /// Every 3D solve starts here (after a window's event observations, after a depth observation):
+  /// nothing unless estimate_trajectories.
   void estimate(int track_id, TimeNs t);
   std::optional<Eigen::Isometry3d> camera_pose(TimeNs t) const;
   std::optional<OdometrySample> vehicle_state(TimeNs t) const;
@@ -274,6 +302,7 @@ class Perception {
   std::deque<PendingWindow> pending_windows_;
   std::vector<std::vector<Event>> free_buffers_;
   std::vector<DetectionPrior> priors_;  ///< per window, reused
+  std::vector<TrackerDetection> tracker_inputs_;  ///< per window, reused: the tracker's input
   std::vector<ExternalGate> vouched_;   ///< per window, reused (estimate_aided_association)
   std::map<int, TrackEstimators> estimators_;
   TimeNs stream_time_ = std::numeric_limits<TimeNs>::min();
