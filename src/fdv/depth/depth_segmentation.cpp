@@ -1,29 +1,23 @@
 #include "fdv/depth/depth_segmentation.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <numbers>
 #include <vector>
 
 #include "fdv/core/error.h"
+#include "fdv/core/numeric.h"
 
 namespace fdv {
 
 namespace {
 
-bool positive_finite(double v) { return std::isfinite(v) && v > 0; }
-
 /// std of the depths of a sphere's visible cap (orthographic, uniform over the disc): the height
 /// h = sqrt(r² - ρ²) has mean 2r/3 and variance r²/2 - 4r²/9 = r²/18.
 constexpr double kCapSpreadPerRadius = 0.23570226039551584;  // 1/sqrt(18)
 constexpr double kCapMeanPerRadius = 2.0 / 3.0;
-
-std::string fmt(const char* f, double a, double b = 0, double c = 0) {
-  char buf[160];
-  std::snprintf(buf, sizeof buf, f, a, b, c);
-  return buf;
-}
 
 }  // namespace
 
@@ -254,29 +248,29 @@ std::optional<GateFailure> failed_gate(const WindowStats& s, const ObjectGeometr
   const Eigen::Vector2d off = (s.centroid - q.centre_px).cwiseQuotient(0.5 * q.box_size_px);
   if (s.count < o.min_peak_pixels)
     return GateFailure{DepthRejection::kNoSignificantPeak,
-                       fmt("%.0f pixels in the window", s.count)};
+                       fmt::format("{} pixels in the window", s.count)};
   if (s.std > o.spread_gate * g.expected_spread)
     return GateFailure{
         DepthRejection::kSpreadTooLarge,
-        fmt("spread %.3f m > %.1f x expected %.3f m", s.std, o.spread_gate, g.expected_spread)};
+        fmt::format("spread {:.3f} m > {:.1f} x expected {:.3f} m", s.std, o.spread_gate, g.expected_spread)};
   if (s.count > o.max_fill_ratio * ellipse_area)
     return GateFailure{
         DepthRejection::kFootprintTooLarge,
-        fmt("%.0f pixels > %.2f x box ellipse %.0f px", s.count, o.max_fill_ratio, ellipse_area)};
+        fmt::format("{} pixels > {:.2f} x box ellipse {:.0f} px", s.count, o.max_fill_ratio, ellipse_area)};
   if (off.norm() > o.max_centroid_offset)
     return GateFailure{DepthRejection::kOffCentre,
-                       fmt("centroid %.2f box half-sizes from the track's centre", off.norm())};
+                       fmt::format("centroid {:.2f} box half-sizes from the track's centre", off.norm())};
   if (o.object_radius_m > 0 &&
       (g.r_box > o.radius_ratio_gate * g.r || g.r_box * o.radius_ratio_gate < g.r))
     return GateFailure{
         DepthRejection::kSizeInconsistent,
-        fmt("box at this depth implies radius %.3f m, object has %.3f m", g.r_box, g.r)};
+        fmt::format("box at this depth implies radius {:.3f} m, object has {:.3f} m", g.r_box, g.r)};
   if (q.expected_depth_m &&
       std::abs(g.z_c - *q.expected_depth_m) >
           q.expected_depth_gate_sigmas * std::hypot(g.sigma_z, q.expected_depth_sigma_m))
     return GateFailure{
         DepthRejection::kDepthInconsistent,
-        fmt("centre depth %.2f m, trajectory expects %.2f m", g.z_c, *q.expected_depth_m)};
+        fmt::format("centre depth {:.2f} m, trajectory expects {:.2f} m", g.z_c, *q.expected_depth_m)};
   return std::nullopt;
 }
 
@@ -306,7 +300,7 @@ DepthObservation depth_observation(TimeNs t, const WindowStats& s, const ObjectG
 void add_failed_peak(DepthSegmentation& out, int peak, double mean_m, const GateFailure& failed) {
   if (peak == 0) out.rejection = failed.why;
   if (!out.reason.empty()) out.reason += "; ";
-  out.reason += fmt("peak %.0f at %.2f m: ", peak + 1, mean_m) + to_string(failed.why) + " (" +
+  out.reason += fmt::format("peak {} at {:.2f} m: ", peak + 1, mean_m) + to_string(failed.why) + " (" +
                 failed.text + ")";
 }
 
@@ -332,7 +326,7 @@ DepthSegmentation segment_object_depth(const DepthImageView& depth, const Pinhol
   out.valid_pixels = hist.valid_pixels;
   if (out.valid_pixels < o.min_peak_pixels)
     return rejected(out, DepthRejection::kTooFewValidPixels,
-                    fmt("%.0f valid depth pixels of %.0f in the ROI (holes)", out.valid_pixels,
+                    fmt::format("{} valid depth pixels of {} in the ROI (holes)", out.valid_pixels,
                         out.roi_pixels));
   const double threshold = peak_threshold_pixels(out.valid_pixels, o);
   int from = 0;  // peaks from near to far, each search beyond the previous peak's window
@@ -341,7 +335,7 @@ DepthSegmentation segment_object_depth(const DepthImageView& depth, const Pinhol
     if (!p && peak == 0)
       return rejected(
           out, DepthRejection::kNoSignificantPeak,
-          fmt("no depth peak reaches %.0f pixels (%.0f valid)", threshold, out.valid_pixels));
+          fmt::format("no depth peak reaches {:.0f} pixels ({} valid)", threshold, out.valid_pixels));
     if (!p) break;
     ++out.peaks_tried;
     const double w = window_half_width_m(p->depth_m, o);

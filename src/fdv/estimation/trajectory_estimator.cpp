@@ -4,17 +4,18 @@
 #include <ceres/loss_function.h>
 #include <ceres/problem.h>
 #include <ceres/solver.h>
+#include <fmt/format.h>
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <limits>
 #include <tuple>
 #include <utility>
 
 #include "fdv/core/error.h"
+#include "fdv/core/numeric.h"
 #include "fdv/estimation/residuals.h"
 
 namespace fdv {
@@ -22,7 +23,6 @@ namespace fdv {
 namespace {
 
 bool finite_pose(const Eigen::Isometry3d& T) { return T.matrix().allFinite(); }
-bool positive_finite(double v) { return std::isfinite(v) && v > 0; }
 
 double event_sigma(const EventObservation& o, double default_sigma_n) {
   return o.sigma_n > 0 ? o.sigma_n : default_sigma_n;
@@ -64,12 +64,6 @@ std::optional<BallisticTrajectory> prior_depth_solution(const std::vector<EventO
   const auto x = solve_full_rank(A, b, 1e-9);
   if (!x) return std::nullopt;
   return BallisticTrajectory{t0, x->head<3>(), x->tail<3>(), g};
-}
-
-std::string format(const char* f, double a = 0, double b = 0, double c = 0, double d = 0) {
-  char buf[256];
-  std::snprintf(buf, sizeof buf, f, a, b, c, d);
-  return buf;
 }
 
 void append(std::string& msg, const std::string& s) {
@@ -161,15 +155,15 @@ std::optional<double> TrajectoryEstimate::observation_mahalanobis2(TimeNs t, con
 std::string TrajectoryEstimate::brief_report() const {
   std::string s = usable ? "usable" : "NOT usable";
   s += std::string(", ") + to_string(method);
-  s += format(", %.0f event + %.0f depth obs, %.0f outliers", event_observations,
+  s += fmt::format(", {} event + {} depth obs, {} outliers", event_observations,
               depth_observations, outliers);
-  s += format(", cost %.4g -> %.4g in %.0f iterations", initial_cost, final_cost, iterations);
+  s += fmt::format(", cost {:.4g} -> {:.4g} in {} iterations", initial_cost, final_cost, iterations);
   if (method != EstimateMethod::kNone) {
     const auto& p = trajectory.p0_W;
     const auto& v = trajectory.v0_W;
-    s += format(", p0 (%.3f %.3f %.3f)", p.x(), p.y(), p.z());
-    s += format(" v0 (%.3f %.3f %.3f)", v.x(), v.y(), v.z());
-    s += format(", pos sigma %.3g m (%.3g m at the horizon)", position_sigma_m, horizon_sigma_m);
+    s += fmt::format(", p0 ({:.3f} {:.3f} {:.3f})", p.x(), p.y(), p.z());
+    s += fmt::format(" v0 ({:.3f} {:.3f} {:.3f})", v.x(), v.y(), v.z());
+    s += fmt::format(", pos sigma {:.3g} m ({:.3g} m at the horizon)", position_sigma_m, horizon_sigma_m);
   }
   if (!initialisation.empty()) s += ", init " + initialisation;
   if (!message.empty()) s += " (" + message + ")";
@@ -308,10 +302,10 @@ std::optional<std::string> missing_observations(const EstimatorOptions& o, int n
                                 : ne >= o.min_event_observations_event_only;
   if (enough) return std::nullopt;
   return use_depth
-             ? format("waiting for observations: %.0f event + %.0f depth, need >= %.0f + %.0f", ne,
+             ? fmt::format("waiting for observations: {} event + {} depth, need >= {} + {}", ne,
                       nd, o.min_event_observations, o.min_depth_observations) +
-                   format(" and >= %.0f residuals", o.min_residuals)
-             : format("waiting for observations: %.0f event, need >= %.0f", ne,
+                   fmt::format(" and >= {} residuals", o.min_residuals)
+             : fmt::format("waiting for observations: {} event, need >= {}", ne,
                       o.min_event_observations_event_only);
 }
 
@@ -471,7 +465,7 @@ std::optional<std::string> rejected_solution(const ceres::Solver::Summary& summa
                                              double max_range_m) {
   if (summary.IsSolutionUsable() && fit.feasible_cost(tr)) return std::nullopt;
   if (const double z = fit.largest_range(tr); summary.IsSolutionUsable() && z > max_range_m)
-    return format("diverged: the fit puts the object %.3g m away (max_range_m %.0f m)", z,
+    return fmt::format("diverged: the fit puts the object {:.3g} m away (max_range_m {:.0f} m)", z,
                   max_range_m);
   return "solver failed: " + summary.message;
 }
@@ -537,7 +531,7 @@ bool well_constrained(TrajectoryProblem& fit, const EstimatorOptions& o, Traject
   const auto [lmin, lmax] = jtj_eigenvalue_range(fit.problem());
   if (!(lmax > 0 && lmin > o.min_reciprocal_condition * lmax)) {
     append(e.message,
-           format("degenerate geometry: trajectory not observable (JtJ reciprocal condition %.2g)",
+           fmt::format("degenerate geometry: trajectory not observable (JtJ reciprocal condition {:.2g})",
                   lmax > 0 ? lmin / lmax : 0.0));
     return false;
   }
@@ -550,7 +544,7 @@ bool well_constrained(TrajectoryProblem& fit, const EstimatorOptions& o, Traject
   e.position_sigma_m = largest_position_sigma_m(e, e.t_last);
   e.horizon_sigma_m = largest_position_sigma_m(e, e.t_last + from_seconds(o.usable_horizon_s));
   if (e.horizon_sigma_m <= o.max_position_sigma_m) return true;
-  append(e.message, format("poorly constrained: position sigma %.2f m %.2f s ahead > %.2f m",
+  append(e.message, fmt::format("poorly constrained: position sigma {:.2f} m {:.2f} s ahead > {:.2f} m",
                            e.horizon_sigma_m, o.usable_horizon_s, o.max_position_sigma_m));
   return false;
 }
