@@ -115,7 +115,7 @@ void BM_TrackerUpdate(benchmark::State& state) {
   for (auto _ : state) {
     const double s = 0.025 * (k % 40);
     d[0].t = t;
-    d[0].centre_px = {100 + 1200 * s + 1.5 * n01(rng),
+    d[0].center_px = {100 + 1200 * s + 1.5 * n01(rng),
                       300 - 300 * s + 500 * s * s + 1.5 * n01(rng)};
     d[0].box_size_px = {24, 24};
     if (k % 40 == 39) t += 200 * kNsPerMs;  // gap: the track is deleted, a new one starts
@@ -150,7 +150,7 @@ void BM_DepthSegmentation640x480(benchmark::State& state) {
           u01(rng) < 0.03 ? 0.0f : static_cast<float>(z);
     }
   DepthQuery q;
-  q.centre_px = cam.project(c);
+  q.center_px = cam.project(c);
   q.box_size_px = Eigen::Vector2d::Constant(2 * kFocal * r / zc);
   DepthSegmentationOptions o;
   o.object_radius_m = r;

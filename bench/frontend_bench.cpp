@@ -285,7 +285,7 @@ void BM_Detector(benchmark::State& state, bool noisy, int threads) {
   CompensationOptions opt;
   opt.method = CompensationMethod::kNone;
   auto comp = make_compensator(calib, opt);
-  const CompensatedWindow& cw = comp->compensate({.events = ev, .t_start_ns = s.t0, .t_end_ns = s.t0 + s.duration});
+  const CompensatedWindow& cw = comp->compensate({.events = ev, .t_start = s.t0, .t_end = s.t0 + s.duration});
   Detector detector(DetectorOptions{}, calib.event_camera);
   std::vector<double> ms, wall;
   bool found = true;
@@ -335,7 +335,7 @@ const StageInputs& stage_inputs() {
     CompensationOptions opt;
     opt.method = CompensationMethod::kNone;
     auto comp = make_compensator(calib, opt);
-    build_time_images(detector_input(comp->compensate({.events = ev, .t_start_ns = s.t0, .t_end_ns = s.t0 + s.duration})), r.ti);
+    build_time_images(detector_input(comp->compensate({.events = ev, .t_start = s.t0, .t_end = s.t0 + s.duration})), r.ti);
     const DetectorOptions o;
     r.theta = adaptive_threshold(r.ti.mean_normalized, 0, 0, o);
     cv::Mat scratch;

@@ -68,7 +68,7 @@ TEST(ContrastMax, RecoversAConstantImageShift) {
   opt.method = CompensationMethod::kContrastMax;
   opt.contrast_max.warm_start = false;
   auto comp = make_compensator(c, opt);
-  const CompensatedWindow& out = comp->compensate({.events = ev, .t_start_ns = 0, .t_end_ns = 25 * kNsPerMs});
+  const CompensatedWindow& out = comp->compensate({.events = ev, .t_start = 0, .t_end = 25 * kNsPerMs});
   EXPECT_EQ(out.report.used, CompensationMethod::kContrastMax);
   const auto& h = out.report.warp_params;
   // The sharpest image is the one that undoes the flow; within 5 % (the events are rounded to
@@ -86,8 +86,8 @@ TEST(ContrastMax, RecoversAConstantImageShift) {
   };
   opt.method = CompensationMethod::kNone;
   auto none = make_compensator(c, opt);
-  const auto n_none = distinct(none->compensate({.events = ev, .t_start_ns = 0, .t_end_ns = 25 * kNsPerMs}).pixel());
-  const auto n_cm = distinct(comp->compensate({.events = ev, .t_start_ns = 0, .t_end_ns = 25 * kNsPerMs}).pixel());
+  const auto n_none = distinct(none->compensate({.events = ev, .t_start = 0, .t_end = 25 * kNsPerMs}).pixel());
+  const auto n_cm = distinct(comp->compensate({.events = ev, .t_start = 0, .t_end = 25 * kNsPerMs}).pixel());
   EXPECT_LT(n_cm * 3, n_none);
 }
 
@@ -100,7 +100,7 @@ TEST(ContrastMax, ObservedPositionUndoesTheFittedWarp) {
   CompensationOptions opt;
   opt.method = CompensationMethod::kContrastMax;
   auto comp = make_compensator(c, opt);
-  const CompensatedWindow& out = comp->compensate({.events = ev, .t_start_ns = 0, .t_end_ns = 25 * kNsPerMs});
+  const CompensatedWindow& out = comp->compensate({.events = ev, .t_start = 0, .t_end = 25 * kNsPerMs});
   ASSERT_EQ(out.size(), ev.size()) << out.report.brief();
   double worst = 0, moved = 0;
   for (std::size_t k = 0; k < ev.size(); ++k) {

@@ -75,7 +75,7 @@ TEST(Fallback, ImuGapIsFlaggedAndTheMeanStillUsed) {
   CompensationOptions opt;
   opt.method = CompensationMethod::kRotation;
   auto comp = make_compensator(c, opt);
-  const CompensatedWindow& out = comp->compensate({.events = some_events(t0, 100), .t_start_ns = t0, .t_end_ns = t1, .imu = imu});
+  const CompensatedWindow& out = comp->compensate({.events = some_events(t0, 100), .t_start = t0, .t_end = t1, .imu = imu});
   EXPECT_TRUE(out.report.imu_gap);
   EXPECT_FALSE(out.report.imu_missing);
   EXPECT_EQ(out.report.used, CompensationMethod::kRotation);
@@ -227,7 +227,7 @@ TEST(Fallback, BurstIsDecimatedAndCounted) {
   opt.method = CompensationMethod::kNone;
   opt.max_events_per_window = 100'000;
   auto comp = make_compensator(c, opt);
-  const CompensatedWindow& out = comp->compensate({.events = ev, .t_start_ns = t0, .t_end_ns = t1});
+  const CompensatedWindow& out = comp->compensate({.events = ev, .t_start = t0, .t_end = t1});
   EXPECT_EQ(out.report.dropped_burst, 300'000u);
   EXPECT_EQ(out.size(), 100'000u);
   EXPECT_EQ(out.report.events_in, 400'000u);

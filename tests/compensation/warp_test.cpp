@@ -298,7 +298,7 @@ TEST(Warp, NoneIsExactlyTheUndistortion) {
   CompensationOptions opt;
   opt.method = CompensationMethod::kNone;
   auto comp = make_compensator(calib, opt);
-  const CompensatedWindow& out = comp->compensate({.events = ev, .t_start_ns = 0, .t_end_ns = 25 * kNsPerMs});
+  const CompensatedWindow& out = comp->compensate({.events = ev, .t_start = 0, .t_end = 25 * kNsPerMs});
   std::size_t k = 0;
   for (const Event& e : ev) {
     const Eigen::Vector2d u = calib.event_camera.undistort_pixel({e.x, e.y});  // core's Newton inverse
@@ -328,7 +328,7 @@ TEST(Warp, RoundsToTheNearestPixelNotDown) {
     const double omega_y = std::atan(shift_px / 400.0) / 0.0005;
     const auto imu = test::constant_imu({0, omega_y, 0}, -kNsPerMs, 30 * kNsPerMs, kNsPerMs);
     auto comp = make_compensator(calib, opt);
-    const CompensatedWindow& out = comp->compensate({.events = ev, .t_start_ns = 0, .t_end_ns = 25 * kNsPerMs, .imu = imu});
+    const CompensatedWindow& out = comp->compensate({.events = ev, .t_start = 0, .t_end = 25 * kNsPerMs, .imu = imu});
     ASSERT_EQ(out.size(), 1u);
     EXPECT_NEAR(out.x()[0], 32.0 + shift_px, 1e-4);
     EXPECT_EQ(out.pixel()[0], 24 * 64 + expected_u) << "shift " << shift_px;
@@ -363,7 +363,7 @@ TEST(Warp, CountsEveryDroppedEventByReason) {
   CompensationOptions opt;
   opt.method = CompensationMethod::kNone;
   auto comp = make_compensator(calib, opt);
-  const CompensationReport& r = comp->compensate({.events = ev, .t_start_ns = t0, .t_end_ns = t1}).report;
+  const CompensationReport& r = comp->compensate({.events = ev, .t_start = t0, .t_end = t1}).report;
   EXPECT_EQ(r.events_in, 8u);
   EXPECT_EQ(r.dropped_outside_window, 2u);
   EXPECT_EQ(r.dropped_outside_sensor, 2u);
@@ -379,7 +379,7 @@ TEST(Warp, EmptyWindowIsFine) {
     CompensationOptions opt;
     opt.method = *parse_compensation_method(m);
     auto comp = make_compensator(calib, opt);
-    const CompensatedWindow& out = comp->compensate({.events = {}, .t_start_ns = 0, .t_end_ns = 25 * kNsPerMs});
+    const CompensatedWindow& out = comp->compensate({.events = {}, .t_start = 0, .t_end = 25 * kNsPerMs});
     EXPECT_EQ(out.size(), 0u) << m;
     EXPECT_EQ(out.report.events_in, 0u) << m;
   }

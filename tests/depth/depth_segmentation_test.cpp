@@ -72,7 +72,7 @@ Frame render(const Scene& s) {
 /// The sphere's image: projected centre and a box of its silhouette diameter.
 DepthQuery query_for(const Sphere& s) {
   DepthQuery q;
-  q.centre_px = kCam.project(s.c);
+  q.center_px = kCam.project(s.c);
   const double rho = kCam.fx * s.r / std::sqrt(s.c.squaredNorm() - s.r * s.r);  // silhouette radius
   q.box_size_px = Eigen::Vector2d(2 * rho, 2 * rho);
   return q;
@@ -100,7 +100,7 @@ TEST(DepthSegmentation, BallInFrontOfWallGivesCentreDepth) {
   EXPECT_NEAR(o.depth_m, 4.0, 0.02);
   EXPECT_LT(o.surface_depth_m, 3.96);  // the visible cap is nearer than the centre
   EXPECT_NEAR(o.sigma_m, sigma_d435(4.0), 0.01);
-  EXPECT_NEAR((o.centre_px - kCam.project(kBall.c)).norm(), 0, 1.0);
+  EXPECT_NEAR((o.center_px - kCam.project(kBall.c)).norm(), 0, 1.0);
   EXPECT_NEAR(o.pixel_count, 0.97 * M_PI * std::pow(536.3 * 0.1 / 4.0, 2), 60);
 
   const DepthSegmentation est = segment_object_depth(depth_view(f), kCam, query_for(kBall), {});
@@ -134,7 +134,7 @@ TEST(DepthSegmentation, FlatTargetAtKnownDepth) {
   s.boards = {{3.0, 300, 330, 200, 230}};
   const Frame f = render(s);
   DepthQuery q;
-  q.centre_px = {315, 215};
+  q.center_px = {315, 215};
   q.box_size_px = {31, 31};
   const DepthSegmentation r = segment_object_depth(depth_view(f), kCam, q, {});
   ASSERT_TRUE(r.observation) << r.reason;
@@ -150,7 +150,7 @@ TEST(DepthSegmentation, HolesOverTheObjectAreRejected) {
   const DepthQuery q = query_for(kBall);
   for (int v = 0; v < 480; ++v)
     for (int u = 0; u < 640; ++u)
-      if ((Eigen::Vector2d(u, v) - q.centre_px).norm() <= 0.5 * q.box_size_px.x() + 1)
+      if ((Eigen::Vector2d(u, v) - q.center_px).norm() <= 0.5 * q.box_size_px.x() + 1)
         f.depth_m[static_cast<std::size_t>(v) * 640 + u] = 0;
   const DepthSegmentation r = segment_object_depth(depth_view(f), kCam, q, {});
   EXPECT_FALSE(r.observation) << r.observation->depth_m;
@@ -170,7 +170,7 @@ TEST(DepthSegmentation, OccluderBesideTheBallIsSkipped) {
   Scene s;
   s.spheres = {kBall};
   const DepthQuery q = query_for(kBall);
-  const int u_left = static_cast<int>(q.centre_px.x() - q.box_size_px.x());
+  const int u_left = static_cast<int>(q.center_px.x() - q.box_size_px.x());
   s.boards = {{2.0, u_left, u_left + 8, 0, 479}};
   const Frame f = render(s);
   for (const auto& o : {DepthSegmentationOptions{}, known_radius(0.1)}) {
@@ -215,7 +215,7 @@ TEST(DepthSegmentation, RampWithoutObjectIsRejected) {
   s.surface = [](int, int v) { return 3.0 + 0.02 * (v - 200); };
   const Frame f = render(s);
   DepthQuery q;
-  q.centre_px = {320, 230};
+  q.center_px = {320, 230};
   q.box_size_px = {30, 30};
   const DepthSegmentation r = segment_object_depth(depth_view(f), kCam, q, {});
   EXPECT_FALSE(r.observation) << r.observation->depth_m;
@@ -268,7 +268,7 @@ TEST(DepthSegmentation, InvalidInputIsReportedNotThrown) {
   PinholeCamera small = kCam;
   small.width = 320;
   DepthQuery q;
-  q.centre_px = {320, 240};
+  q.center_px = {320, 240};
   q.box_size_px = {20, 20};
   EXPECT_EQ(segment_object_depth(depth_view(f), small, q, {}).rejection,
             DepthRejection::kInvalidInput);
@@ -279,7 +279,7 @@ TEST(DepthSegmentation, InvalidInputIsReportedNotThrown) {
   EXPECT_EQ(segment_object_depth(depth_view(f), kCam, q, {}).rejection,
             DepthRejection::kInvalidInput);
   q.box_size_px = {20, 20};
-  q.centre_px = {-100, 240};
+  q.center_px = {-100, 240};
   EXPECT_EQ(segment_object_depth(depth_view(f), kCam, q, {}).rejection,
             DepthRejection::kRoiOutsideImage);
   DepthSegmentationOptions bad;
@@ -292,7 +292,7 @@ TEST(DepthSegmentation, InvalidInputIsReportedNotThrown) {
 // border counts); it is clipped at the image's edges and empty when the box is outside.
 TEST(DepthSegmentationPhases, RoiIsTheScaledBoxsPixelCentresClippedToTheImage) {
   DepthQuery q;
-  q.centre_px = {10.5, 20};
+  q.center_px = {10.5, 20};
   q.box_size_px = {4, 6};
   const PixelRect r = depth_roi(q, 2.0, 640, 480);
   EXPECT_EQ(r.x0, 7);
@@ -300,13 +300,13 @@ TEST(DepthSegmentationPhases, RoiIsTheScaledBoxsPixelCentresClippedToTheImage) {
   EXPECT_EQ(r.y0, 14);
   EXPECT_EQ(r.y1, 26);
   EXPECT_FALSE(r.empty());
-  q.centre_px = {1, 478};
+  q.center_px = {1, 478};
   const PixelRect corner = depth_roi(q, 2.0, 640, 480);
   EXPECT_EQ(corner.x0, 0);
   EXPECT_EQ(corner.x1, 5);
   EXPECT_EQ(corner.y0, 472);
   EXPECT_EQ(corner.y1, 479);
-  q.centre_px = {-10, 20};
+  q.center_px = {-10, 20};
   EXPECT_TRUE(depth_roi(q, 2.0, 640, 480).empty());
 }
 
@@ -327,7 +327,7 @@ TEST(DepthSegmentationPhases, HistogramCountsTheRoisValidDepthsPerBin) {
   EXPECT_EQ(all.counts, (std::vector<int>{2, 1, 2, 2}));
   EXPECT_EQ(all.roi_pixels, 12);
   EXPECT_EQ(all.valid_pixels, 7);
-  EXPECT_DOUBLE_EQ(all.bin_centre_m(1), 1.75);
+  EXPECT_DOUBLE_EQ(all.bin_center_m(1), 1.75);
   EXPECT_EQ(all.at(-1), 0);
   EXPECT_EQ(all.at(4), 0);
   const DepthHistogram part = depth_histogram(view, PixelRect{1, 2, 0, 1}, o);

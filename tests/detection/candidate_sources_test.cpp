@@ -224,7 +224,7 @@ TEST(EventRefiner, SymmetricEventsGiveTheirCentroidAndMeanTime) {
   w.view = {0, from_seconds(kWindowS), kWidth, kHeight, w.pixel, w.t_s};  // not time-sorted
   EventRefiner refiner(o);
   refiner.allocate(kWidth, kHeight);
-  const std::optional<RefinedCentre> r = refiner.refine(w.view, Box2D{38, 46, 46, 54}, 0.0125);
+  const std::optional<RefinedCenter> r = refiner.refine(w.view, Box2D{38, 46, 46, 54}, 0.0125);
   ASSERT_TRUE(r);
   EXPECT_NEAR(r->center.x(), 40.0, 1e-9);
   EXPECT_NEAR(r->center.y(), 50.0, 1e-9);

@@ -30,7 +30,7 @@ class DetectorTest : public ::testing::Test {
     compensator_ = make_compensator(c, o);
   }
   DetectionResult run(const std::vector<Event>& ev, TimeNs t0, TimeNs t1) {
-    const CompensatedWindow& w = compensator_->compensate({.events = ev, .t_start_ns = t0, .t_end_ns = t1});
+    const CompensatedWindow& w = compensator_->compensate({.events = ev, .t_start = t0, .t_end = t1});
     return detector_.detect(detector_input(w));
   }
   std::unique_ptr<Compensator> compensator_;
@@ -41,12 +41,12 @@ class DetectorTest : public ::testing::Test {
 void expect_on_blob(const DetectionResult& r, const test::BlobScene& s, double tol_px) {
   ASSERT_TRUE(r.detection) << to_string(r.status) << ", fit rejected: " << r.fit_rejected;
   const Detection2D& d = *r.detection;
-  EXPECT_GT(d.t_ns, s.t0);
-  EXPECT_LT(d.t_ns, s.t0 + s.duration);
-  const Eigen::Vector2d truth = s.blob_at(d.t_ns);
+  EXPECT_GT(d.t, s.t0);
+  EXPECT_LT(d.t, s.t0 + s.duration);
+  const Eigen::Vector2d truth = s.blob_at(d.t);
   EXPECT_LT((d.center_undistorted - truth).norm(), tol_px)
       << "detected " << d.center_undistorted.transpose() << " truth " << truth.transpose() << " at "
-      << to_seconds(d.t_ns - s.t0) * 1e3 << " ms, source " << to_string(d.source);
+      << to_seconds(d.t - s.t0) * 1e3 << " ms, source " << to_string(d.source);
   const PinholeCamera cam = lens();
   const Eigen::Vector2d truth_raw =
       cam.normalized_to_pixel({(truth.x() - cam.cx) / cam.fx, (truth.y() - cam.cy) / cam.fy});
@@ -100,11 +100,11 @@ TEST(DetectorBox, SquareBoxHoldsTheWholeFastBallNotJustItsLatestSweep) {
       s.velocity_px_s = {seed % 2 ? 1200.0 : 0.0, seed % 2 ? 0.0 : 1200.0};  // 30 px per window
       const auto ev = test::make_scene(lens(), s);
       const CompensatedWindow& w =
-          compensator->compensate({.events = ev, .t_start_ns = s.t0, .t_end_ns = s.t0 + s.duration});
+          compensator->compensate({.events = ev, .t_start = s.t0, .t_end = s.t0 + s.duration});
       const DetectionResult r = detector.detect(detector_input(w));
       ASSERT_TRUE(r.detection) << to_string(r.status);
       const Box2D& b = r.detection->box_undistorted;
-      const Eigen::Vector2d at = s.blob_at(r.detection->t_ns);
+      const Eigen::Vector2d at = s.blob_at(r.detection->t);
       const double margin = 2.0;  // px: the disc's edge pixels are sparse
       holds_the_disc += b.x0 <= at.x() - s.radius_px + margin && b.x1 >= at.x() + s.radius_px - margin &&
                         b.y0 <= at.y() - s.radius_px + margin && b.y1 >= at.y() + s.radius_px - margin;
@@ -121,7 +121,7 @@ TEST(DetectorBox, SquareBoxHoldsTheWholeFastBallNotJustItsLatestSweep) {
 }
 
 // The box and centre on the compensated grid stay where the events are; the camera-at-t fields
-// (centre_raw, centre_normalized, box_raw) go through the view's observed_at at the detection's
+// (center_raw, center_normalized, box_raw) go through the view's observed_at at the detection's
 // time: here a made-up ego-motion that moves the image by (800, −500) px/s.
 TEST_F(DetectorTest, CentreForTheCameraAtTheDetectionTimeGoesThroughObservedAt) {
   test::BlobScene s;
@@ -129,7 +129,7 @@ TEST_F(DetectorTest, CentreForTheCameraAtTheDetectionTimeGoesThroughObservedAt) 
   s.start_uv = {250.0, 200.0};
   s.velocity_px_s = {300.0, 160.0};
   const auto ev = test::make_scene(lens(), s);
-  const CompensatedWindow& w = compensator_->compensate({.events = ev, .t_start_ns = s.t0, .t_end_ns = s.t0 + s.duration});
+  const CompensatedWindow& w = compensator_->compensate({.events = ev, .t_start = s.t0, .t_end = s.t0 + s.duration});
   const DetectionResult plain = detector_.detect(detector_input(w));
   CompensatedEventsView view = detector_input(w);
   const Eigen::Vector2d flow(800.0, -500.0);
@@ -137,10 +137,10 @@ TEST_F(DetectorTest, CentreForTheCameraAtTheDetectionTimeGoesThroughObservedAt) 
   const DetectionResult moved = detector_.detect(view);
   ASSERT_TRUE(plain.detection && moved.detection);
   const Detection2D &a = *plain.detection, &b = *moved.detection;
-  EXPECT_EQ(a.t_ns, b.t_ns);
+  EXPECT_EQ(a.t, b.t);
   EXPECT_EQ(a.center_undistorted, b.center_undistorted);
   EXPECT_EQ(a.box_undistorted.x0, b.box_undistorted.x0);
-  const Eigen::Vector2d seen = a.center_undistorted + flow * to_seconds(a.t_ns - s.t0);
+  const Eigen::Vector2d seen = a.center_undistorted + flow * to_seconds(a.t - s.t0);
   EXPECT_GT((seen - a.center_undistorted).norm(), 5.0);
   const PinholeCamera cam = lens();
   const Eigen::Vector2d xn((seen.x() - cam.cx) / cam.fx, (seen.y() - cam.cy) / cam.fy);
@@ -181,14 +181,14 @@ TEST(DetectorRefine, RecentredRegionRemovesTheClutterPullAlongTheMotion) {
   CompensationOptions none;
   none.method = CompensationMethod::kNone;
   auto comp = make_compensator(c, none);
-  const CompensatedWindow& w = comp->compensate({.events = ev, .t_start_ns = s.t0, .t_end_ns = s.t0 + s.duration});
+  const CompensatedWindow& w = comp->compensate({.events = ev, .t_start = s.t0, .t_end = s.t0 + s.duration});
   auto along_error = [&](int passes) {
     DetectorOptions o;
     o.refine_recentre_passes = passes;
     Detector d(o, lens());
     const DetectionResult r = d.detect(detector_input(w));
     EXPECT_TRUE(r.detection) << to_string(r.status);
-    return r.detection ? r.detection->center_undistorted.x() - s.blob_at(r.detection->t_ns).x() : 1e9;
+    return r.detection ? r.detection->center_undistorted.x() - s.blob_at(r.detection->t).x() : 1e9;
   };
   const double single = along_error(0), recentred = along_error(DetectorOptions{}.refine_recentre_passes);
   EXPECT_GT(single, 2.0) << "the set-up must show the pull";
@@ -204,7 +204,7 @@ TEST(DetectorRefine, RecentredRegionRemovesTheClutterPullAlongTheMotion) {
   const DetectionResult b = unsorted.detect(v);
   ASSERT_TRUE(a.detection && b.detection);
   EXPECT_EQ(a.detection->center_undistorted, b.detection->center_undistorted);
-  EXPECT_EQ(a.detection->t_ns, b.detection->t_ns);
+  EXPECT_EQ(a.detection->t, b.detection->t);
 }
 
 TEST_F(DetectorTest, StaticBackgroundAndNoiseAloneGiveNoDetection) {
@@ -261,7 +261,7 @@ TEST_F(DetectorTest, BurstFarAboveTheNormalRate) {
   paper_options.count_contrast.enabled = false;
   Detector paper(paper_options, lens());
   const DetectionResult late_paper =
-      paper.detect(detector_input(compensator_->compensate({.events = late_burst, .t_start_ns = s.t0, .t_end_ns = s.t0 + s.duration})));
+      paper.detect(detector_input(compensator_->compensate({.events = late_burst, .t_start = s.t0, .t_end = s.t0 + s.duration})));
   EXPECT_FALSE(late_paper.detection);
   EXPECT_GT(late_paper.mean_normalized, 0.65);
   EXPECT_EQ(late_paper.status, DetectionStatus::kNothingSegmented);
@@ -277,7 +277,7 @@ TEST_F(DetectorTest, BurstFarAboveTheNormalRate) {
   o.min_pixel_events = 1;  // the paper's S: single-event burst pixels count
   Detector permissive(o, lens());
   const CompensatedWindow& w = compensator_->compensate(
-      {.events = with_burst(ev, 24 * kNsPerMs, 25 * kNsPerMs, 200'000, 6), .t_start_ns = s.t0, .t_end_ns = s.t0 + s.duration});
+      {.events = with_burst(ev, 24 * kNsPerMs, 25 * kNsPerMs, 200'000, 6), .t_start = s.t0, .t_end = s.t0 + s.duration});
   const DetectionResult flooded = permissive.detect(detector_input(w));
   EXPECT_FALSE(flooded.detection);
   EXPECT_EQ(flooded.status, DetectionStatus::kFlooded);
@@ -299,7 +299,7 @@ TEST_F(DetectorTest, NextCandidateIsTriedWhenTheStrongestPatternFailsTheEvidence
   o.min_pixel_events = 1;     // the decoy's single-event pixels enter S (the paper's S)
   o.min_event_density = 2.0;  // the blob holds tens of events per pixel
   o.gaussian_fit.max_candidates = 1;
-  const CompensatedWindow& w = compensator_->compensate({.events = ev, .t_start_ns = s.t0, .t_end_ns = s.t0 + s.duration});
+  const CompensatedWindow& w = compensator_->compensate({.events = ev, .t_start = s.t0, .t_end = s.t0 + s.duration});
   const DetectionResult one = Detector(o, lens()).detect(detector_input(w));
   EXPECT_FALSE(one.detection);
   EXPECT_EQ(one.status, DetectionStatus::kWeakEvidence);
@@ -333,7 +333,7 @@ TEST_F(DetectorTest, SmallerInitialRoiFindsASmallBlobInSparseClutter) {
         if (test::to_raw(lens(), mid + off + Eigen::Vector2d(x - 5, y - 5), e)) ev.push_back(e);
       }
   std::sort(ev.begin(), ev.end(), [](const Event& a, const Event& b) { return a.t < b.t; });
-  const CompensatedWindow& w = compensator_->compensate({.events = ev, .t_start_ns = s.t0, .t_end_ns = s.t0 + s.duration});
+  const CompensatedWindow& w = compensator_->compensate({.events = ev, .t_start = s.t0, .t_end = s.t0 + s.duration});
   DetectorOptions o;
   o.min_pixel_events = 1;  // the clutter's single-event pixels enter S
   o.gaussian_fit.max_candidates = 1;
@@ -350,7 +350,7 @@ TEST_F(DetectorTest, SmallerInitialRoiFindsASmallBlobInSparseClutter) {
 TEST_F(DetectorTest, TrackPriorAdmitsAWeakerPatternOnlyInsideItsGate) {
   test::BlobScene s;
   const auto ev = test::make_scene(lens(), s);
-  const CompensatedWindow& w = compensator_->compensate({.events = ev, .t_start_ns = s.t0, .t_end_ns = s.t0 + s.duration});
+  const CompensatedWindow& w = compensator_->compensate({.events = ev, .t_start = s.t0, .t_end = s.t0 + s.duration});
   DetectorOptions o;
   o.gaussian_fit.min_peak = 0.99;  // nothing passes the normal gate
   o.track_aided.min_peak = 0.3;
@@ -397,7 +397,7 @@ TEST_F(DetectorTest, DenseMotionCueFindsASlowDenseBlobInsideATrackGateOnly) {
                     std::span<const DetectionPrior> priors) {
     const auto ev = test::make_scene(cam, scene);
     const CompensatedWindow& w =
-        compensator_->compensate({.events = ev, .t_start_ns = scene.t0, .t_end_ns = scene.t0 + scene.duration});
+        compensator_->compensate({.events = ev, .t_start = scene.t0, .t_end = scene.t0 + scene.duration});
     Detector detector(options, cam);
     return detector.detect(detector_input(w), priors);
   };
@@ -412,8 +412,8 @@ TEST_F(DetectorTest, DenseMotionCueFindsASlowDenseBlobInsideATrackGateOnly) {
   // T rises by 8 px per window along −y: across the 21 px square that is ≈ 2.6 windows on an
   // infinite edge; the finite disk gives less, but well above the gate.
   EXPECT_GT(found.motion_cue_span, 0.3);
-  EXPECT_LT((d.center_undistorted - s.blob_at(d.t_ns)).norm(), 2.0)
-      << d.center_undistorted.transpose() << " vs " << s.blob_at(d.t_ns).transpose();
+  EXPECT_LT((d.center_undistorted - s.blob_at(d.t)).norm(), 2.0)
+      << d.center_undistorted.transpose() << " vs " << s.blob_at(d.t).transpose();
   EXPECT_LT(d.box_undistorted.width(), 4 * s.radius_px);
 
   // Without a gate the cue does not run (it would report any dense moving thing, e.g. a person).
@@ -497,18 +497,18 @@ CountCueSearch count_cue_by_brute_force(const CompensatedEventsView& view, const
   auto sum = [&](std::vector<std::int64_t>& t, int x0, int y0, int side) {
     return static_cast<double>(at(t, x0 + side, y0 + side) - at(t, x0, y0 + side) - at(t, x0 + side, y0) + at(t, x0, y0));
   };
-  const double centre_area = static_cast<double>(k) * k;
-  const double ring_area = static_cast<double>(2 * hs + 1) * (2 * hs + 1) - centre_area;
+  const double center_area = static_cast<double>(k) * k;
+  const double ring_area = static_cast<double>(2 * hs + 1) * (2 * hs + 1) - center_area;
   const double image_density = static_cast<double>(ti.events) / (static_cast<double>(w) * h);
   CountCueSearch r;
   for (int y = hs; y < h - hs; ++y)
     for (int x = hs; x < w - hs; ++x) {
-      const double fill = sum(active, x - hk, y - hk, k) / centre_area;
+      const double fill = sum(active, x - hk, y - hk, k) / center_area;
       if (fill < o.count_contrast.min_fill) continue;
       ++r.filled_centres;
       const double in = sum(count, x - hk, y - hk, k);
       const double surround = (sum(count, x - hs, y - hs, 2 * hs + 1) - in) / ring_area;
-      const double contrast = in / centre_area / std::max(surround, image_density);
+      const double contrast = in / center_area / std::max(surround, image_density);
       if (contrast > r.best_contrast) r.best_contrast = contrast, r.best_fill = fill;
     }
   return r;
@@ -532,7 +532,7 @@ TEST_F(DetectorTest, CountContrastCueFindsAnEvenlyFiringBlobOnALateBackground) {
   const PinholeCamera cam = lens();
   auto detect = [&](const std::vector<Event>& ev, const DetectorOptions& options) {
     const CompensatedWindow& w =
-        compensator_->compensate({.events = ev, .t_start_ns = s.t0, .t_end_ns = s.t0 + s.duration});
+        compensator_->compensate({.events = ev, .t_start = s.t0, .t_end = s.t0 + s.duration});
     Detector detector(options, cam);
     return detector.detect(detector_input(w));
   };
@@ -542,7 +542,7 @@ TEST_F(DetectorTest, CountContrastCueFindsAnEvenlyFiringBlobOnALateBackground) {
   const auto scene = late_background_scene(cam, s, false);
   // The premise: the time-based detector does not find the ball.
   const DetectionResult paper = detect(scene, off);
-  EXPECT_TRUE(!paper.detection || (paper.detection->center_undistorted - s.blob_at(paper.detection->t_ns)).norm() > 10)
+  EXPECT_TRUE(!paper.detection || (paper.detection->center_undistorted - s.blob_at(paper.detection->t)).norm() > 10)
       << paper.detection->center_undistorted.transpose();
   EXPECT_FALSE(paper.count_cue_ran);
 
@@ -550,7 +550,7 @@ TEST_F(DetectorTest, CountContrastCueFindsAnEvenlyFiringBlobOnALateBackground) {
   {
     SCOPED_TRACE("few filled centres: their box sums taken directly");
     const CompensatedWindow& w =
-        compensator_->compensate({.events = scene, .t_start_ns = s.t0, .t_end_ns = s.t0 + s.duration});
+        compensator_->compensate({.events = scene, .t_start = s.t0, .t_end = s.t0 + s.duration});
     expect_count_cue_search_as_brute_force(found, detector_input(w), on);
     EXPECT_GT(found.count_cue_filled_centres, 0);
     EXPECT_LT(found.count_cue_filled_centres, 1000);
@@ -567,8 +567,8 @@ TEST_F(DetectorTest, CountContrastCueFindsAnEvenlyFiringBlobOnALateBackground) {
   // ≈ 0.8 of it; by more than θ's margin c = 0.1 (static camera: ω = v = 0).
   EXPECT_LT(found.count_cue_time_offset, -0.2);
   // At the ball's true centre at the detection's time, with the ball's size.
-  EXPECT_LT((d.center_undistorted - s.blob_at(d.t_ns)).norm(), 2.0)
-      << d.center_undistorted.transpose() << " vs " << s.blob_at(d.t_ns).transpose();
+  EXPECT_LT((d.center_undistorted - s.blob_at(d.t)).norm(), 2.0)
+      << d.center_undistorted.transpose() << " vs " << s.blob_at(d.t).transpose();
   EXPECT_GT(d.box_undistorted.width(), s.radius_px);
   EXPECT_LT(d.box_undistorted.width(), 4 * s.radius_px);
 
@@ -597,7 +597,7 @@ TEST_F(DetectorTest, CountContrastCueFindsAnEvenlyFiringBlobOnALateBackground) {
   uniform.noise_rate_ev_s = 4.0 * 640 * 480 / to_seconds(uniform.duration);
   const auto ev = test::make_scene(cam, uniform);
   const CompensatedWindow& w =
-      compensator_->compensate({.events = ev, .t_start_ns = uniform.t0, .t_end_ns = uniform.t0 + uniform.duration});
+      compensator_->compensate({.events = ev, .t_start = uniform.t0, .t_end = uniform.t0 + uniform.duration});
   Detector detector(on, cam);
   const DetectionResult flat = detector.detect(detector_input(w));
   EXPECT_FALSE(flat.detection) << to_string(flat.status);
@@ -634,7 +634,7 @@ TEST_F(DetectorTest, CountContrastCueSkipsNoFilledCentreAtTheEdgesOfItsBlocks) {
       for (int dx = -4; dx <= 4; ++dx)
         if (!(dx >= -2 && dx <= 1 && dy >= -2 && dy <= 1)) fire(c.x + dx, c.y + dy, 3);
   for (int i = 0; i < 2000; ++i) fire((37 * i) % w, (53 * i) % h, 1);  // sparse single events
-  const CompensatedEventsView view{.t_start_ns = 0, .t_end_ns = 25 * kNsPerMs, .width = w, .height = h,
+  const CompensatedEventsView view{.t_start = 0, .t_end = 25 * kNsPerMs, .width = w, .height = h,
                                    .pixel = pixel, .t_s = t_s};
   Detector detector(o, lens());
   const DetectionResult r = detector.detect(view);
@@ -657,7 +657,7 @@ TEST_F(DetectorTest, CountContrastCueWaivesTheTimeTestOnlyInsideATrackGate) {
   const PinholeCamera cam = lens();
   const auto ev = test::make_scene(cam, s);
   const CompensatedWindow& w =
-      compensator_->compensate({.events = ev, .t_start_ns = s.t0, .t_end_ns = s.t0 + s.duration});
+      compensator_->compensate({.events = ev, .t_start = s.t0, .t_end = s.t0 + s.duration});
   const Eigen::Vector2d mid = s.blob_at(s.t0 + s.duration / 2);
   const DetectionPrior on_ball{cam.normalized_to_pixel({(mid.x() - cam.cx) / cam.fx, (mid.y() - cam.cy) / cam.fy}),
                                {16, 16}};
@@ -676,7 +676,7 @@ TEST_F(DetectorTest, CountContrastCueWaivesTheTimeTestOnlyInsideATrackGate) {
   ASSERT_TRUE(gated.detection) << to_string(gated.status);
   EXPECT_EQ(gated.detection->source, DetectionSource::kCountContrast);
   EXPECT_TRUE(gated.detection->track_aided);
-  EXPECT_LT((gated.detection->center_undistorted - s.blob_at(gated.detection->t_ns)).norm(), 2.0);
+  EXPECT_LT((gated.detection->center_undistorted - s.blob_at(gated.detection->t)).norm(), 2.0);
   // Without a gate: nothing.
   EXPECT_FALSE(Detector(o, cam).detect(detector_input(w)).detection);
 }

@@ -12,8 +12,8 @@ namespace {
 // Perception::process_window's view, as written out by hand before detector_input.
 CompensatedEventsView pipeline_view_before(const CompensatedWindow& cw, const Compensator& compensator, int threads) {
   CompensatedEventsView view;
-  view.t_start_ns = cw.t_start_ns;
-  view.t_end_ns = cw.t_end_ns;
+  view.t_start = cw.t_start;
+  view.t_end = cw.t_end;
   view.width = cw.width;
   view.height = cw.height;
   view.pixel = cw.pixel();
@@ -27,8 +27,8 @@ CompensatedEventsView pipeline_view_before(const CompensatedWindow& cw, const Co
 }
 
 void expect_same_input(const CompensatedEventsView& a, const CompensatedEventsView& b) {
-  EXPECT_EQ(a.t_start_ns, b.t_start_ns);
-  EXPECT_EQ(a.t_end_ns, b.t_end_ns);
+  EXPECT_EQ(a.t_start, b.t_start);
+  EXPECT_EQ(a.t_end, b.t_end);
   EXPECT_EQ(a.width, b.width);
   EXPECT_EQ(a.height, b.height);
   // The same arrays, not copies.
@@ -84,7 +84,7 @@ TEST(DetectorInput, MotionIsZeroWhereTheCompensationHadNone) {
   o.method = CompensationMethod::kRotationTranslation;
   const auto compensator = make_compensator(w.calib, o);
   // No IMU and no odometry: no ω, no v; the view says 0 (the threshold's "unknown").
-  const CompensatedWindow& cw = compensator->compensate({.events = w.scene.events, .t_start_ns = 0, .t_end_ns = 10 * kNsPerMs});
+  const CompensatedWindow& cw = compensator->compensate({.events = w.scene.events, .t_start = 0, .t_end = 10 * kNsPerMs});
   ASSERT_FALSE(cw.report.has_omega);
   ASSERT_FALSE(cw.report.has_velocity);
   const CompensatedEventsView view = detector_input(cw);

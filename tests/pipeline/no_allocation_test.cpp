@@ -132,7 +132,7 @@ Counts run(const char* method, std::size_t max_events_per_window, const Detector
     const RegisteredDepth& depth = s.depth[static_cast<std::size_t>(w.index) % s.depth.size()];
     const CompensationInput in{w.events, w.t_start, w.t_end, s.imu, s.odometry, &depth};
     const CompensatedWindow& cw = comp->compensate(in);
-    CompensatedEventsView v{cw.t_start_ns, cw.t_end_ns, cw.width, cw.height, cw.pixel(), cw.t_s()};
+    CompensatedEventsView v{cw.t_start, cw.t_end, cw.width, cw.height, cw.pixel(), cw.t_s()};
     build_time_images(v, ti);
     const long before_detector = g_allocations.load();
     const DetectionResult r = detector.detect(v, priors);

@@ -217,7 +217,7 @@ TEST(Perception, DepthFramesFromBeforeATracksConfirmationAreUsed) {
   // window began 25 ms earlier, and frames up to there had been segmented before it.
   TimeNs first_detection = std::numeric_limits<TimeNs>::max(), confirmed_window_start = 0;
   for (const WindowResult& w : a.results)
-    if (w.detection && w.track_id == track) first_detection = std::min(first_detection, w.detection->t_ns);
+    if (w.detection && w.track_id == track) first_detection = std::min(first_detection, w.detection->t);
   for (std::size_t i = 0; i < a.fusion.size(); ++i)
     if (a.fusion_track[i] == track) {
       confirmed_window_start = a.fusion_t[i] - PerceptionOptions{}.windows.window_ns;

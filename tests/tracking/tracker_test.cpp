@@ -14,7 +14,7 @@ constexpr TimeNs kWindow = 25 * kNsPerMs;
 TrackerDetection det(TimeNs t, double u, double v, double size = 20) {
   TrackerDetection d;
   d.t = t;
-  d.centre_px = {u, v};
+  d.center_px = {u, v};
   d.box_size_px = {size, size};
   d.event_count = 100;
   return d;
@@ -63,7 +63,7 @@ TEST(Tracker, LifecycleOfOneTrack) {
   }
   // The track predicted ahead follows the motion; its box is the smoothed detection size.
   const TrackPrediction p = tracker.find(id)->predict(9 * kWindow);
-  EXPECT_LT((p.centre_px - pos(9)).norm(), 2.0);
+  EXPECT_LT((p.center_px - pos(9)).norm(), 2.0);
   EXPECT_NEAR(p.box_size_px.x(), 20.0, 1e-9);
   // No detections: deleted once more than 100 ms have passed since the last update (k = 7).
   EXPECT_TRUE(tracker.update(11 * kWindow, {}).deleted.empty());

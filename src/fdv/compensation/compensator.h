@@ -5,10 +5,10 @@
 ///   Calibration calib = load_calibration(...);
 ///   CompensationOptions opt;                         // opt.method = kRotationTranslation
 ///   std::unique_ptr<Compensator> comp = make_compensator(calib, opt);
-///   CompensationInput in{.events = win.events, .t_start_ns = win.t_start, .t_end_ns = win.t_end,
+///   CompensationInput in{.events = win.events, .t_start = win.t_start, .t_end = win.t_end,
 ///                        .imu = imu_around_window, .odometry = odo_at_t_start, .depth = &registered};
 ///   const CompensatedWindow& out = comp->compensate(in);   // valid until the next call
-///   // detection view: {t_start_ns, t_end_ns, width, height, pixel(), t_s(), |ω|, |v|,
+///   // detection view: {t_start, t_end, width, height, pixel(), t_s(), |ω|, |v|,
 ///   //                  .time_sorted = out.report.events_out_of_order == 0}
 ///   if (out.report.used != out.report.requested) note(out.report.brief());
 ///
@@ -132,9 +132,9 @@ void describe(V& v, CompensationOptions& o) {
 
 /// Everything one window needs. Spans and the depth pointer are borrowed for the call only.
 struct CompensationInput {
-  std::span<const Event> events = {};  ///< raw sensor pixels, time-ordered, in [t_start_ns, t_end_ns)
-  TimeNs t_start_ns = 0;          ///< t0: events are warped to this time
-  TimeNs t_end_ns = 0;            ///< exclusive
+  std::span<const Event> events = {};  ///< raw sensor pixels, time-ordered, in [t_start, t_end)
+  TimeNs t_start = 0;          ///< t0: events are warped to this time
+  TimeNs t_end = 0;            ///< exclusive
   std::span<const ImuSample> imu = {};      ///< samples around the window (IMU frame), may be empty
   std::optional<OdometrySample> odometry = {};  ///< vehicle state near t_start (v_W, q_W_B), may be absent
   const RegisteredDepth* depth = nullptr;   ///< latest depth registered into E, may be null or stale
@@ -187,8 +187,8 @@ struct CompensationReport {
 /// size() (buffers are reused); use the span accessors.
 class CompensatedWindow {
  public:
-  TimeNs t_start_ns = 0;
-  TimeNs t_end_ns = 0;
+  TimeNs t_start = 0;
+  TimeNs t_end = 0;
   int width = 0;   ///< undistorted grid size = event camera size
   int height = 0;
   CompensationReport report;

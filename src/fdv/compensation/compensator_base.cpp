@@ -10,14 +10,14 @@ CompensatorBase::CompensatorBase(CompensationMethod method, const Calibration& c
 }
 
 ImuWindowSummary CompensatorBase::begin_window(const CompensationInput& in) {
-  out_.t_start_ns = in.t_start_ns;
-  out_.t_end_ns = in.t_end_ns;
+  out_.t_start = in.t_start;
+  out_.t_end = in.t_end;
   out_.set_size(0);
   CompensationReport& rep = out_.report;
   rep = CompensationReport{};
   rep.requested = rep.used = method_;
   rep.events_in = in.events.size();
-  const ImuWindowSummary imu = summarize_imu(in.imu, in.t_start_ns, in.t_end_ns, options_.max_imu_gap_ns);
+  const ImuWindowSummary imu = summarize_imu(in.imu, in.t_start, in.t_end, options_.max_imu_gap_ns);
   rep.imu_samples = imu.samples_used;
   rep.imu_largest_gap_ns = imu.largest_gap_ns;
   rep.imu_gap = imu.available && imu.gap;

@@ -56,7 +56,7 @@ void CompensatorBase::run_warp(const CompensationInput& in, Kernel& kernel) {
   float* oy = out_.y_data();
   float* ot = out_.t_data();
   std::int32_t* op = out_.pixel_data();
-  const TimeNs t0 = in.t_start_ns, t1 = in.t_end_ns;
+  const TimeNs t0 = in.t_start, t1 = in.t_end;
   std::uint64_t outside_window = 0, outside_sensor = 0, no_inverse = 0, left = 0, out_of_order = 0;
   TimeNs previous_t = std::numeric_limits<TimeNs>::min();
   std::size_t n = 0;

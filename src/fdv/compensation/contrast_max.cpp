@@ -166,16 +166,16 @@ const CompensatedWindow& ContrastMaxCompensator::compensate(const CompensationIn
   std::uniform_real_distribution<float> half_px(-0.5f, 0.5f);
   for (std::size_t i = 0; i < n; i += stride) {
     const Event& e = in.events[i];
-    if (e.t < in.t_start_ns || e.t >= in.t_end_ns || e.x >= w || e.y >= h) continue;
+    if (e.t < in.t_start || e.t >= in.t_end || e.x >= w || e.y >= h) continue;
     const NormalizedRay r = map_->ray(e.x, e.y);
     if (std::isnan(r.x)) continue;
     const float du = half_px(dither), dv = half_px(dither);
     fit_u_.push_back(static_cast<float>(cam.fx * r.x + cam.cx) + du);
     fit_v_.push_back(static_cast<float>(cam.fy * r.y + cam.cy) + dv);
-    fit_t_.push_back(static_cast<float>(in.t_end_ns > in.t_start_ns ? to_seconds(e.t - in.t_start_ns) : 0.0));
+    fit_t_.push_back(static_cast<float>(in.t_end > in.t_start ? to_seconds(e.t - in.t_start) : 0.0));
   }
   std::array<double, 4> hsol = cm.warm_start && have_previous_ ? previous_ : std::array<double, 4>{};
-  const double duration_s = to_seconds(in.t_end_ns - in.t_start_ns);
+  const double duration_s = to_seconds(in.t_end - in.t_start);
   if (fit_u_.size() >= 10 && duration_s > 0) {
     objective_.set_events(fit_u_, fit_v_, fit_t_);
     const double f0 = objective_.evaluate({0, 0, 0, 0}, nullptr);

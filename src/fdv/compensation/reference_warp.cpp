@@ -44,7 +44,7 @@ ReferenceMotion reference_motion(const CompensationReport& report, const Compens
 
 ReferenceWarpResult reference_warp(const PinholeCamera& cam, const ReferenceMotion& m, const CompensationInput& in) {
   ReferenceWarpResult out;
-  const TimeNs t0 = in.t_start_ns, t1 = in.t_end_ns, duration = t1 - t0;
+  const TimeNs t0 = in.t_start, t1 = in.t_end, duration = t1 - t0;
   TimeNs previous_t = std::numeric_limits<TimeNs>::min();
   for (std::size_t i = 0; i < in.events.size(); ++i) {
     const Event& e = in.events[i];

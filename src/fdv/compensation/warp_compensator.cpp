@@ -441,7 +441,7 @@ const CompensatedWindow& WarpCompensator::compensate(const CompensationInput& in
     used = CompensationMethod::kNone;
   }
   if (used == CompensationMethod::kRotationTranslation) {
-    const TimeNs t_mid = in.t_start_ns + (in.t_end_ns - in.t_start_ns) / 2;
+    const TimeNs t_mid = in.t_start + (in.t_end - in.t_start) / 2;
     if (!rep.has_velocity) {
       rep.odometry_missing = true;
     } else if (!in.depth || in.depth->empty()) {
@@ -468,8 +468,8 @@ const CompensatedWindow& WarpCompensator::compensate(const CompensationInput& in
   p.rays = map_->rays();
   p.width = map_->width();
   p.height = map_->height();
-  p.t0 = in.t_start_ns;
-  p.duration = std::max<TimeNs>(0, in.t_end_ns - in.t_start_ns);
+  p.t0 = in.t_start;
+  p.duration = std::max<TimeNs>(0, in.t_end - in.t_start);
   p.refresh = options_.rotation_refresh_ns;
   p.fx = static_cast<float>(cam.fx), p.fy = static_cast<float>(cam.fy);
   p.cx = static_cast<float>(cam.cx), p.cy = static_cast<float>(cam.cy);

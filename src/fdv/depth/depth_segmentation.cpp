@@ -82,10 +82,10 @@ std::string DepthSegmentationOptions::validate() const {
 PixelRect depth_roi(const DepthQuery& q, double roi_scale, int width, int height) {
   const Eigen::Vector2d half = 0.5 * roi_scale * q.box_size_px;
   PixelRect roi;
-  roi.x0 = std::max(0, static_cast<int>(std::ceil(q.centre_px.x() - half.x())));
-  roi.x1 = std::min(width - 1, static_cast<int>(std::floor(q.centre_px.x() + half.x())));
-  roi.y0 = std::max(0, static_cast<int>(std::ceil(q.centre_px.y() - half.y())));
-  roi.y1 = std::min(height - 1, static_cast<int>(std::floor(q.centre_px.y() + half.y())));
+  roi.x0 = std::max(0, static_cast<int>(std::ceil(q.center_px.x() - half.x())));
+  roi.x1 = std::min(width - 1, static_cast<int>(std::floor(q.center_px.x() + half.x())));
+  roi.y0 = std::max(0, static_cast<int>(std::ceil(q.center_px.y() - half.y())));
+  roi.y1 = std::min(height - 1, static_cast<int>(std::floor(q.center_px.y() + half.y())));
   return roi;
 }
 
@@ -121,7 +121,7 @@ std::optional<DepthPeak> nearest_significant_peak(const DepthHistogram& h, int f
     if (j >= 0 && j < bins && h.at(j) > h.at(p)) p = j;
   double m0 = 0, n0 = 0;
   for (int j = p - 1; j <= p + 1; ++j) {
-    m0 += h.at(j) * h.bin_centre_m(j);
+    m0 += h.at(j) * h.bin_center_m(j);
     n0 += h.at(j);
   }
   m0 /= n0;
@@ -140,7 +140,7 @@ const char* invalid_input(const DepthImageView& depth, const PinholeCamera& cam,
     return "depth buffer does not hold width x height values";
   if (depth.width != cam.width || depth.height != cam.height)
     return "depth image is not in the event camera's grid (size differs)";
-  if (!std::isfinite(q.centre_px.x()) || !std::isfinite(q.centre_px.y()) ||
+  if (!std::isfinite(q.center_px.x()) || !std::isfinite(q.center_px.y()) ||
       !positive_finite(q.box_size_px.x()) || !positive_finite(q.box_size_px.y()))
     return "box centre not finite or box size not > 0";
   if (!positive_finite(std::sqrt(cam.fx * cam.fy))) return "camera focal length not > 0";
@@ -245,7 +245,7 @@ struct GateFailure {
 std::optional<GateFailure> failed_gate(const WindowStats& s, const ObjectGeometry& g,
                                        const DepthQuery& q, const DepthSegmentationOptions& o) {
   const double ellipse_area = std::numbers::pi / 4 * q.box_size_px.x() * q.box_size_px.y();
-  const Eigen::Vector2d off = (s.centroid - q.centre_px).cwiseQuotient(0.5 * q.box_size_px);
+  const Eigen::Vector2d off = (s.centroid - q.center_px).cwiseQuotient(0.5 * q.box_size_px);
   if (s.count < o.min_peak_pixels)
     return GateFailure{DepthRejection::kNoSignificantPeak,
                        fmt::format("{} pixels in the window", s.count)};
@@ -291,7 +291,7 @@ DepthObservation depth_observation(TimeNs t, const WindowStats& s, const ObjectG
   obs.pixel_count = s.count;
   obs.spread_m = s.std;
   obs.expected_spread_m = g.expected_spread;
-  obs.centre_px = s.centroid;
+  obs.center_px = s.centroid;
   return obs;
 }
 

@@ -5,7 +5,7 @@
 /// footprint, position and size; the object's centre depth with the sphere-radius correction.
 ///
 ///   DepthSegmentationOptions opt;  opt.object_radius_m = 0.1;    // if the ball is known
-///   DepthQuery q{track.predict(frame.t).centre_px, track.predict(frame.t).box_size_px};
+///   DepthQuery q{track.predict(frame.t).center_px, track.predict(frame.t).box_size_px};
 ///   DepthSegmentation r = segment_object_depth(depth_view(registered), event_camera, q, opt);
 ///   if (r.observation) use(*r.observation); else report(r.rejection, r.reason);
 ///
@@ -121,7 +121,7 @@ void describe(V& v, DepthSegmentationOptions& o) {
 /// Where to look: the track's box at the depth frame's time (raw event pixels), optionally the
 /// depth the current trajectory estimate expects there (consistency with the event track).
 struct DepthQuery {
-  Eigen::Vector2d centre_px = Eigen::Vector2d::Zero();
+  Eigen::Vector2d center_px = Eigen::Vector2d::Zero();
   Eigen::Vector2d box_size_px = Eigen::Vector2d::Zero();  ///< width, height
   std::optional<double> expected_depth_m;                 ///< z of the centre in E, if known
   double expected_depth_sigma_m = 0.0;                    ///< its std (added to σ(z))
@@ -142,7 +142,7 @@ struct DepthObservation {
   int pixel_count = 0;
   double spread_m = 0;                                  ///< std of the segmented depths [m]
   double expected_spread_m = 0;                         ///< what a sphere plus noise would give [m]
-  Eigen::Vector2d centre_px = Eigen::Vector2d::Zero();  ///< centroid of the segmented pixels
+  Eigen::Vector2d center_px = Eigen::Vector2d::Zero();  ///< centroid of the segmented pixels
 };
 
 enum class DepthRejection {
@@ -197,7 +197,7 @@ struct DepthHistogram {
   int bins() const { return static_cast<int>(counts.size()); }
   /// Count of bin i; 0 outside the histogram.
   int at(int i) const { return i < 0 || i >= bins() ? 0 : counts[static_cast<std::size_t>(i)]; }
-  double bin_centre_m(int i) const { return min_depth_m + (i + 0.5) * bin_width_m; }
+  double bin_center_m(int i) const { return min_depth_m + (i + 0.5) * bin_width_m; }
 };
 DepthHistogram depth_histogram(const DepthImageView& depth, const PixelRect& roi,
                                const DepthSegmentationOptions& options);

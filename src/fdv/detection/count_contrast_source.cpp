@@ -121,8 +121,8 @@ std::optional<Candidate> CountContrastSource::find_in(const SourceWindow& in, co
   cv::Point at(-1, -1);
   double best_fill = 0, best_surround = 0;
   // Both boxes lie in the image (hs > hk since surround_scale > 1).
-  const double centre_area = static_cast<double>(k) * k;
-  const double ring_area = static_cast<double>(2 * hs + 1) * (2 * hs + 1) - centre_area;
+  const double center_area = static_cast<double>(k) * k;
+  const double ring_area = static_cast<double>(2 * hs + 1) * (2 * hs + 1) - center_area;
   // Centres in raster order (the first best wins ties), in bands of kBlock rows cut into blocks of
   // kBlock columns: a block whose centres' boxes together hold too few active pixels for any one of
   // them to pass the fill test is skipped whole (each box's fill ≤ the union's; exact).
@@ -133,18 +133,18 @@ std::optional<Candidate> CountContrastSource::find_in(const SourceWindow& in, co
     live.clear();
     for (int x0 = area.x; x0 < area.x + area.width; x0 += kBlock) {
       const int cols = std::min(kBlock, area.x + area.width - x0);
-      const double union_fill = box_sum(active, x0 - hk, y0 - hk, cols + 2 * hk, rows + 2 * hk) / (255.0 * centre_area);
+      const double union_fill = box_sum(active, x0 - hk, y0 - hk, cols + 2 * hk, rows + 2 * hk) / (255.0 * center_area);
       if (!(union_fill < cc.min_fill)) live.push_back(x0);
     }
     for (int y = y0; y < y0 + rows && !live.empty(); ++y) {
       for (const int x0 : live) {
         for (int x = x0; x < std::min(x0 + kBlock, area.x + area.width); ++x) {
-          const double fill = box_sum(active, x - hk, y - hk, k, k) / (255.0 * centre_area);
+          const double fill = box_sum(active, x - hk, y - hk, k, k) / (255.0 * center_area);
           if (fill < cc.min_fill) continue;
           ++filled;
           const double inner = count_sum(x - hk, y - hk, k, k);
           const double surround = (count_sum(x - hs, y - hs, 2 * hs + 1, 2 * hs + 1) - inner) / ring_area;
-          const double contrast = inner / centre_area / std::max(surround, image_density);
+          const double contrast = inner / center_area / std::max(surround, image_density);
           if (contrast > best) {
             best = contrast;
             at = {x, y};

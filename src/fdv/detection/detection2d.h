@@ -28,14 +28,14 @@ std::string_view to_string(DetectionSource s);
 
 struct Detection2D {
   /// Mean time of the compensated events inside the box (not the window start).
-  TimeNs t_ns = 0;
+  TimeNs t = 0;
   // On the compensated, undistorted pixel grid K·xn where the time images live: the camera at the
   // window's start (the events were warped there).
   Box2D box_undistorted;
   Eigen::Vector2d center_undistorted = Eigen::Vector2d::Zero();
-  // The fields below are in the camera at t_ns (CompensatedEventsView::observed_at undoes the
-  // ego-motion warp between t_start and t_ns): what the tracker, the estimator (which pairs the
-  // centre with the camera pose at t_ns) and the evaluation use.
+  // The fields below are in the camera at t (CompensatedEventsView::observed_at undoes the
+  // ego-motion warp between t_start and t): what the tracker, the estimator (which pairs the
+  // center with the camera pose at t) and the evaluation use.
   /// The centre as normalised undistorted coordinates (x/z, y/z) of the event camera.
   Eigen::Vector2d center_normalized = Eigen::Vector2d::Zero();
   // In raw (distorted) sensor pixels: the centre mapped through the lens model, and the bounding

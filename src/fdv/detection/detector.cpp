@@ -184,7 +184,7 @@ DetectionResult Detector::detect(const CompensatedEventsView& window, std::span<
                   .P_support = pre_.nonzero_bounds(),
                   .P_max = pre_.first_max(),
                   .theta = res.theta,
-                  .window_s = to_seconds(window.t_end_ns - window.t_start_ns),
+                  .window_s = to_seconds(window.t_end - window.t_start),
                   .gates = gates_,
                   .region_scratch = region_,
                   .why_not = res.segmented_pixels == 0 ? DetectionStatus::kNothingSegmented
@@ -219,7 +219,7 @@ Detection2D Detector::to_detection(const CompensatedEventsView& window, const Ca
     box = Box2D{center.x() - half, center.y() - half, center.x() + half, center.y() + half};
   }
   Detection2D d;
-  d.t_ns = window.t_start_ns + from_seconds(t_mean_s);
+  d.t = window.t_start + from_seconds(t_mean_s);
   d.box_undistorted = box;
   d.center_undistorted = center;
   // Seen by the camera at the detection's time (the events were warped to the window's start).

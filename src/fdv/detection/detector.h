@@ -9,7 +9,7 @@
 /// Each has its own unit, options sub-struct (DetectorOptions) and buffers (candidate_source.h).
 ///
 ///   Detector detector(options, calibration.event_camera);
-///   CompensatedEventsView view{w.t_start_ns, w.t_end_ns, w.width, w.height, w.pixel(), w.t_s(),
+///   CompensatedEventsView view{w.t_start, w.t_end, w.width, w.height, w.pixel(), w.t_s(),
 ///                              w.report.omega_E.norm(), w.report.v_E.norm(),
 ///                              w.report.events_out_of_order == 0};
 ///   DetectionResult r = detector.detect(view);

@@ -62,13 +62,13 @@ void bin_slice(const std::int32_t* __restrict pixel, const float* __restrict t_s
 
 void EventRefiner::allocate(int width, int height) { acc_.create(height, width, CV_32FC2); }
 
-std::optional<RefinedCentre> EventRefiner::refine(const CompensatedEventsView& window, const Box2D& box,
+std::optional<RefinedCenter> EventRefiner::refine(const CompensatedEventsView& window, const Box2D& box,
                                                   double t_box_s) {
   // A time slice symmetric about the box's mean event time, as wide as the window allows, and a
   // region large enough to hold the object throughout that slice: the object's events in it are
   // then complete, and their centroid is the object's position at their mean time (exact for
   // constant image velocity and a time-uniform event rate).
-  const double duration_s = to_seconds(window.t_end_ns - window.t_start_ns);
+  const double duration_s = to_seconds(window.t_end - window.t_start);
   const double tau = std::min(t_box_s, duration_s - t_box_s);
   if (!(tau > 0)) return std::nullopt;
   const float t_lo = static_cast<float>(t_box_s - tau), t_hi = static_cast<float>(t_box_s + tau);
@@ -130,7 +130,7 @@ std::optional<RefinedCentre> EventRefiner::refine(const CompensatedEventsView& w
     if ((centre - c).norm() > reach) return std::nullopt;
     if (settled) break;
   }
-  return RefinedCentre{centre, st / static_cast<double>(n)};
+  return RefinedCenter{centre, st / static_cast<double>(n)};
 }
 
 }  // namespace fdv

@@ -19,7 +19,7 @@
 
 namespace fdv {
 
-struct RefinedCentre {
+struct RefinedCenter {
   Eigen::Vector2d center = Eigen::Vector2d::Zero();  ///< undistorted grid [px]
   double t_mean_s = 0;                               ///< [s since t_start]
 };
@@ -30,7 +30,7 @@ class EventRefiner {
   void allocate(int width, int height);
   /// Centroid and mean time of the events in a time-complete slice around `box` (whose events' mean
   /// time is t_box_s), or nothing when too few or when the centroid leaves the box's reach.
-  std::optional<RefinedCentre> refine(const CompensatedEventsView& window, const Box2D& box, double t_box_s);
+  std::optional<RefinedCenter> refine(const CompensatedEventsView& window, const Box2D& box, double t_box_s);
 
  private:
   DetectorOptions options_;

@@ -35,8 +35,8 @@ namespace fdv {
 /// What detection needs of a motion-compensated window (compensation/compensator.h produces
 /// the arrays; the pipeline joins the two modules). Borrowed, valid for the call.
 struct CompensatedEventsView {
-  TimeNs t_start_ns = 0;
-  TimeNs t_end_ns = 0;
+  TimeNs t_start = 0;
+  TimeNs t_end = 0;
   int width = 0;   ///< undistorted grid size
   int height = 0;
   std::span<const std::int32_t> pixel;  ///< row-major index v·width + u of each event, in range
@@ -53,7 +53,7 @@ struct CompensatedEventsView {
   /// Maps a point of this grid (the camera at t_start) to where the camera saw it t_s [s] later, on
   /// the same undistorted grid: the inverse of the compensation's warp
   /// (Compensator::observed_position). Empty = identity (no ego-motion). The detector reports its
-  /// centre_raw / centre_normalized / box_raw through it: the camera at the detection's time.
+  /// center_raw / center_normalized / box_raw through it: the camera at the detection's time.
   std::function<Eigen::Vector2d(const Eigen::Vector2d& px, double t_s)> observed_at = {};
 };
 

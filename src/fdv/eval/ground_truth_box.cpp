@@ -181,7 +181,7 @@ GroundTruthBox ground_truth_box(std::span<const ObjectState> objects, int id, do
 
   const Lens lens(calib.event_camera);
   const Eigen::Isometry3d T_B_E = calib.T_B_E;
-  auto centre_in_camera = [&](TimeNs t) {
+  auto center_in_camera = [&](TimeNs t) {
     Eigen::Isometry3d T_W_E = body_at(body, options.rotation_time.value_or(t)).T_W_B() * T_B_E;
     T_W_E.translation() =
         (body_at(body, options.position_time.value_or(t)).T_W_B() * T_B_E).translation();
@@ -212,10 +212,10 @@ GroundTruthBox ground_truth_box(std::span<const ObjectState> objects, int id, do
     box.v_min = std::min(box.v_min, in.v0), box.v_max = std::max(box.v_max, in.v1);
   };
   const double magnification = 1.3;  // bound on the lens's local scale relative to f
-  Eigen::Vector3d c_prev = centre_in_camera(knots.front());
+  Eigen::Vector3d c_prev = center_in_camera(knots.front());
   accumulate(evaluate(c_prev, radius_m, lens, options));
   for (std::size_t i = 1; i < knots.size(); ++i) {
-    const Eigen::Vector3d c_next = centre_in_camera(knots[i]);
+    const Eigen::Vector3d c_next = center_in_camera(knots[i]);
     const double a0 = std::asin(std::min(1.0, radius_m / c_prev.norm()));
     const double a1 = std::asin(std::min(1.0, radius_m / c_next.norm()));
     const double turn =
@@ -225,7 +225,7 @@ GroundTruthBox ground_truth_box(std::span<const ObjectState> objects, int id, do
                                                          options.max_step_px)));
     for (int j = 1; j <= n; ++j) {
       const TimeNs t = knots[i - 1] + (knots[i] - knots[i - 1]) * j / n;
-      accumulate(evaluate(j == n ? c_next : centre_in_camera(t), radius_m, lens, options));
+      accumulate(evaluate(j == n ? c_next : center_in_camera(t), radius_m, lens, options));
     }
     c_prev = c_next;
   }

@@ -5,8 +5,8 @@ namespace fdv {
 CompensatedEventsView detector_input(const CompensatedWindow& window, int threads) {
   const CompensationReport& r = window.report;
   CompensatedEventsView view;
-  view.t_start_ns = window.t_start_ns;
-  view.t_end_ns = window.t_end_ns;
+  view.t_start = window.t_start;
+  view.t_end = window.t_end;
   view.width = window.width;
   view.height = window.height;
   view.pixel = window.pixel();

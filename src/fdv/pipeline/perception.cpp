@@ -265,8 +265,8 @@ void Perception::process_window(PendingWindow& w) {
 const CompensatedWindow& Perception::compensate(const PendingWindow& w) {
   CompensationInput in;
   in.events = w.events;
-  in.t_start_ns = w.t_start;
-  in.t_end_ns = w.t_end;
+  in.t_start = w.t_start;
+  in.t_end = w.t_end;
   in.imu = imu_;
   in.odometry = vehicle_state(w.t_start);
   in.depth = nullptr;
@@ -282,7 +282,7 @@ void Perception::detector_priors_from_tracks(TimeNs t) {
   for (const Track& track : tracker_.tracks()) {
     if (!track.confirmed()) continue;
     const TrackPrediction p = track.predict(t);
-    priors_.push_back({p.centre_px, p.box_size_px});
+    priors_.push_back({p.center_px, p.box_size_px});
   }
 }
 
@@ -298,7 +298,7 @@ TrackerStep Perception::associate(TimeNs t, const std::optional<Detection2D>& de
   tracker_inputs_.clear();
   if (detection) {
     const Detection2D& d = *detection;
-    tracker_inputs_.push_back({d.t_ns, d.center_raw, d.center_normalized,
+    tracker_inputs_.push_back({d.t, d.center_raw, d.center_normalized,
                                Eigen::Vector2d(d.box_raw.width(), d.box_raw.height()), d.events});
   }
   vouch_by_trajectory();
@@ -337,7 +337,7 @@ std::vector<int> Perception::add_event_observations(const TrackerStep& step) {
     }
     EventObservation obs;
     obs.t = d.t;
-    obs.xn = d.centre_normalized;
+    obs.xn = d.center_normalized;
     obs.T_W_E = *T_W_E;
     TrackEstimators& e = estimators_for(a.track_id);
     e.fusion_new |= e.fusion.add(obs) == AddResult::kAccepted;
@@ -384,7 +384,7 @@ std::optional<double> Perception::trajectory_mahalanobis2(const TrajectoryEstima
   if (!est.converged || !est.usable || est.method != EstimateMethod::kFusion) return std::nullopt;
   const auto T_W_E = camera_pose(d.t);
   if (!T_W_E) return std::nullopt;
-  return est.observation_mahalanobis2(d.t, *T_W_E, d.centre_normalized,
+  return est.observation_mahalanobis2(d.t, *T_W_E, d.center_normalized,
                                       options_.estimation.event_sigma_px / options_.estimation.event_focal_px);
 }
 
@@ -401,7 +401,7 @@ bool Perception::segment_depth(const RegisteredDepth& depth, const Track& track)
   const auto start = Clock::now();
   const TrackPrediction p = track.predict(depth.t);
   DepthQuery query;
-  query.centre_px = p.centre_px;
+  query.center_px = p.center_px;
   query.box_size_px = p.box_size_px;
   const auto T_W_E = camera_pose(depth.t);
   if (T_W_E)

@@ -352,7 +352,7 @@ WindowRow window_row(const WindowResult& w) {
   if (w.compensation.used != w.compensation.requested) r.method_requested = to_string(w.compensation.requested);
   if (w.detection) {
     const Detection2D& d = *w.detection;
-    r.detections.push_back({d.box_raw, d.center_raw, d.box_undistorted, d.center_undistorted, to_seconds(d.t_ns),
+    r.detections.push_back({d.box_raw, d.center_raw, d.box_undistorted, d.center_undistorted, to_seconds(d.t),
                             d.events, d.score, d.event_density, d.track_aided, std::string(to_string(d.source)),
                             w.track_id});
   }
@@ -366,7 +366,7 @@ DepthRow depth_row(const DepthResult& d) {
   r.roi_pixels = d.segmentation.roi_pixels;
   r.valid_pixels = d.segmentation.valid_pixels;
   if (const auto& o = d.segmentation.observation) {
-    r.observation = {o->depth_m, o->surface_depth_m, o->sigma_m, o->pixel_count, o->spread_m, o->centre_px};
+    r.observation = {o->depth_m, o->surface_depth_m, o->sigma_m, o->pixel_count, o->spread_m, o->center_px};
   } else {
     r.rejection = to_string(d.segmentation.rejection);
     r.reason = d.segmentation.reason;

@@ -160,11 +160,11 @@ EventCameraSim::EventCameraSim(const ScenarioConfig& config, const Calibration& 
           }
           noise_interval_ns_[p] = rate > 0 ? static_cast<float>(1e9 / rate) : 0.0f;
         }
-      t.centre_dir = mean_dir.normalized();
+      t.center_dir = mean_dir.normalized();
       for (int y = t.y0; y < t.y1; ++y)
         for (int x = t.x0; x < t.x1; ++x) {
           const auto p = pixel(t, x, y);
-          const double a = angle_between(t.centre_dir, Eigen::Vector3d(ray_x_[p], ray_y_[p], 1));
+          const double a = angle_between(t.center_dir, Eigen::Vector3d(ray_x_[p], ray_y_[p], 1));
           t.radius_rad = std::max(t.radius_rad, a + 1.5 * pixel_angle_[p]);
         }
     }
@@ -463,7 +463,7 @@ void EventCameraSim::plan_chunk(TimeNs t0, TimeNs t1) {
       bool touches = bp.everywhere;
       for (int k = 0; !touches && k + 1 < kPlanSamples; ++k) {
         const double reach = bp.reach[k] + tile.radius_rad + margin_rad;
-        touches = reach >= 3.14159 || tile.centre_dir.dot(bp.dir[k]) >= std::cos(reach);
+        touches = reach >= 3.14159 || tile.center_dir.dot(bp.dir[k]) >= std::cos(reach);
       }
       if (!touches) continue;
       tile.balls |= 1u << b;

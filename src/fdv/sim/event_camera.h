@@ -80,8 +80,8 @@ class EventCameraSim {
     float x_abs = 0, y_abs = 0, xy_abs = 0, r_max = 0;  ///< normalised-coordinate extents
     float xmin = 0, xmax = 0, ymin = 0, ymax = 0;       ///< normalised bounds (+ margin)
     float scale_px = 0;          ///< largest pixels per normalised unit in the tile
-    Eigen::Vector3d centre_dir;  ///< unit ray of the tile centre (E)
-    double radius_rad = 0;       ///< largest angle between centre_dir and a pixel ray (+1 px)
+    Eigen::Vector3d center_dir;  ///< unit ray of the tile centre (E)
+    double radius_rad = 0;       ///< largest angle between center_dir and a pixel ray (+1 px)
     float rho_max = 0;           ///< largest inverse depth at the last sample [1/m]
     TimeNs noise_next = 0;       ///< earliest noise event of the tile's pixels
     Rng noise_rng, jitter_rng;

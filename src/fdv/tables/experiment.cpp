@@ -54,7 +54,7 @@ ExperimentRun run_experiment(const DatasetTruth& truth, const ExperimentOptions&
   callbacks.on_window = [&](const WindowResult& w) {
     WindowDetections d{w.t_start, w.t_end, {}};
     if (w.detection)
-      d.detections.push_back({w.detection->t_ns, w.detection->center_raw, w.track_id});
+      d.detections.push_back({w.detection->t, w.detection->center_raw, w.track_id});
     run.windows.push_back(std::move(d));
     run.compensation_ms.push_back(w.timings.compensation_ms);
     run.front_end_ms.push_back(w.timings.compensation_ms + w.timings.detection.total_ms);

@@ -3,7 +3,7 @@
 /// (paper §IV-C.1), state x = (u, v, u', v', u'', v'') in raw pixels, px/s, px/s².
 ///
 ///   ImageFilterOptions o;                        // defaults: docs/ESTIMATION.md
-///   ImageKalmanFilter f(o, t0, centre_px);       // first detection
+///   ImageKalmanFilter f(o, t0, center_px);       // first detection
 ///   ImagePrediction p = f.predict(t1);           // any time: the filter is not changed
 ///   double d2 = p.mahalanobis2(z1);              // association gate
 ///   f.update(t1, z1);                            // t1 >= f.time()

@@ -37,7 +37,7 @@ TrackPrediction Track::predict(TimeNs t) const {
   const ImagePrediction p = filter_.predict(t);
   TrackPrediction out;
   out.t = t;
-  out.centre_px = p.position();
+  out.center_px = p.position();
   out.velocity_px_s = p.velocity();
   out.acceleration_px_s2 = p.acceleration();
   out.centre_covariance_px2 = p.position_covariance();
@@ -73,7 +73,7 @@ TrackerStep Tracker::update(TimeNs t, std::span<const TrackerDetection> detectio
   std::vector<bool> usable(detections.size(), false);
   for (std::size_t i = 0; i < detections.size(); ++i) {
     const TrackerDetection& d = detections[i];
-    if (!finite(d.centre_px) || !finite(d.box_size_px) || d.box_size_px.minCoeff() < 0)
+    if (!finite(d.center_px) || !finite(d.box_size_px) || d.box_size_px.minCoeff() < 0)
       step.assignments[i].reason = "non-finite centre or invalid box";
     else if (d.t > t)
       step.assignments[i].reason = "detection time after the window time";
@@ -91,8 +91,8 @@ TrackerStep Tracker::update(TimeNs t, std::span<const TrackerDetection> detectio
       const TrackerDetection& d = detections[i];
       if (d.t < tr.last_update_time() || d.t - tr.last_update_time() > gap_limit) continue;
       const ImagePrediction p = tr.filter().predict(d.t);
-      if ((d.centre_px - p.position()).norm() > options_.gate_max_distance_px) continue;
-      const double d2 = p.mahalanobis2(d.centre_px);
+      if ((d.center_px - p.position()).norm() > options_.gate_max_distance_px) continue;
+      const double d2 = p.mahalanobis2(d.center_px);
       if (d2 <= options_.gate_chi2) {
         candidates.push_back({d2, k, i});
         continue;
@@ -115,7 +115,7 @@ TrackerStep Tracker::update(TimeNs t, std::span<const TrackerDetection> detectio
     track_taken[c.track] = detection_taken[c.detection] = true;
     Track& tr = tracks_[c.track];
     const TrackerDetection& d = detections[c.detection];
-    tr.filter_.update(d.t, d.centre_px);
+    tr.filter_.update(d.t, d.center_px);
     const double a = options_.box_smoothing;
     tr.box_size_px_ = a * d.box_size_px + (1 - a) * tr.box_size_px_;
     ++tr.hits_;

@@ -33,8 +33,8 @@ namespace fdv {
 /// One 2D detection as the tracker needs it (the detector's output converts to this).
 struct TrackerDetection {
   TimeNs t = 0;                                         ///< time the centre refers to
-  Eigen::Vector2d centre_px = Eigen::Vector2d::Zero();  ///< raw (distorted) pixel
-  Eigen::Vector2d centre_normalized =
+  Eigen::Vector2d center_px = Eigen::Vector2d::Zero();  ///< raw (distorted) pixel
+  Eigen::Vector2d center_normalized =
       Eigen::Vector2d::Zero();                            ///< undistorted x/z, y/z (passed through)
   Eigen::Vector2d box_size_px = Eigen::Vector2d::Zero();  ///< width, height [px]
   int event_count = 0;
@@ -81,7 +81,7 @@ enum class TrackStatus { kTentative, kConfirmed };
 /// A track's predicted state at some time (raw pixels).
 struct TrackPrediction {
   TimeNs t = 0;
-  Eigen::Vector2d centre_px = Eigen::Vector2d::Zero();
+  Eigen::Vector2d center_px = Eigen::Vector2d::Zero();
   Eigen::Vector2d velocity_px_s = Eigen::Vector2d::Zero();
   Eigen::Vector2d acceleration_px_s2 = Eigen::Vector2d::Zero();
   Eigen::Matrix2d centre_covariance_px2 = Eigen::Matrix2d::Zero();
@@ -106,7 +106,7 @@ class Track {
  private:
   friend class Tracker;
   Track(int id, const TrackerDetection& d, const ImageFilterOptions& o)
-      : id_(id), first_t_(d.t), filter_(o, d.t, d.centre_px), box_size_px_(d.box_size_px) {}
+      : id_(id), first_t_(d.t), filter_(o, d.t, d.center_px), box_size_px_(d.box_size_px) {}
   int id_ = 0;
   TrackStatus status_ = TrackStatus::kTentative;
   TimeNs first_t_ = 0;
