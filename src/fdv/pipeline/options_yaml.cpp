@@ -26,6 +26,9 @@ struct TopLevel {
   }
   void removed(const char* key, std::string_view why) { scalars.removed(key, why); }
 };
+// Spelled out for clang 14, which lacks C++20's deduction for aggregates.
+template <class Scalars, class OnSection>
+TopLevel(Scalars&, OnSection) -> TopLevel<Scalars, OnSection>;
 
 }  // namespace
 
