@@ -52,8 +52,8 @@ void write_visualization(const WindowResult& w, const fs::path& dir) {
   cv::cvtColor(s8, s_color, cv::COLOR_GRAY2BGR);
   ti.count.convertTo(c8, CV_8U, 64.0);
   cv::cvtColor(c8, c_color, cv::COLOR_GRAY2BGR);
-  if (w.detection) {
-    const Box2D& b = w.detection->box_undistorted;
+  for (const TrackedDetection& found : w.detections) {
+    const Box2D& b = found.detection.box_undistorted;
     const cv::Rect r(cv::Point(static_cast<int>(b.x0), static_cast<int>(b.y0)),
                      cv::Point(static_cast<int>(b.x1) + 1, static_cast<int>(b.y1) + 1));
     for (cv::Mat* m : {&n_color, &s_color, &c_color}) cv::rectangle(*m, r, cv::Scalar(0, 255, 0), 1);

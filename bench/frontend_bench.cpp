@@ -297,7 +297,7 @@ void BM_Detector(benchmark::State& state, bool noisy, int threads) {
     const DetectionResult r = detector.detect(view);
     ms.push_back(thread_cpu_ms() - t0);
     wall.push_back(wall_ms() - w0);
-    found = found && r.detection.has_value();
+    found = found && !r.detections.empty();
     sum.time_images_ms += r.timings.time_images_ms;
     sum.segmentation_ms += r.timings.segmentation_ms;
     sum.preprocess_ms += r.timings.preprocess_ms;

@@ -221,7 +221,7 @@ int run(const Args& a) {
     lag = std::max(0.0, lag + work_ms - window_ms);
     max_lag = std::max(max_lag, lag);
     if (windows++ < static_cast<std::uint64_t>(a.warmup_windows)) return;
-    detections += w.detection.has_value();
+    detections += w.detections.size();
     ++used[std::string(to_string(w.compensation.used))];
     const DetectionTimings& d = w.timings.detection;
     stage["compensation"].v.push_back(w.timings.compensation_ms);
@@ -244,9 +244,9 @@ int run(const Args& a) {
     work.v.push_back(work_ms);
     work_cpu.v.push_back(cpu_ms);
     if (windows_csv)
-      std::fprintf(windows_csv.get(), "%llu,%zu,%s,%d,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n",
+      std::fprintf(windows_csv.get(), "%llu,%zu,%s,%zu,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n",
                    static_cast<unsigned long long>(w.index), w.events, std::string(to_string(w.status)).c_str(),
-                   w.detection.has_value() ? 1 : 0, w.timings.compensation_ms, d.time_images_ms, d.segmentation_ms,
+                   w.detections.size(), w.timings.compensation_ms, d.time_images_ms, d.segmentation_ms,
                    d.preprocess_ms, d.fit_ms, d.retrieval_ms, d.refine_ms, d.motion_cue_ms, d.count_cue_ms, d.total_ms,
                    w.timings.compensation_ms + d.total_ms);
   };

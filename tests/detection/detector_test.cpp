@@ -39,8 +39,8 @@ class DetectorTest : public ::testing::Test {
 
 // The blob's true position at the detection's own time, on the undistorted grid and in raw pixels.
 void expect_on_blob(const DetectionResult& r, const test::BlobScene& s, double tol_px) {
-  ASSERT_TRUE(r.detection) << to_string(r.status) << ", fit rejected: " << r.fit_rejected;
-  const Detection2D& d = *r.detection;
+  ASSERT_TRUE(r.strongest()) << to_string(r.status) << ", fit rejected: " << r.fit_rejected;
+  const Detection2D& d = *r.strongest();
   EXPECT_GT(d.t, s.t0);
   EXPECT_LT(d.t, s.t0 + s.duration);
   const Eigen::Vector2d truth = s.blob_at(d.t);
@@ -102,9 +102,9 @@ TEST(DetectorBox, SquareBoxHoldsTheWholeFastBallNotJustItsLatestSweep) {
       const CompensatedWindow& w =
           compensator->compensate({.events = ev, .t_start = s.t0, .t_end = s.t0 + s.duration});
       const DetectionResult r = detector.detect(detector_input(w));
-      ASSERT_TRUE(r.detection) << to_string(r.status);
-      const Box2D& b = r.detection->box_undistorted;
-      const Eigen::Vector2d at = s.blob_at(r.detection->t);
+      ASSERT_TRUE(r.strongest()) << to_string(r.status);
+      const Box2D& b = r.strongest()->box_undistorted;
+      const Eigen::Vector2d at = s.blob_at(r.strongest()->t);
       const double margin = 2.0;  // px: the disc's edge pixels are sparse
       holds_the_disc += b.x0 <= at.x() - s.radius_px + margin && b.x1 >= at.x() + s.radius_px - margin &&
                         b.y0 <= at.y() - s.radius_px + margin && b.y1 >= at.y() + s.radius_px - margin;
@@ -135,8 +135,8 @@ TEST_F(DetectorTest, CentreForTheCameraAtTheDetectionTimeGoesThroughObservedAt) 
   const Eigen::Vector2d flow(800.0, -500.0);
   view.observed_at = [&](const Eigen::Vector2d& px, double t_s) -> Eigen::Vector2d { return px + flow * t_s; };
   const DetectionResult moved = detector_.detect(view);
-  ASSERT_TRUE(plain.detection && moved.detection);
-  const Detection2D &a = *plain.detection, &b = *moved.detection;
+  ASSERT_TRUE(plain.strongest() && moved.strongest());
+  const Detection2D &a = *plain.strongest(), &b = *moved.strongest();
   EXPECT_EQ(a.t, b.t);
   EXPECT_EQ(a.center_undistorted, b.center_undistorted);
   EXPECT_EQ(a.box_undistorted.x0, b.box_undistorted.x0);
@@ -187,8 +187,8 @@ TEST(DetectorRefine, RecentredRegionRemovesTheClutterPullAlongTheMotion) {
     o.refine_recentre_passes = passes;
     Detector d(o, lens());
     const DetectionResult r = d.detect(detector_input(w));
-    EXPECT_TRUE(r.detection) << to_string(r.status);
-    return r.detection ? r.detection->center_undistorted.x() - s.blob_at(r.detection->t).x() : 1e9;
+    EXPECT_TRUE(r.strongest()) << to_string(r.status);
+    return r.strongest() ? r.strongest()->center_undistorted.x() - s.blob_at(r.strongest()->t).x() : 1e9;
   };
   const double single = along_error(0), recentred = along_error(DetectorOptions{}.refine_recentre_passes);
   EXPECT_GT(single, 2.0) << "the set-up must show the pull";
@@ -202,9 +202,9 @@ TEST(DetectorRefine, RecentredRegionRemovesTheClutterPullAlongTheMotion) {
   const DetectionResult a = sorted.detect(v);
   v.time_sorted = false;
   const DetectionResult b = unsorted.detect(v);
-  ASSERT_TRUE(a.detection && b.detection);
-  EXPECT_EQ(a.detection->center_undistorted, b.detection->center_undistorted);
-  EXPECT_EQ(a.detection->t, b.detection->t);
+  ASSERT_TRUE(a.strongest() && b.strongest());
+  EXPECT_EQ(a.strongest()->center_undistorted, b.strongest()->center_undistorted);
+  EXPECT_EQ(a.strongest()->t, b.strongest()->t);
 }
 
 TEST_F(DetectorTest, StaticBackgroundAndNoiseAloneGiveNoDetection) {
@@ -213,25 +213,25 @@ TEST_F(DetectorTest, StaticBackgroundAndNoiseAloneGiveNoDetection) {
   for (unsigned seed = 1; seed <= 3; ++seed) {
     s.seed = seed;
     const DetectionResult r = run(test::make_scene(lens(), s), s.t0, s.t0 + s.duration);
-    EXPECT_FALSE(r.detection) << "seed " << seed << " at " << r.detection->center_undistorted.transpose();
+    EXPECT_FALSE(r.strongest()) << "seed " << seed << " at " << r.strongest()->center_undistorted.transpose();
   }
 }
 
 TEST_F(DetectorTest, EmptyAndNearlyEmptyWindows) {
   DetectionResult r = run({}, 0, 25 * kNsPerMs);
-  EXPECT_FALSE(r.detection);
+  EXPECT_FALSE(r.strongest());
   EXPECT_EQ(r.status, DetectionStatus::kTooFewEvents);
   std::vector<Event> few;
   for (int i = 0; i < 10; ++i) few.push_back({i * kNsPerMs, static_cast<std::uint16_t>(300 + i), 200, true});
   r = run(few, 0, 25 * kNsPerMs);
-  EXPECT_FALSE(r.detection);
+  EXPECT_FALSE(r.strongest());
   EXPECT_EQ(r.status, DetectionStatus::kTooFewEvents);
   EXPECT_EQ(cv::countNonZero(detector_.preprocessed()), 0);
   // Many events, all at one instant: no temporal contrast.
   std::vector<Event> same_time;
   for (int i = 0; i < 500; ++i) same_time.push_back({kNsPerMs, static_cast<std::uint16_t>(100 + i % 50), static_cast<std::uint16_t>(100 + i / 50), true});
   r = run(same_time, 0, 25 * kNsPerMs);
-  EXPECT_FALSE(r.detection);
+  EXPECT_FALSE(r.strongest());
   EXPECT_EQ(r.status, DetectionStatus::kNoTemporalContrast);
 }
 
@@ -262,14 +262,14 @@ TEST_F(DetectorTest, BurstFarAboveTheNormalRate) {
   Detector paper(paper_options, lens());
   const DetectionResult late_paper =
       paper.detect(detector_input(compensator_->compensate({.events = late_burst, .t_start = s.t0, .t_end = s.t0 + s.duration})));
-  EXPECT_FALSE(late_paper.detection);
+  EXPECT_FALSE(late_paper.strongest());
   EXPECT_GT(late_paper.mean_normalized, 0.65);
   EXPECT_EQ(late_paper.status, DetectionStatus::kNothingSegmented);
   // A late burst of background events is what the count-contrast cue is for: the blob fires
   // evenly over the window, so it is dense in I and early against all events.
   const DetectionResult late = run(late_burst, s.t0, s.t0 + s.duration);
   expect_on_blob(late, s, 2.0);
-  EXPECT_EQ(late.detection->source, DetectionSource::kCountContrast);
+  EXPECT_EQ(late.strongest()->source, DetectionSource::kCountContrast);
   EXPECT_LT(late.count_cue_time_offset, -late.theta + late.mean_normalized);
   // With c = 0 the burst passes θ and floods the segmentation: reported as such.
   DetectorOptions o;
@@ -279,7 +279,7 @@ TEST_F(DetectorTest, BurstFarAboveTheNormalRate) {
   const CompensatedWindow& w = compensator_->compensate(
       {.events = with_burst(ev, 24 * kNsPerMs, 25 * kNsPerMs, 200'000, 6), .t_start = s.t0, .t_end = s.t0 + s.duration});
   const DetectionResult flooded = permissive.detect(detector_input(w));
-  EXPECT_FALSE(flooded.detection);
+  EXPECT_FALSE(flooded.strongest());
   EXPECT_EQ(flooded.status, DetectionStatus::kFlooded);
 }
 
@@ -301,19 +301,19 @@ TEST_F(DetectorTest, NextCandidateIsTriedWhenTheStrongestPatternFailsTheEvidence
   o.gaussian_fit.max_candidates = 1;
   const CompensatedWindow& w = compensator_->compensate({.events = ev, .t_start = s.t0, .t_end = s.t0 + s.duration});
   const DetectionResult one = Detector(o, lens()).detect(detector_input(w));
-  EXPECT_FALSE(one.detection);
+  EXPECT_FALSE(one.strongest());
   EXPECT_EQ(one.status, DetectionStatus::kWeakEvidence);
   EXPECT_EQ(one.candidates, 1);
   o.gaussian_fit.max_candidates = 3;
   const DetectionResult more = Detector(o, lens()).detect(detector_input(w));
   EXPECT_EQ(more.candidates, 2);
   expect_on_blob(more, s, 2.0);
-  EXPECT_GE(more.detection->event_density, 2.0);
+  EXPECT_GE(more.strongest()->event_density, 2.0);
   // Without the density gate the decoy wins: it is the strongest pattern.
   o.min_event_density = 0;
   const DetectionResult ungated = Detector(o, lens()).detect(detector_input(w));
-  ASSERT_TRUE(ungated.detection);
-  EXPECT_NEAR(ungated.detection->center_undistorted.x(), 461.5, 3.0);
+  ASSERT_TRUE(ungated.strongest());
+  EXPECT_NEAR(ungated.strongest()->center_undistorted.x(), 461.5, 3.0);
 }
 
 // A small dense blob with sparse late clutter 50-70 px around it (posters on a wall): from the
@@ -339,11 +339,11 @@ TEST_F(DetectorTest, SmallerInitialRoiFindsASmallBlobInSparseClutter) {
   o.gaussian_fit.max_candidates = 1;
   o.gaussian_fit.refit_min_roi_px = 0;  // the paper: one fit from half the image
   const DetectionResult paper = Detector(o, lens()).detect(detector_input(w));
-  EXPECT_FALSE(paper.detection) << "the half-image fit should spread over the clutter";
+  EXPECT_FALSE(paper.strongest()) << "the half-image fit should spread over the clutter";
   o.gaussian_fit.refit_min_roi_px = 16;
   const DetectionResult refit = Detector(o, lens()).detect(detector_input(w));
   expect_on_blob(refit, s, 2.5);
-  EXPECT_LT(refit.detection->box_undistorted.width(), 40);
+  EXPECT_LT(refit.strongest()->box_undistorted.width(), 40);
 }
 
 // A pattern under min_peak is taken only inside a confirmed track's gate, at prior_min_peak.
@@ -355,7 +355,7 @@ TEST_F(DetectorTest, TrackPriorAdmitsAWeakerPatternOnlyInsideItsGate) {
   o.gaussian_fit.min_peak = 0.99;  // nothing passes the normal gate
   o.track_aided.min_peak = 0.3;
   Detector detector(o, lens());
-  EXPECT_FALSE(detector.detect(detector_input(w)).detection);
+  EXPECT_FALSE(detector.detect(detector_input(w)).strongest());
   const PinholeCamera cam = lens();
   auto raw_of = [&](const Eigen::Vector2d& uv) {
     return cam.normalized_to_pixel({(uv.x() - cam.cx) / cam.fx, (uv.y() - cam.cy) / cam.fy});
@@ -364,14 +364,14 @@ TEST_F(DetectorTest, TrackPriorAdmitsAWeakerPatternOnlyInsideItsGate) {
   const DetectionPrior on_blob{raw_of(s.blob_at(s.t0 + s.duration / 2)), {14, 14}};
   const DetectionResult aided = detector.detect(detector_input(w), std::span(&on_blob, 1));
   expect_on_blob(aided, s, 2.0);
-  EXPECT_TRUE(aided.detection->track_aided);
+  EXPECT_TRUE(aided.strongest()->track_aided);
   // A prior 100 px away opens a gate with only background in it.
   const DetectionPrior elsewhere{raw_of(s.blob_at(s.t0) + Eigen::Vector2d(100, 100)), {14, 14}};
-  EXPECT_FALSE(detector.detect(detector_input(w), std::span(&elsewhere, 1)).detection);
+  EXPECT_FALSE(detector.detect(detector_input(w), std::span(&elsewhere, 1)).strongest());
   // A gate 14 px ahead of the blob holds only its leading edge: the pattern is seeded there, but
   // the box the fit finds is centred outside the gate, so it is not taken.
   const DetectionPrior at_edge{raw_of(s.blob_at(s.t0 + s.duration) + Eigen::Vector2d(14, 0)), {2, 2}};
-  EXPECT_FALSE(detector.detect(detector_input(w), std::span(&at_edge, 1)).detection);
+  EXPECT_FALSE(detector.detect(detector_input(w), std::span(&at_edge, 1)).strongest());
 }
 
 // A far, spinning, textured ball: events all over its disk throughout the window (the scene's
@@ -403,8 +403,8 @@ TEST_F(DetectorTest, DenseMotionCueFindsASlowDenseBlobInsideATrackGateOnly) {
   };
 
   const DetectionResult found = detect(s, o, std::span(&on_blob, 1));
-  ASSERT_TRUE(found.detection) << to_string(found.status);
-  const Detection2D& d = *found.detection;
+  ASSERT_TRUE(found.strongest()) << to_string(found.status);
+  const Detection2D& d = *found.strongest();
   EXPECT_EQ(d.source, DetectionSource::kDenseMotion);
   EXPECT_TRUE(d.track_aided);
   EXPECT_GE(found.motion_cue_r2, o.dense_motion.min_r2);
@@ -418,17 +418,17 @@ TEST_F(DetectorTest, DenseMotionCueFindsASlowDenseBlobInsideATrackGateOnly) {
 
   // Without a gate the cue does not run (it would report any dense moving thing, e.g. a person).
   const DetectionResult no_prior = detect(s, o, {});
-  EXPECT_FALSE(no_prior.detection);
+  EXPECT_FALSE(no_prior.strongest());
   EXPECT_FALSE(no_prior.motion_cue_ran);
   // Switched off.
   DetectorOptions off = o;
   off.dense_motion.enabled = false;
-  EXPECT_FALSE(detect(s, off, std::span(&on_blob, 1)).detection);
+  EXPECT_FALSE(detect(s, off, std::span(&on_blob, 1)).strongest());
   // The same dense blob standing still: no trend of T across it.
   test::BlobScene still = s;
   still.velocity_px_s = {0, 0};
   const DetectionResult static_blob = detect(still, o, std::span(&on_blob, 1));
-  EXPECT_FALSE(static_blob.detection);
+  EXPECT_FALSE(static_blob.strongest());
   EXPECT_TRUE(static_blob.motion_cue_ran);
   EXPECT_LT(static_blob.motion_cue_r2, o.dense_motion.min_r2);
 }
@@ -542,8 +542,8 @@ TEST_F(DetectorTest, CountContrastCueFindsAnEvenlyFiringBlobOnALateBackground) {
   const auto scene = late_background_scene(cam, s, false);
   // The premise: the time-based detector does not find the ball.
   const DetectionResult paper = detect(scene, off);
-  EXPECT_TRUE(!paper.detection || (paper.detection->center_undistorted - s.blob_at(paper.detection->t)).norm() > 10)
-      << paper.detection->center_undistorted.transpose();
+  EXPECT_TRUE(!paper.strongest() || (paper.strongest()->center_undistorted - s.blob_at(paper.strongest()->t)).norm() > 10)
+      << paper.strongest()->center_undistorted.transpose();
   EXPECT_FALSE(paper.count_cue_ran);
 
   const DetectionResult found = detect(scene, on);
@@ -555,9 +555,9 @@ TEST_F(DetectorTest, CountContrastCueFindsAnEvenlyFiringBlobOnALateBackground) {
     EXPECT_GT(found.count_cue_filled_centres, 0);
     EXPECT_LT(found.count_cue_filled_centres, 1000);
   }
-  ASSERT_TRUE(found.detection) << to_string(found.status) << ", contrast " << found.count_cue_contrast << ", fill "
+  ASSERT_TRUE(found.strongest()) << to_string(found.status) << ", contrast " << found.count_cue_contrast << ", fill "
                                << found.count_cue_fill << ", time offset " << found.count_cue_time_offset;
-  const Detection2D& d = *found.detection;
+  const Detection2D& d = *found.strongest();
   EXPECT_EQ(d.source, DetectionSource::kCountContrast);
   EXPECT_FALSE(d.track_aided);
   EXPECT_GE(found.count_cue_contrast, on.count_contrast.min_contrast);
@@ -577,14 +577,14 @@ TEST_F(DetectorTest, CountContrastCueFindsAnEvenlyFiringBlobOnALateBackground) {
   test::BlobScene no_ball = s;
   no_ball.blob_rate_ev_s = 0;
   const DetectionResult background = detect(late_background_scene(cam, no_ball, false), on);
-  EXPECT_FALSE(background.detection) << background.detection->center_undistorted.transpose();
+  EXPECT_FALSE(background.strongest()) << background.strongest()->center_undistorted.transpose();
   EXPECT_TRUE(background.count_cue_ran);
   EXPECT_LT(background.count_cue_contrast, on.count_contrast.min_contrast);
 
   // A dense, compact static spot that fires with the background: dense enough in I, but its
   // events follow the background's time profile, so the time test rejects it.
   const DetectionResult spot = detect(late_background_scene(cam, no_ball, true), on);
-  EXPECT_FALSE(spot.detection) << spot.detection->center_undistorted.transpose();
+  EXPECT_FALSE(spot.strongest()) << spot.strongest()->center_undistorted.transpose();
   EXPECT_GE(spot.count_cue_contrast, on.count_contrast.min_contrast);
   EXPECT_LT(std::abs(spot.count_cue_time_offset), 0.1);
 
@@ -600,7 +600,7 @@ TEST_F(DetectorTest, CountContrastCueFindsAnEvenlyFiringBlobOnALateBackground) {
       compensator_->compensate({.events = ev, .t_start = uniform.t0, .t_end = uniform.t0 + uniform.duration});
   Detector detector(on, cam);
   const DetectionResult flat = detector.detect(detector_input(w));
-  EXPECT_FALSE(flat.detection) << to_string(flat.status);
+  EXPECT_FALSE(flat.strongest()) << to_string(flat.status);
   EXPECT_TRUE(flat.count_cue_ran);
   EXPECT_GE(flat.count_cue_fill, on.count_contrast.min_fill);
   // The best of ≈ 300 k centres: a 9x9 box's mean count fluctuates by ≈ 0.22 around 4.
@@ -668,17 +668,17 @@ TEST_F(DetectorTest, CountContrastCueWaivesTheTimeTestOnlyInsideATrackGate) {
   o.count_contrast.enabled = true;
   o.count_contrast.in_gates = false;
   const DetectionResult image_only = Detector(o, cam).detect(detector_input(w), std::span(&on_ball, 1));
-  EXPECT_FALSE(image_only.detection) << to_string(image_only.detection->source);
+  EXPECT_FALSE(image_only.strongest()) << to_string(image_only.strongest()->source);
   EXPECT_GE(image_only.count_cue_contrast, o.count_contrast.min_contrast);
   EXPECT_LT(std::abs(image_only.count_cue_time_offset), 0.1);
   o.count_contrast.in_gates = true;
   const DetectionResult gated = Detector(o, cam).detect(detector_input(w), std::span(&on_ball, 1));
-  ASSERT_TRUE(gated.detection) << to_string(gated.status);
-  EXPECT_EQ(gated.detection->source, DetectionSource::kCountContrast);
-  EXPECT_TRUE(gated.detection->track_aided);
-  EXPECT_LT((gated.detection->center_undistorted - s.blob_at(gated.detection->t)).norm(), 2.0);
+  ASSERT_TRUE(gated.strongest()) << to_string(gated.status);
+  EXPECT_EQ(gated.strongest()->source, DetectionSource::kCountContrast);
+  EXPECT_TRUE(gated.strongest()->track_aided);
+  EXPECT_LT((gated.strongest()->center_undistorted - s.blob_at(gated.strongest()->t)).norm(), 2.0);
   // Without a gate: nothing.
-  EXPECT_FALSE(Detector(o, cam).detect(detector_input(w)).detection);
+  EXPECT_FALSE(Detector(o, cam).detect(detector_input(w)).strongest());
 }
 
 TEST_F(DetectorTest, InvalidOptionsAreRejected) {

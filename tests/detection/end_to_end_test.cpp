@@ -81,12 +81,12 @@ TEST(EndToEnd, FlyingCameraFindsTheMovingObject) {
   const CompensatedWindow& w = comp->compensate({s.events, 0, dt, imu, odo, &s.depth});
   ASSERT_EQ(w.report.used, CompensationMethod::kRotationTranslation) << w.report.brief();
   const DetectionResult r = detector.detect(detector_input(w));
-  ASSERT_TRUE(r.detection) << to_string(r.status) << " " << r.fit_rejected;
+  ASSERT_TRUE(r.strongest()) << to_string(r.status) << " " << r.fit_rejected;
   // Truth: the object's centre at the detection's time, seen from the camera at t0.
-  const Eigen::Vector3d c = s.object_p0 + s.object_v * to_seconds(r.detection->t);
+  const Eigen::Vector3d c = s.object_p0 + s.object_v * to_seconds(r.strongest()->t);
   const Eigen::Vector2d truth(400.0 * c.x() / c.z() + 320.0, 400.0 * c.y() / c.z() + 240.0);
-  EXPECT_LT((r.detection->center_undistorted - truth).norm(), 2.0)
-      << r.detection->center_undistorted.transpose() << " vs " << truth.transpose();
+  EXPECT_LT((r.strongest()->center_undistorted - truth).norm(), 2.0)
+      << r.strongest()->center_undistorted.transpose() << " vs " << truth.transpose();
 
   // The background collapses only with the full compensation: far fewer pixels reach θ than with
   // rotation only or none (the paper's point, Table I "Dynamic-flight").

@@ -51,8 +51,8 @@ PerceptionCallbacks collect(Collected& c) {
     std::string line = std::to_string(w.t_start) + " " + std::string(to_string(w.status)) + " " +
                        w.compensation.brief() + " th=" + std::to_string(w.theta) + " w=" +
                        std::to_string(w.compensation.omega_E.norm()) + " v=" + std::to_string(w.compensation.v_E.norm());
-    if (w.detection)
-      line += " " + std::to_string(w.detection->center_raw.x()) + "," + std::to_string(w.detection->center_raw.y());
+    for (const TrackedDetection& found : w.detections)
+      line += " " + std::to_string(found.detection.center_raw.x()) + "," + std::to_string(found.detection.center_raw.y());
     c.windows.push_back(line);
     c.results.push_back(w);
     c.results.back().detector = nullptr;
@@ -74,9 +74,9 @@ PerceptionCallbacks collect(Collected& c) {
 std::vector<int> ball_detection_tracks(const SimulatedThrow& s, const Collected& c) {
   std::vector<int> ids;
   for (const WindowResult& w : c.results) {
-    if (!w.detection) continue;
     const GroundTruthBox box = ground_truth_box(s.data.objects, 1, 0.105, s.data.body, s.calib, w.t_start, w.t_end - 1);
-    if (box.contains(w.detection->center_raw.x(), w.detection->center_raw.y(), 2.0)) ids.push_back(w.track_id);
+    for (const auto& [d, track_id] : w.detections)
+      if (box.contains(d.center_raw.x(), d.center_raw.y(), 2.0)) ids.push_back(track_id);
   }
   return ids;
 }
@@ -217,7 +217,8 @@ TEST(Perception, DepthFramesFromBeforeATracksConfirmationAreUsed) {
   // window began 25 ms earlier, and frames up to there had been segmented before it.
   TimeNs first_detection = std::numeric_limits<TimeNs>::max(), confirmed_window_start = 0;
   for (const WindowResult& w : a.results)
-    if (w.detection && w.track_id == track) first_detection = std::min(first_detection, w.detection->t);
+    for (const auto& [d, track_id] : w.detections)
+      if (track_id == track) first_detection = std::min(first_detection, d.t);
   for (std::size_t i = 0; i < a.fusion.size(); ++i)
     if (a.fusion_track[i] == track) {
       confirmed_window_start = a.fusion_t[i] - PerceptionOptions{}.windows.window_ns;

@@ -34,7 +34,7 @@ TEST(RealRecording, TheThrownBallIsFoundInFlightAndThePersonIsNotReported) {
   PerceptionCallbacks callbacks;
   callbacks.on_window = [&](const WindowResult& w) {
     ++windows;
-    if (w.detection) detections[w.index] = *w.detection;
+    if (!w.detections.empty()) detections[w.index] = w.detections.front().detection;
   };
   replay(open_recording(path), calib, options, callbacks);
   EXPECT_EQ(windows, 30u);

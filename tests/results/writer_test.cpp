@@ -36,7 +36,10 @@ WindowRow sample_window() {
                           0.4375,
                           true,
                           "region_retrieval",
-                          7});
+                          7,
+                          true,
+                          0.625,
+                          Eigen::Vector2d(-3.5, 30.75)});
   return w;
 }
 
@@ -120,6 +123,9 @@ void expect_equal(const DetectionRow& a, const DetectionRow& b) {
   EXPECT_EQ(a.track_aided, b.track_aided);
   EXPECT_EQ(a.source, b.source);
   EXPECT_EQ(a.track, b.track);
+  EXPECT_EQ(a.partial, b.partial);
+  EXPECT_EQ(a.visible_fraction, b.visible_fraction);
+  EXPECT_EQ(a.center_full, b.center_full);
 }
 
 TEST(ResultsWriter, EveryFieldOfEveryRowSurvivesAWriteAndARead) {

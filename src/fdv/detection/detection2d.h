@@ -2,6 +2,7 @@
 /// One detected moving object in one event window. Plain value type (Eigen only), so tracking
 /// and output code can use it without OpenCV.
 #include <Eigen/Core>
+#include <optional>
 #include <string_view>
 
 #include "fdv/core/time.h"
@@ -56,6 +57,13 @@ struct Detection2D {
   int fit_iterations = 0;
   /// Found only with a track's prior (DetectionPrior), at the lower evidence threshold.
   bool track_aided = false;
+  /// The object is cut by the frame's border: the boxes and centres above are of its visible
+  /// part (box_raw clipped to the sensor), `visible_fraction` estimates how much of its
+  /// silhouette is in the frame, and `center_full_raw` the whole object's centre where the
+  /// uncut side gives its size (docs/DETECTION.md "Objects cut by the border").
+  bool partial = false;
+  double visible_fraction = 1;
+  std::optional<Eigen::Vector2d> center_full_raw;
 };
 
 }  // namespace fdv

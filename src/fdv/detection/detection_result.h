@@ -4,6 +4,7 @@
 #include <Eigen/Core>
 #include <optional>
 #include <string_view>
+#include <vector>
 
 #include "fdv/detection/detection2d.h"
 #include "fdv/detection/gaussian_fit.h"
@@ -37,7 +38,9 @@ struct DetectionTimings {
 };
 
 struct DetectionResult {
-  std::optional<Detection2D> detection;
+  /// Every object found, in the order found (the strongest pattern first); empty unless status is
+  /// kDetected. At most DetectorOptions::max_objects.
+  std::vector<Detection2D> detections;
   DetectionStatus status = DetectionStatus::kTooFewEvents;
   double theta = 0;             ///< θ(ω, v) used
   double mean_normalized = 0;   ///< mean(N) over pixels with events
@@ -61,6 +64,8 @@ struct DetectionResult {
   /// (the blob's mean event time − all events') / (max T − min T), when its box passed the event gates.
   double count_cue_time_offset = 0;
   DetectionTimings timings;
+  /// The first object found, or nullptr.
+  const Detection2D* strongest() const { return detections.empty() ? nullptr : &detections.front(); }
 };
 
 /// Where a confirmed track expects its object in a window (raw sensor pixels, the tracker's grid):

@@ -192,7 +192,7 @@ DetectionResult Detector::detect(const CompensatedEventsView& window, std::span<
   // The first source whose candidate passes its gates wins.
   for (CandidateSource* source : sources()) {
     if (const std::optional<Candidate> found = source->find(in, res)) {
-      res.detection = to_detection(window, *found, res);
+      res.detections.push_back(to_detection(window, *found, res));
       return finish(DetectionStatus::kDetected);
     }
   }

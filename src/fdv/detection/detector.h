@@ -13,7 +13,7 @@
 ///                              w.report.omega_E.norm(), w.report.v_E.norm(),
 ///                              w.report.events_out_of_order == 0};
 ///   DetectionResult r = detector.detect(view);
-///   if (r.detection) use(*r.detection);              // else r.status says why not
+///   for (const Detection2D& d : r.detections) use(d);   // none: r.status says why not
 ///   show(detector.time_images().normalized, detector.segmentation());   // valid until next call
 ///
 /// The images live on the undistorted grid K·xn of `event_camera` (the compensators' output

@@ -54,7 +54,7 @@ std::string PerceptionOptions::validate() const {
 void PerceptionCounters::count_window(const WindowResult& w) {
   ++windows;
   windows_skipped += w.skipped_before;
-  if (w.detection) ++detections;
+  detections += w.detections.size();
   events_in_windows += w.events;
   const CompensationReport& r = w.compensation;
   events_dropped.overload += w.decimated + r.dropped_burst;
@@ -243,16 +243,14 @@ void Perception::process_window(PendingWindow& w) {
   detector_priors_from_tracks(w.t_start + (w.t_end - w.t_start) / 2);
   const DetectionResult det = detect(cw);
   result.status = det.status;
-  result.detection = det.detection;
   result.theta = det.theta;
   result.timings.detection = det.timings;
 
   const auto tracking_start = Clock::now();
-  const TrackerStep step = associate(w.t_end, det.detection);
+  const TrackerStep step = associate(w.t_end, det.detections);
   result.timings.tracking_ms = ms_since(tracking_start);
   for (int id : step.deleted) estimators_.erase(id);
-  for (const TrackAssignment& a : step.assignments)
-    if (a.track_id >= 0) result.track_id = a.track_id;
+  for (const TrackAssignment& a : step.assignments) result.detections.push_back({det.detections[a.detection], a.track_id});
   const std::vector<int> to_solve = add_event_observations(step);
   segment_depth_since_first_detection(step.confirmed);
   for (int id : to_solve) estimate(id, w.t_end);
@@ -297,13 +295,11 @@ DetectionResult Perception::detect(const CompensatedWindow& cw) {
 }
 
 // Association and Kalman filter on the image plane (paper §IV-C.1), with the 3D estimates' say.
-TrackerStep Perception::associate(TimeNs t, const std::optional<Detection2D>& detection) {
+TrackerStep Perception::associate(TimeNs t, std::span<const Detection2D> detections) {
   tracker_inputs_.clear();
-  if (detection) {
-    const Detection2D& d = *detection;
+  for (const Detection2D& d : detections)
     tracker_inputs_.push_back({d.t, d.center_raw, d.center_normalized,
                                Eigen::Vector2d(d.box_raw.width(), d.box_raw.height()), d.events});
-  }
   vouch_by_trajectory();
   return tracker_.update(t, tracker_inputs_, vouched_);
 }

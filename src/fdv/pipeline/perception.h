@@ -140,6 +140,12 @@ struct WindowTimings {
   double total_ms = 0;  ///< compensation + detection + tracking (+ estimation triggered by it)
 };
 
+/// A window's detection and the track it was assigned to (-1: none, e.g. rejected by the tracker).
+struct TrackedDetection {
+  Detection2D detection;
+  int track_id = -1;
+};
+
 struct WindowResult {
   std::uint64_t index = 0;
   TimeNs t_start = 0, t_end = 0;
@@ -148,9 +154,8 @@ struct WindowResult {
   std::uint64_t skipped_before = 0;  ///< empty windows skipped just before (windower's gap policy)
   CompensationReport compensation;
   DetectionStatus status = DetectionStatus::kTooFewEvents;
-  std::optional<Detection2D> detection;
+  std::vector<TrackedDetection> detections;  ///< in the detector's order (DetectionResult::detections)
   double theta = 0;
-  int track_id = -1;  ///< track the detection was assigned to; -1 none
   WindowTimings timings;
   /// The detector, for its intermediate images (visualisation); valid during the callback only.
   const Detector* detector = nullptr;
@@ -263,7 +268,7 @@ class Perception {
   const CompensatedWindow& compensate(const PendingWindow& w);
   void detector_priors_from_tracks(TimeNs t);  ///< fills priors_
   DetectionResult detect(const CompensatedWindow& cw);
-  TrackerStep associate(TimeNs t, const std::optional<Detection2D>& detection);
+  TrackerStep associate(TimeNs t, std::span<const Detection2D> detections);
   void vouch_by_trajectory();  ///< fills vouched_ for tracker_inputs_
   std::vector<int> add_event_observations(const TrackerStep& step);
   void segment_depth_since_first_detection(std::span<const int> confirmed);

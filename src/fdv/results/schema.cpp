@@ -140,7 +140,10 @@ void to_json(json& j, const DetectionRow& r) {
        {"event_density", r.event_density},
        {"track_aided", r.track_aided},
        {"source", r.source},
-       {"track", r.track}};
+       {"track", r.track},
+       {"partial", r.partial},
+       {"visible_fraction", r.visible_fraction}};
+  if (r.center_full) j["center_full"] = vec_json(*r.center_full);
 }
 
 void from_json(const json& j, DetectionRow& r) {
@@ -155,6 +158,9 @@ void from_json(const json& j, DetectionRow& r) {
   optional_key(j, "track_aided", r.track_aided);
   optional_key(j, "source", r.source);
   optional_key(j, "track", r.track);
+  optional_key(j, "partial", r.partial);
+  optional_number(j, "visible_fraction", r.visible_fraction, 1.0);
+  if (const auto it = j.find("center_full"); it != j.end()) r.center_full = vec2_of(*it);
 }
 
 void to_json(json& j, const WindowRow& r) {
@@ -350,12 +356,10 @@ WindowRow window_row(const WindowResult& w) {
   r.method = to_string(w.compensation.used);
   r.status = to_string(w.status);
   if (w.compensation.used != w.compensation.requested) r.method_requested = to_string(w.compensation.requested);
-  if (w.detection) {
-    const Detection2D& d = *w.detection;
+  for (const auto& [d, track_id] : w.detections)
     r.detections.push_back({d.box_raw, d.center_raw, d.box_undistorted, d.center_undistorted, to_seconds(d.t),
                             d.events, d.score, d.event_density, d.track_aided, std::string(to_string(d.source)),
-                            w.track_id});
-  }
+                            track_id, d.partial, d.visible_fraction, d.center_full_raw});
   return r;
 }
 

@@ -49,6 +49,11 @@ struct DetectionRow {
   bool track_aided = false;    ///< "track_aided"
   std::string source;          ///< "source": DetectionSource text
   int track = -1;              ///< "track": track it was assigned to; -1 none
+  bool partial = false;        ///< "partial": cut by the frame's border (box and centre: the visible part)
+  double visible_fraction = 1;  ///< "visible_fraction": estimated share of the silhouette in the frame
+  /// "center_full": the whole object's centre [raw px], written only for a partial detection whose
+  /// uncut side gave the object's size.
+  std::optional<Eigen::Vector2d> center_full;
 };
 
 /// A line of detections.jsonl: one event window.

@@ -53,8 +53,7 @@ ExperimentRun run_experiment(const DatasetTruth& truth, const ExperimentOptions&
   PerceptionCallbacks callbacks;
   callbacks.on_window = [&](const WindowResult& w) {
     WindowDetections d{w.t_start, w.t_end, {}};
-    if (w.detection)
-      d.detections.push_back({w.detection->t, w.detection->center_raw, w.track_id});
+    for (const auto& [found, track_id] : w.detections) d.detections.push_back({found.t, found.center_raw, track_id});
     run.windows.push_back(std::move(d));
     run.compensation_ms.push_back(w.timings.compensation_ms);
     run.front_end_ms.push_back(w.timings.compensation_ms + w.timings.detection.total_ms);
