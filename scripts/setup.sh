@@ -19,6 +19,8 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   librosbag-storage-dev libroslz4-dev libbz2-dev libsensor-msgs-dev libnav-msgs-dev
   libgeometry-msgs-dev libfastcdr-dev
+  # the fdv Python package (python/), for Debian's /usr/bin/python3
+  python3-dev pybind11-dev python3-numpy python3-matplotlib python3-pytest
 )
 # The fuzz build: clang with its libFuzzer and sanitizer runtimes; python3 builds the seed corpora.
 [ "${FDV_FUZZ:-OFF}" = "ON" ] && PACKAGES+=(clang libclang-rt-14-dev python3)

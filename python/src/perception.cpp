@@ -1,0 +1,337 @@
+// fdv.Perception and fdv.run: the streaming pipeline driven from Python. Results are the rows of
+// the results schema (fdv/results/schema.h: window_row, depth_row, ... and their JSON), so a dict
+// here has exactly the keys of the line `fdv run` writes. C++ work runs without the GIL; the rows
+// it produced are handed to Python when the call returns.
+#include <pybind11/stl.h>
+
+#include <cstring>
+#include <optional>
+
+#include "common.h"
+#include "fdv/core/error.h"
+#include "fdv/io/recording.h"
+#include "fdv/pipeline/options_yaml.h"
+#include "fdv/pipeline/perception.h"
+#include "fdv/pipeline/replay.h"
+#include "fdv/pipeline/sensor_policy.h"
+#include "fdv/results/schema.h"
+#include "fdv/results/writer.h"
+
+namespace fdv::python {
+namespace {
+
+enum class RowKind { kWindow, kDepth, kTrajectory, kPrediction, kWarning };
+constexpr const char* kListNames[] = {"windows", "depth", "trajectories", "predictions", "warnings"};
+
+/// Rows in the order the pipeline produced them, kept until the GIL is held again.
+struct RowQueue {
+  std::vector<std::pair<RowKind, nlohmann::json>> rows;
+  PerceptionCallbacks callbacks(ResultsWriter* writer = nullptr) {
+    PerceptionCallbacks c;
+    c.on_window = [this, writer](const WindowResult& w) {
+      rows.emplace_back(RowKind::kWindow, window_row(w));
+      if (writer) writer->window(w);
+    };
+    c.on_depth = [this, writer](const DepthResult& d) {
+      rows.emplace_back(RowKind::kDepth, depth_row(d));
+      if (writer) writer->depth(d);
+    };
+    c.on_estimate = [this, writer](const EstimateResult& e) {
+      rows.emplace_back(RowKind::kTrajectory, trajectory_row(e));
+      if (writer) writer->estimate(e);
+    };
+    c.on_prediction = [this, writer](const PredictionResult& p) {
+      rows.emplace_back(RowKind::kPrediction, prediction_row(p));
+      if (writer) writer->prediction(p);
+    };
+    c.on_warning = [this](const std::string& w) { rows.emplace_back(RowKind::kWarning, w); };
+    return c;
+  }
+};
+
+/// summary.json's "counts" object (the schema's keys).
+nlohmann::json counts_json(const PerceptionCounters& c) {
+  RunSummary s;
+  s.counts = c;
+  return nlohmann::json(s).at("counts");
+}
+
+/// Where the fields of an event record are: fdv.EVENT_DTYPE (aligned, 16 bytes) or the packed
+/// 14-byte layout numpy's promotion gives it (np.concatenate of event arrays returns that).
+struct EventLayout {
+  std::size_t x, y, p, t, itemsize;
+};
+
+EventLayout event_layout(const py::array& a) {
+  const py::dtype dt = a.dtype();
+  auto fail = [&] {
+    return py::type_error("push_events: expected an array of dtype " + py::repr(py::dtype::of<EventCD>()).cast<std::string>() +
+                          " (or its packed form), got " + py::repr(dt).cast<std::string>());
+  };
+  const py::object fields = dt.attr("fields");
+  if (fields.is_none() || py::len(fields) != 4) throw fail();
+  std::size_t offsets[4];
+  const char* names[] = {"x", "y", "p", "t"};
+  const py::dtype types[] = {py::dtype::of<std::uint16_t>(), py::dtype::of<std::uint16_t>(), py::dtype::of<std::int16_t>(),
+                             py::dtype::of<std::int64_t>()};
+  for (int k = 0; k < 4; ++k) {
+    if (!fields.contains(names[k])) throw fail();
+    const py::tuple f = fields[names[k]];
+    if (!f[0].cast<py::dtype>().equal(types[k])) throw fail();
+    offsets[k] = f[1].cast<std::size_t>();
+  }
+  if (a.ndim() != 1) throw py::value_error("push_events: expected a 1-D array, got " + std::to_string(a.ndim()) + "-D");
+  if (!(a.flags() & py::array::c_style))
+    throw py::value_error("push_events: the array is not contiguous (use numpy.ascontiguousarray)");
+  return {offsets[0], offsets[1], offsets[2], offsets[3], static_cast<std::size_t>(dt.itemsize())};
+}
+
+template <class T>
+T field(const std::byte* record, std::size_t offset) {
+  T v;
+  std::memcpy(&v, record + offset, sizeof(T));
+  return v;
+}
+
+class PyPerception {
+ public:
+  PyPerception(const Calibration& calibration, const PerceptionOptions& options, const std::string& time_unit,
+               py::object on_window, py::object on_depth, py::object on_estimate, py::object on_prediction,
+               py::object on_warning)
+      : unit_(parse_time_unit(time_unit)),
+        handlers_{std::move(on_window), std::move(on_depth), std::move(on_estimate), std::move(on_prediction),
+                  std::move(on_warning)} {
+    perception_ = std::make_unique<Perception>(calibration, options, queue_.callbacks());
+  }
+
+  void push_events(const py::array& a) {
+    check_running("push_events");
+    const EventLayout f = event_layout(a);
+    const auto* base = static_cast<const std::byte*>(a.data());
+    const auto n = static_cast<std::size_t>(a.size());
+    {
+      py::gil_scoped_release release;
+      events_.resize(n);
+      for (std::size_t i = 0; i < n; ++i) {
+        const std::byte* r = base + i * f.itemsize;
+        const std::uint16_t x = field<std::uint16_t>(r, f.x), y = field<std::uint16_t>(r, f.y);
+        const std::int16_t p = field<std::int16_t>(r, f.p);
+        const std::int64_t t_unit = field<std::int64_t>(r, f.t);
+        const TimeNs t = to_ns(t_unit, unit_);
+        if (t < last_event_t_)
+          throw py::value_error("push_events: event times go backwards at index " + std::to_string(i) + " (t " +
+                                std::to_string(t_unit) + " after " + std::to_string(from_ns(last_event_t_, unit_)) +
+                                "); events must be pushed in time order");
+        last_event_t_ = t;
+        events_[i] = {t, x, y, p > 0};
+      }
+      perception_->push_events(events_);
+    }
+    deliver();
+  }
+
+  void push_imu(const py::array& a) {
+    check_running("push_imu");
+    require_records(a, py::dtype::of<ImuRecord>(), "push_imu");
+    const auto* in = static_cast<const ImuRecord*>(a.data());
+    {
+      py::gil_scoped_release release;
+      for (py::ssize_t i = 0; i < a.size(); ++i) {
+        const ImuRecord& r = in[i];
+        perception_->push_imu({to_ns(r.t, unit_), {r.gx, r.gy, r.gz}, {r.ax, r.ay, r.az}});
+      }
+    }
+    deliver();
+  }
+
+  void push_odometry(const py::array& a) {
+    check_running("push_odometry");
+    require_records(a, py::dtype::of<OdometryRecord>(), "push_odometry");
+    const auto* in = static_cast<const OdometryRecord*>(a.data());
+    {
+      py::gil_scoped_release release;
+      for (py::ssize_t i = 0; i < a.size(); ++i) {
+        const OdometryRecord& r = in[i];
+        OdometrySample s;
+        s.t = to_ns(r.t, unit_);
+        s.p_W_B = {r.px, r.py, r.pz};
+        s.q_W_B = Eigen::Quaterniond(r.qw, r.qx, r.qy, r.qz);
+        s.v_W = {r.vx, r.vy, r.vz};
+        s.omega_B = {r.wx, r.wy, r.wz};
+        perception_->push_odometry(s);
+      }
+    }
+    deliver();
+  }
+
+  /// A depth image in uint16 millimetres (0 = no depth) of the calibration's depth camera size.
+  void push_depth(const py::array& a, std::int64_t t) {
+    check_running("push_depth");
+    if (!a.dtype().equal(py::dtype::of<std::uint16_t>()))
+      throw py::type_error("push_depth: expected uint16 millimetres, got dtype " + py::repr(a.dtype()).cast<std::string>());
+    const auto& depth_camera = perception_->calibration().depth_camera;
+    if (!depth_camera) throw py::value_error("push_depth: the calibration has no depth camera");
+    const auto shape = [](py::ssize_t h, py::ssize_t w) { return "(" + std::to_string(h) + ", " + std::to_string(w) + ")"; };
+    if (a.ndim() != 2 || a.shape(0) != depth_camera->height || a.shape(1) != depth_camera->width)
+      throw py::value_error("push_depth: expected shape " + shape(depth_camera->height, depth_camera->width) +
+                            " (the calibration's depth camera), got " +
+                            (a.ndim() == 2 ? shape(a.shape(0), a.shape(1)) : std::to_string(a.ndim()) + "-D"));
+    if (!(a.flags() & py::array::c_style))
+      throw py::value_error("push_depth: the array is not contiguous (use numpy.ascontiguousarray)");
+    const auto* in = static_cast<const std::uint16_t*>(a.data());
+    {
+      py::gil_scoped_release release;
+      DepthFrame f;
+      f.t = to_ns(t, unit_);
+      f.width = depth_camera->width;
+      f.height = depth_camera->height;
+      f.depth_m.resize(static_cast<std::size_t>(a.size()));
+      for (std::size_t i = 0; i < f.depth_m.size(); ++i) f.depth_m[i] = static_cast<float>(in[i]) * 1e-3f;
+      perception_->push_depth(f);
+    }
+    deliver();
+  }
+
+  py::dict finish() {
+    check_running("finish");
+    {
+      py::gil_scoped_release release;
+      perception_->finish();
+    }
+    finished_ = true;
+    deliver();
+    return results();
+  }
+
+  /// Every result not given to a callback so far, and the counters.
+  py::dict results() const {
+    py::dict d;
+    for (std::size_t k = 0; k < lists_.size(); ++k) d[kListNames[k]] = lists_[k];
+    d["counts"] = counts();
+    return d;
+  }
+  py::object counts() const { return to_python(counts_json(perception_->counters())); }
+  const py::list& list(RowKind k) const { return lists_[static_cast<std::size_t>(k)]; }
+
+ private:
+  void check_running(const char* what) const {
+    if (finished_) throw py::value_error(std::string("Perception.") + what + ": used after finish()");
+  }
+  void deliver() {
+    std::vector<std::pair<RowKind, nlohmann::json>> rows;
+    rows.swap(queue_.rows);
+    for (const auto& [kind, j] : rows) {
+      const auto k = static_cast<std::size_t>(kind);
+      py::object row = to_python(j);
+      if (handlers_[k].is_none())
+        lists_[k].append(row);
+      else
+        handlers_[k](row);
+    }
+  }
+
+  TimeUnit unit_;
+  std::array<py::object, 5> handlers_;
+  std::array<py::list, 5> lists_;
+  RowQueue queue_;
+  std::unique_ptr<Perception> perception_;
+  std::vector<Event> events_;
+  TimeNs last_event_t_ = std::numeric_limits<TimeNs>::min();
+  bool finished_ = false;
+};
+
+/// `fdv run` from Python: the same sensor policy, replay and (with `out`) results folder.
+py::dict run(const std::string& path, std::optional<Calibration> calibration, const std::string& calibration_name,
+             const PerceptionOptions& requested, const std::string& out, const ReaderOptions& reader_options) {
+  RowQueue queue;
+  std::vector<std::string> warnings;
+  ReadReport report;
+  PerceptionCounters counters;
+  SensorPolicy policy;
+  {
+    py::gil_scoped_release release;
+    auto reader = open_recording(path, reader_options);
+    const RecordingInfo info = reader->info();
+    const bool from_file = calibration.has_value();
+    try {
+      policy = apply_sensor_policy(declared_sensors(info, std::move(calibration)), requested);
+    } catch (const ConfigError& e) {  // a missing or mismatched sensor size: name where it came from
+      throw InputError(from_file ? calibration_name : path, "", e.what());
+    }
+    warnings = policy.warnings;
+    std::optional<ResultsWriter> writer;
+    if (!out.empty()) writer.emplace(out);
+    counters = replay(std::move(reader), policy.calibration, policy.options,
+                      queue.callbacks(writer ? &*writer : nullptr), &report);
+    for (const auto& [kind, j] : queue.rows)
+      if (kind == RowKind::kWarning) warnings.push_back(j.get<std::string>());
+    if (writer) {
+      RunSummary s;
+      s.input = path;
+      s.format = info.format;
+      s.width = info.width;
+      s.height = info.height;
+      s.calibration = from_file ? calibration_name : policy.pixel_only ? "none (pixel coordinates, no compensation)"
+                                                                       : "from the recording";
+      s.method_requested = to_string(requested.compensation.method);
+      s.method = to_string(policy.options.compensation.method);
+      s.threads = policy.options.threads;
+      s.reader_report = report.to_json();
+      s.counts = counters;
+      s.timing_ms = writer->timing_ms();
+      s.warnings = warnings;
+      s.options = to_json(policy.options);
+      writer->finish(s);
+    }
+  }
+  py::dict d;
+  for (const char* name : kListNames) d[name] = py::list();
+  for (const auto& [kind, j] : queue.rows)
+    if (kind != RowKind::kWarning) d[kListNames[static_cast<std::size_t>(kind)]].cast<py::list>().append(to_python(j));
+  d["warnings"] = warnings;
+  d["counts"] = to_python(counts_json(counters));
+  d["reader_report"] = to_python(report.to_json());
+  d["options"] = to_python(to_json(policy.options));
+  return d;
+}
+
+}  // namespace
+
+void register_perception(py::module_& m) {
+  py::class_<PyPerception>(m, "Perception",
+                           "The streaming pipeline (fdv::Perception). Push each stream in its time order; "
+                           "results are dicts with the keys of the `fdv run` JSONL lines, given to the "
+                           "on_* callbacks at the end of the push that produced them, else kept in the "
+                           "lists windows, depth, trajectories, predictions, warnings.")
+      .def(py::init<const Calibration&, const PerceptionOptions&, const std::string&, py::object, py::object,
+                    py::object, py::object, py::object>(),
+           py::arg("calibration"), py::arg("options") = PerceptionOptions{}, py::kw_only(),
+           py::arg("time_unit") = "us", py::arg("on_window") = py::none(), py::arg("on_depth") = py::none(),
+           py::arg("on_estimate") = py::none(), py::arg("on_prediction") = py::none(),
+           py::arg("on_warning") = py::none())
+      .def("push_events", &PyPerception::push_events, py::arg("events"), "a 1-D contiguous fdv.EVENT_DTYPE array")
+      .def("push_imu", &PyPerception::push_imu, py::arg("imu"), "fdv.IMU_DTYPE samples")
+      .def("push_odometry", &PyPerception::push_odometry, py::arg("odometry"), "fdv.ODOMETRY_DTYPE samples")
+      .def("push_depth", &PyPerception::push_depth, py::arg("depth_mm"), py::arg("t"),
+           "uint16 millimetres, shape (height, width) of the calibration's depth camera; t in time_unit")
+      .def("finish", &PyPerception::finish, "flushes the last windows; returns results() (no push after it)")
+      .def("results", &PyPerception::results)
+      .def_property_readonly("counts", &PyPerception::counts, "summary.json's counts")
+      .def_property_readonly("windows", [](const PyPerception& p) { return p.list(RowKind::kWindow); })
+      .def_property_readonly("depth", [](const PyPerception& p) { return p.list(RowKind::kDepth); })
+      .def_property_readonly("trajectories", [](const PyPerception& p) { return p.list(RowKind::kTrajectory); })
+      .def_property_readonly("predictions", [](const PyPerception& p) { return p.list(RowKind::kPrediction); })
+      .def_property_readonly("warnings", [](const PyPerception& p) { return p.list(RowKind::kWarning); });
+
+  m.def("_run", &run, py::arg("path"), py::arg("calibration"), py::arg("calibration_name"), py::arg("options"),
+        py::arg("out"), py::arg("reader_options"));
+  py::class_<ReaderOptions>(m, "_ReaderOptions")
+      .def(py::init<>())
+      .def_readwrite("events_topic", &ReaderOptions::events_topic)
+      .def_readwrite("imu_topic", &ReaderOptions::imu_topic)
+      .def_readwrite("depth_topic", &ReaderOptions::depth_topic)
+      .def_readwrite("odometry_topic", &ReaderOptions::odometry_topic)
+      .def_readwrite("ground_truth_topic", &ReaderOptions::ground_truth_topic);
+}
+
+}  // namespace fdv::python

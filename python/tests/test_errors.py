@@ -1,0 +1,116 @@
+"""Bad input: a Python exception with a clear message, never a crash; the C++ messages kept."""
+import numpy as np
+import pytest
+
+import fdv
+from conftest import cli
+
+
+@pytest.fixture(scope="module")
+def perception(dataset):
+    return fdv.Perception(fdv.Calibration.load(str(dataset / "calibration.yaml")))
+
+
+def events(ts):
+    a = np.zeros(len(ts), fdv.EVENT_DTYPE)
+    a["t"], a["x"], a["y"], a["p"] = ts, 10, 20, 1
+    return a
+
+
+def test_errors_are_value_errors_with_the_cpp_message(workdir):
+    assert issubclass(fdv.InputError, ValueError) and issubclass(fdv.ConfigError, ValueError)
+    missing = workdir / "no_such_file.aedat4"
+    with pytest.raises(fdv.InputError) as e:
+        fdv.open(str(missing))
+    assert str(e.value) in cli("info", missing, check=False).stderr
+
+
+def test_unknown_option_key_same_message_as_cpp(workdir):
+    config = workdir / "bad_options.yaml"
+    config.write_text("detector:\n  no_such_key: 1\n")
+    with pytest.raises(fdv.InputError) as e:
+        fdv.PerceptionOptions.load(str(config))
+    assert "key detector.no_such_key" in str(e.value)
+    assert str(e.value) in cli("run", "--print-config", "--config", config, check=False).stderr
+    with pytest.raises(fdv.InputError) as d:
+        fdv.PerceptionOptions.from_dict({"detector": {"no_such_key": 1}})
+    assert str(d.value) == str(e.value).replace(str(config), "<dict>")
+
+
+def test_config_error():
+    with pytest.raises(fdv.ConfigError, match="unknown scenario 'nope'"):
+        fdv.simulate("nope", out="/nonexistent")
+    with pytest.raises(fdv.InputError, match="window_ms"):
+        fdv.PerceptionOptions.from_dict({"window_ms": -1})
+
+
+def test_wrong_dtype(perception):
+    with pytest.raises(TypeError, match="push_events: expected an array of dtype"):
+        perception.push_events(np.zeros(4, dtype=np.float64))
+    with pytest.raises(TypeError, match="push_imu"):
+        perception.push_imu(events([1]))
+
+
+def test_non_contiguous(perception):
+    with pytest.raises(ValueError, match="not contiguous"):
+        perception.push_events(events(np.arange(10))[::2])
+    with pytest.raises(ValueError, match="1-D"):
+        perception.push_events(events(np.arange(4)).reshape(2, 2))
+
+
+def test_unsorted_times(dataset):
+    p = fdv.Perception(fdv.Calibration.load(str(dataset / "calibration.yaml")))
+    with pytest.raises(ValueError, match="go backwards at index 2"):
+        p.push_events(events([5, 6, 4]))
+    p2 = fdv.Perception(fdv.Calibration.load(str(dataset / "calibration.yaml")))
+    p2.push_events(events([5, 6]))
+    with pytest.raises(ValueError, match="go backwards at index 0"):
+        p2.push_events(events([3]))
+
+
+def test_depth_of_the_wrong_shape(perception):
+    with pytest.raises(ValueError, match=r"expected shape \(\d+, \d+\).*got \(10, 10\)"):
+        perception.push_depth(np.zeros((10, 10), np.uint16), 0)
+    with pytest.raises(TypeError, match="uint16"):
+        perception.push_depth(np.zeros((10, 10), np.float32), 0)
+
+
+def test_closed_reader(dataset):
+    rec = fdv.open(str(dataset))
+    it = iter(rec)
+    next(it)
+    rec.close()
+    assert rec.closed
+    with pytest.raises(ValueError, match="the recording is closed"):
+        next(it)
+    with pytest.raises(ValueError, match="the recording is closed"):
+        rec.imu()
+    with pytest.raises(ValueError, match="the recording is closed"):
+        list(rec.events(delta_t=1000))
+
+
+def test_perception_after_finish(dataset):
+    p = fdv.Perception(fdv.Calibration.load(str(dataset / "calibration.yaml")))
+    p.finish()
+    for call in [lambda: p.push_events(events([1])), lambda: p.push_imu(np.zeros(1, fdv.IMU_DTYPE)),
+                 lambda: p.push_odometry(np.zeros(1, fdv.ODOMETRY_DTYPE)), p.finish]:
+        with pytest.raises(ValueError, match="used after finish"):
+            call()
+
+
+def test_bad_slicing_arguments(dataset):
+    with pytest.raises(ValueError, match="delta_t must be > 0"):
+        fdv.open(str(dataset)).events(delta_t=0)
+    with pytest.raises(ValueError, match="time_unit must be"):
+        fdv.open(str(dataset), time_unit="ms")
+
+
+def test_packed_event_layout_is_accepted(dataset):
+    # np.concatenate drops the padding of EVENT_DTYPE (numpy's structured promotion): accepted too.
+    a = events([1, 2])
+    packed = np.concatenate([a, a[:0]])
+    assert packed.dtype.itemsize == 14
+    p = fdv.Perception(fdv.Calibration.load(str(dataset / "calibration.yaml")))
+    p.push_events(packed)
+    p.finish()
+    assert p.counts["events_read"] == 2
