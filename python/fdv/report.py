@@ -141,7 +141,10 @@ def plot_trajectories(results, trajectories, truth, out):
         t = np.linspace(row["t_first"], row["t_last"], 50)
         p = trajectory_at(row, t)
         fig, axes = plt.subplots(1, 2, figsize=(11, 4.5))
-        for ax, (i, j), view in zip(axes, [(0, 1), (0, 2)], ["top view (x, y)", "side view (x, z)"]):
+        # The side view looks across the flight: along the horizontal axis it moves most on.
+        along = 0 if abs(p[-1, 0] - p[0, 0]) >= abs(p[-1, 1] - p[0, 1]) else 1
+        views = [(0, 1, "top view (x, y)"), (along, 2, f"side view ({'xy'[along]}, z)")]
+        for ax, (i, j, view) in zip(axes, views):
             ax.plot(p[:, i], p[:, j], "-", color="C0", lw=2, label="fusion estimate (observed interval)")
             ax.plot(p[0, i], p[0, j], "o", color="C0")
             if truth is not None:
@@ -183,7 +186,7 @@ def plot_prediction_error(windows, trajectories, predictions, truth, out):
             since = [r["t"] - first_seen[track] for r in rows]
             ax.plot(since, err, "o-", color=TRACK_COLORS[k % len(TRACK_COLORS)], ms=4,
                     label=f"track {track} vs ball {ball} (true closest approach at {t_ca:.3f} s)")
-        ax.set_ylabel("|predicted − true| position at the true closest approach [m]")
+        ax.set_ylabel("position error at true closest approach [m]")
         ax.set_yscale("log")
         ax.set_title("Prediction error at the true closest approach (usable fusion solves)")
     else:
@@ -236,7 +239,10 @@ def plot_window_strip(results, windows, out, n=6):
         ax.imshow(img)
         ax.set_axis_off()
     fig.suptitle("Window images: mean-time image N, segmentation, event count with the detection box")
-    return save(fig, out, "windows.png")
+    fig.tight_layout(rect=(0, 0, 1, 0.97))
+    fig.savefig(out / "windows.png", dpi=90)
+    plt.close(fig)
+    return "windows.png"
 
 
 def write_report(results_dir, truth_dir=None, out_dir=None):
