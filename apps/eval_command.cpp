@@ -1,5 +1,6 @@
 // `fdv eval RESULTS_DIR --truth DATASET`: scores a `fdv run` against a simulated dataset's ground
-// truth and writes RESULTS_DIR/metrics.json: detection metrics, relative contrast η (paper §V-B),
+// truth and writes RESULTS_DIR/metrics.json: detection metrics (Table I's, and per apparent-size
+// bin, for balls cut by the border and per ball: `objects`), relative contrast η (paper §V-B),
 // APE of each track's final estimate (paper Table II), and the prediction error at the true
 // closest-approach time as a function of the time since the track's first detection.
 #include <spdlog/spdlog.h>
@@ -42,6 +43,7 @@ nlohmann::json evaluate(const std::string& results, const std::string& dataset) 
   const std::vector<WindowDetections> windows = read_detections(results);
   const DetectionMetrics detection = detection_metrics(truth, windows);
   metrics["detection"] = detection.to_json();
+  metrics["objects"] = detection.objects_json();
   {
     std::ofstream csv(results + "/detection_windows.csv");
     write_window_outcomes_csv(csv, detection.per_window);

@@ -83,7 +83,7 @@ TEST(DetectionMetrics, CountsFoundMissedAndFalseAgainstTheTruthBox) {
   std::getline(lines, header);
   EXPECT_EQ(header,
             "t_start_s,t_end_s,eligible,found,detections,false_detections,center_error_px,ball,"
-            "fraction_in_view_min,span_px_min");
+            "fraction_in_view_min,span_px_min,size_px,fills_view");
   std::getline(lines, row);
   std::getline(lines, row);
   const auto starts_with = [](const std::string& text, const std::string& prefix) {

@@ -191,6 +191,54 @@ TEST(GroundTruthBox, DistortedLensMatchesABruteForceRaster) {
   EXPECT_NEAR(box.v_max, v1, 0.02);
 }
 
+TEST(VisibleSilhouette, ACutBallsCentreIsItsInViewAreasCentroid) {
+  // Independent route: a 0.1 px raster of the image's pixels whose ray lies in the tangent cone;
+  // the mean of those in view is the visible part's centroid, their extent its clipped box.
+  const double z = 4.0, r = 0.3, x = (10.5 - kCx) / kF * z;  // centre 11 px inside the left border
+  const Eigen::Vector3d centre(x, 0.4, z);
+  const auto s = visible_silhouette(ball_at(centre), 1, r, still_body(), camera(), 0);
+  ASSERT_TRUE(s.visible);
+  EXPECT_TRUE(s.partial());
+  const Eigen::Vector3d axis = centre.normalized();
+  const double cos_alpha = std::cos(std::asin(r / centre.norm()));
+  Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+  double n = 0, u1 = -1e9, v0 = 1e9, v1 = -1e9;
+  for (double v = -0.45; v < 480 - 0.5; v += 0.1)
+    for (double u = -0.45; u < 640 - 0.5; u += 0.1) {
+      if (u > 80) break;  // the silhouette ends ~50 px right of the border
+      if (Eigen::Vector3d((u - kCx) / kF, (v - kCy) / kF, 1).normalized().dot(axis) < cos_alpha)
+        continue;
+      sum += Eigen::Vector2d(u, v), ++n;
+      u1 = std::max(u1, u), v0 = std::min(v0, v), v1 = std::max(v1, v);
+    }
+  ASSERT_GT(n, 0);
+  EXPECT_NEAR(s.visible_center_px.x(), sum.x() / n, 0.3);
+  EXPECT_NEAR(s.visible_center_px.y(), sum.y() / n, 0.3);
+  EXPECT_DOUBLE_EQ(s.u_min, -0.5);
+  EXPECT_NEAR(s.u_max, u1, 0.1);
+  EXPECT_NEAR(s.size_px(), std::max(u1 + 0.5, v1 - v0), 0.2);
+  // The projected centre is still the whole ball's: about 11 px right of the border.
+  ASSERT_TRUE(s.projected_center_px);
+  EXPECT_NEAR(s.projected_center_px->x(), 10.5, 1e-9);
+  EXPECT_GT(s.visible_center_px.x(), 10.5 + 1);  // the cut part lies left of the centre
+}
+
+TEST(VisibleSilhouette, AWholeBallsCentreIsItsProjectedCentre) {
+  const Eigen::Vector3d centre(0.3, -0.2, 3);
+  const auto s = visible_silhouette(ball_at(centre), 1, 0.1, still_body(), camera(), kNsPerMs);
+  ASSERT_TRUE(s.visible);
+  EXPECT_FALSE(s.partial());
+  EXPECT_DOUBLE_EQ(s.fraction_in_view, 1.0);
+  const Eigen::Vector2d projected(kCx + kF * 0.1, kCy - kF * 0.2 / 3);
+  EXPECT_NEAR((s.visible_center_px - projected).norm(), 0, 1e-9);
+  const auto box = ground_truth_box(ball_at(centre), 1, 0.1, still_body(), camera(), kNsPerMs,
+                                    kNsPerMs);
+  EXPECT_NEAR(s.size_px(), std::max(box.width(), box.height()), 1e-9);
+  // No truth at that time: nothing.
+  EXPECT_FALSE(visible_silhouette(ball_at(centre), 1, 0.1, still_body(), camera(), 2 * kNsPerS)
+                   .visible);
+}
+
 TEST(GroundTruthBox, OtherIdsAndMissingTruth) {
   auto states = ball_at({0, 0, 3});
   for (auto& s : states) s.id = 2;

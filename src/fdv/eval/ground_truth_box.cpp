@@ -56,6 +56,8 @@ struct Instant {
   double u0 = 1e300, u1 = -1e300, v0 = 1e300, v1 = -1e300;  // clipped box
   double fraction = 0;
   double span = 0;
+  /// Area centroid of the in-view part [raw px]; only when asked for and part of it is in view.
+  std::optional<Eigen::Vector2d> centroid;
 };
 
 void orthonormal_basis(const Eigen::Vector3d& n, Eigen::Vector3d& e1, Eigen::Vector3d& e2) {
@@ -66,7 +68,7 @@ void orthonormal_basis(const Eigen::Vector3d& n, Eigen::Vector3d& e1, Eigen::Vec
 }
 
 Instant evaluate(const Eigen::Vector3d& c, double r, const Lens& lens,
-                 const GroundTruthBoxOptions& opt) {
+                 const GroundTruthBoxOptions& opt, bool want_centroid = false) {
   Instant in;
   const auto& cam = lens.cam;
   const double L = c.norm();
@@ -110,7 +112,7 @@ Instant evaluate(const Eigen::Vector3d& c, double r, const Lens& lens,
   }
   in.span =
       all_valid ? std::max(uu1 - uu0, vv1 - vv0) : 2 * lens.f * std::tan(std::min(alpha, 1.4));
-  if (all_inside) {  // the whole silhouette is in the image
+  if (all_inside && !want_centroid) {  // the whole silhouette is in the image
     in.any = true;
     in.fraction = 1;
     return in;
@@ -124,10 +126,14 @@ Instant evaluate(const Eigen::Vector3d& c, double r, const Lens& lens,
       in.u0 = std::min(in.u0, px.x()), in.u1 = std::max(in.u1, px.x());
       in.v0 = std::min(in.v0, px.y()), in.v1 = std::max(in.v1, px.y());
     }
-  in.any = any_inside || border_inside;
+  in.any = all_inside || any_inside || border_inside;
   if (!in.any) return in;
-  // Solid-angle fraction in view: a deterministic sunflower pattern over the spherical cap.
+  // Solid-angle fraction in view: a deterministic sunflower pattern over the spherical cap. The
+  // centroid weighs each ray by the image area per solid angle there (1 / cos³ of its angle to
+  // the optical axis, a pinhole's; distortion ignored).
   int inside = 0;
+  Eigen::Vector2d weighted = Eigen::Vector2d::Zero();
+  double weight = 0;
   const int n = opt.view_samples;
   for (int i = 0; i < n; ++i) {
     const double cos_t = 1 - (1 - ca) * (i + 0.5) / n;
@@ -135,9 +141,14 @@ Instant evaluate(const Eigen::Vector3d& c, double r, const Lens& lens,
     const double phi = i * 2.399963229728653;  // golden angle
     const Eigen::Vector3d ray = cos_t * axis + sin_t * (std::cos(phi) * e1 + std::sin(phi) * e2);
     Eigen::Vector2d px;
-    if (lens.project(ray, px) && lens.in_image(px)) ++inside;
+    if (!lens.project(ray, px) || !lens.in_image(px)) continue;
+    ++inside;
+    const double w = 1 / (ray.z() * ray.z() * ray.z());
+    weighted += w * px;
+    weight += w;
   }
-  in.fraction = static_cast<double>(inside) / n;
+  in.fraction = all_inside ? 1 : static_cast<double>(inside) / n;
+  if (want_centroid && weight > 0) in.centroid = weighted / weight;
   return in;
 }
 
@@ -164,7 +175,49 @@ OdometrySample body_at(std::span<const OdometrySample> body, TimeNs t) {
   return interpolate_between(*(hi - 1), *hi, t);
 }
 
+/// The samples of ball `id`, in time order.
+std::vector<ObjectState> states_of(std::span<const ObjectState> objects, int id) {
+  std::vector<ObjectState> states;
+  for (const auto& s : objects)
+    if (s.id == id) states.push_back(s);
+  return states;
+}
+
+/// The ball's centre in the event camera's frame at t, the camera held as `options` says.
+Eigen::Vector3d center_in_camera(const std::vector<ObjectState>& states,
+                                 std::span<const OdometrySample> body, const Eigen::Isometry3d& T_B_E,
+                                 const GroundTruthBoxOptions& options, TimeNs t) {
+  Eigen::Isometry3d T_W_E = body_at(body, options.rotation_time.value_or(t)).T_W_B() * T_B_E;
+  T_W_E.translation() =
+      (body_at(body, options.position_time.value_or(t)).T_W_B() * T_B_E).translation();
+  return Eigen::Vector3d(T_W_E.inverse() * ball_at(states, t));
+}
+
 }  // namespace
+
+VisibleSilhouette visible_silhouette(std::span<const ObjectState> objects, int id, double radius_m,
+                                     std::span<const OdometrySample> body, const Calibration& calib,
+                                     TimeNs t, const GroundTruthBoxOptions& options) {
+  if (!(radius_m > 0)) throw std::invalid_argument("visible_silhouette: radius must be positive");
+  VisibleSilhouette out;
+  const std::vector<ObjectState> states = states_of(objects, id);
+  if (states.empty() || body.empty() || t < states.front().t || t > states.back().t) return out;
+  const Lens lens(calib.event_camera);
+  const Eigen::Vector3d c = center_in_camera(states, body, calib.T_B_E, options, t);
+  const Instant in = evaluate(c, radius_m, lens, options, /*want_centroid=*/true);
+  if (!in.any) return out;
+  out.visible = true;
+  out.u_min = in.u0, out.v_min = in.v0, out.u_max = in.u1, out.v_max = in.v1;
+  out.fraction_in_view = in.fraction;
+  if (Eigen::Vector2d px; lens.project(c, px)) out.projected_center_px = px;
+  if (in.fraction >= 1 && out.projected_center_px)
+    out.visible_center_px = *out.projected_center_px;
+  else if (in.centroid)
+    out.visible_center_px = *in.centroid;
+  else  // the camera inside the ball: all of the image is the ball
+    out.visible_center_px = {(in.u0 + in.u1) / 2, (in.v0 + in.v1) / 2};
+  return out;
+}
 
 GroundTruthBox ground_truth_box(std::span<const ObjectState> objects, int id, double radius_m,
                                 std::span<const OdometrySample> body, const Calibration& calib,
@@ -172,20 +225,14 @@ GroundTruthBox ground_truth_box(std::span<const ObjectState> objects, int id, do
   if (t1 < t0) throw std::invalid_argument("ground_truth_box: t1 < t0");
   if (!(radius_m > 0)) throw std::invalid_argument("ground_truth_box: radius must be positive");
   GroundTruthBox box;
-  std::vector<ObjectState> states;
-  for (const auto& s : objects)
-    if (s.id == id) states.push_back(s);
+  const std::vector<ObjectState> states = states_of(objects, id);
   if (states.empty() || body.empty()) return box;
   const TimeNs lo = std::max(t0, states.front().t), hi = std::min(t1, states.back().t);
   if (hi < lo) return box;
 
   const Lens lens(calib.event_camera);
-  const Eigen::Isometry3d T_B_E = calib.T_B_E;
-  auto center_in_camera = [&](TimeNs t) {
-    Eigen::Isometry3d T_W_E = body_at(body, options.rotation_time.value_or(t)).T_W_B() * T_B_E;
-    T_W_E.translation() =
-        (body_at(body, options.position_time.value_or(t)).T_W_B() * T_B_E).translation();
-    return Eigen::Vector3d(T_W_E.inverse() * ball_at(states, t));
+  const auto center_at = [&](TimeNs t) {
+    return center_in_camera(states, body, calib.T_B_E, options, t);
   };
 
   // Instants: the interval ends and every truth sample inside, refined by the motion between.
@@ -212,10 +259,10 @@ GroundTruthBox ground_truth_box(std::span<const ObjectState> objects, int id, do
     box.v_min = std::min(box.v_min, in.v0), box.v_max = std::max(box.v_max, in.v1);
   };
   const double magnification = 1.3;  // bound on the lens's local scale relative to f
-  Eigen::Vector3d c_prev = center_in_camera(knots.front());
+  Eigen::Vector3d c_prev = center_at(knots.front());
   accumulate(evaluate(c_prev, radius_m, lens, options));
   for (std::size_t i = 1; i < knots.size(); ++i) {
-    const Eigen::Vector3d c_next = center_in_camera(knots[i]);
+    const Eigen::Vector3d c_next = center_at(knots[i]);
     const double a0 = std::asin(std::min(1.0, radius_m / c_prev.norm()));
     const double a1 = std::asin(std::min(1.0, radius_m / c_next.norm()));
     const double turn =
@@ -225,7 +272,7 @@ GroundTruthBox ground_truth_box(std::span<const ObjectState> objects, int id, do
                                                          options.max_step_px)));
     for (int j = 1; j <= n; ++j) {
       const TimeNs t = knots[i - 1] + (knots[i] - knots[i - 1]) * j / n;
-      accumulate(evaluate(j == n ? c_next : center_in_camera(t), radius_m, lens, options));
+      accumulate(evaluate(j == n ? c_next : center_at(t), radius_m, lens, options));
     }
     c_prev = c_next;
   }

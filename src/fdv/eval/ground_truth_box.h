@@ -17,6 +17,7 @@
 /// samples. Ball positions between truth samples by cubic Hermite interpolation of (p, v)
 /// (exact for ballistic flight); vehicle poses by fdv::interpolate_odometry.
 /// Visibility is geometric (no occlusion by the scene). Thread-safe.
+#include <algorithm>
 #include <optional>
 #include <span>
 
@@ -55,6 +56,30 @@ struct GroundTruthBoxOptions {
   std::optional<TimeNs> rotation_time;
   std::optional<TimeNs> position_time;
 };
+
+/// The ball's silhouette at one instant as the image shows it (issue 25's apparent size and the
+/// centre of a partly visible ball).
+struct VisibleSilhouette {
+  bool visible = false;  ///< some part of the silhouette is in the image
+  /// Raw-pixel box of the in-view part, clipped to [-0.5, W-0.5] x [-0.5, H-0.5].
+  double u_min = 0, v_min = 0, u_max = 0, v_max = 0;
+  double fraction_in_view = 0;  ///< of the silhouette's solid angle
+  /// The centre of the visible part [raw px]: the projected ball centre when the whole silhouette
+  /// is in view, else the area centroid of its in-view part.
+  Eigen::Vector2d visible_center_px = Eigen::Vector2d::Zero();
+  /// The ball's centre projected through the lens; nothing behind the camera or beyond the lens
+  /// model's valid field.
+  std::optional<Eigen::Vector2d> projected_center_px;
+  /// Apparent size: the longer side of the visible extent [px].
+  double size_px() const { return visible ? std::max(u_max - u_min, v_max - v_min) : 0; }
+  bool partial() const { return visible && fraction_in_view < 1; }
+};
+
+/// The silhouette of ball `id` at time t (inputs as ground_truth_box); not visible when no truth
+/// covers t. Throws std::invalid_argument for radius <= 0.
+VisibleSilhouette visible_silhouette(std::span<const ObjectState> objects, int id, double radius_m,
+                                     std::span<const OdometrySample> body, const Calibration& calib,
+                                     TimeNs t, const GroundTruthBoxOptions& options = {});
 
 /// `objects` may hold several ids (only `id` is used) and must be time-sorted; `body` is the
 /// true vehicle motion (T_W_B), time-sorted. Empty result (visible = false, samples = 0) when

@@ -86,7 +86,10 @@ std::vector<WindowDetections> window_detections(const std::vector<WindowRow>& ro
     WindowDetections w;
     w.t_start = from_seconds(r.t_start_s);
     w.t_end = from_seconds(r.t_end_s);
-    for (const DetectionRow& d : r.detections) w.detections.push_back({from_seconds(d.t_s), d.center, d.track});
+    w.status = r.status;
+    for (const DetectionRow& d : r.detections)
+      w.detections.push_back({from_seconds(d.t_s), d.center, d.track, d.partial,
+                              d.visible_fraction, d.center_full});
     out.push_back(std::move(w));
   }
   return out;

@@ -52,8 +52,10 @@ ExperimentRun run_experiment(const DatasetTruth& truth, const ExperimentOptions&
   ExperimentRun run;
   PerceptionCallbacks callbacks;
   callbacks.on_window = [&](const WindowResult& w) {
-    WindowDetections d{w.t_start, w.t_end, {}};
-    for (const auto& [found, track_id] : w.detections) d.detections.push_back({found.t, found.center_raw, track_id});
+    WindowDetections d{w.t_start, w.t_end, {}, std::string(to_string(w.status))};
+    for (const auto& [found, track_id] : w.detections)
+      d.detections.push_back({found.t, found.center_raw, track_id, found.partial,
+                              found.visible_fraction, found.center_full_raw});
     run.windows.push_back(std::move(d));
     run.compensation_ms.push_back(w.timings.compensation_ms);
     run.front_end_ms.push_back(w.timings.compensation_ms + w.timings.detection.total_ms);
