@@ -111,6 +111,10 @@ void demo(const DemoArgs& args) {
                                   " 0.5 s ahead)");
   std::cout << "  outputs: " << results
             << " (detections, depth, trajectories, predictions, metrics)\n";
+  // The plots are Python's (python/fdv/report.py), built beside the program as build/python/fdv.
+  std::cout << fmt::format("  plots: PYTHONPATH=build/python /usr/bin/python3 -m fdv.report {} --truth {}\n"
+                           "         (writes {}/report/report.html)\n",
+                           results, dataset, results);
 }
 
 }  // namespace
