@@ -1,6 +1,7 @@
 // The named scenarios of issue 3, each randomised by a seed (docs/SIMULATOR.md, "Scenarios").
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "fdv/core/error.h"
@@ -91,10 +92,49 @@ BallConfig headon_throw(Rng& rng, double distance, double speed, double release_
   return b;
 }
 
+/// Issue 25's near pass: a ball of radius `radius` thrown from `distance` ahead passes the
+/// camera's plane `miss` metres off its centre, in the direction `phi` (0 left, π/2 up), and
+/// flies on out of view. The thrower's arm is 1.5-3.5 m off the axis on the other side, so the
+/// path crosses the view obliquely and the ball is nearer when it leaves; for a pass above the
+/// camera the ball is thrown from low down, rising, or gravity would take it out over the top
+/// of the view long before it is near.
+BallConfig close_pass_throw(const ScenarioConfig& c, Rng& rng, double distance, double speed,
+                            double miss, double phi) {
+  BallConfig b;
+  const double arm = rng.uniform(1.5, 3.5);
+  b.release_t_s = 0.1;
+  b.speed_m_s = speed;
+  const double hand = -1.0 * std::max(std::sin(phi), 0.0) + rng.uniform(-0.3, 0.2);
+  b.from_m = {distance, -arm * std::cos(phi), hand};
+  b.to_m = {c.event_camera.position_B_m.x(), miss * std::cos(phi), miss * std::sin(phi)};
+  b.spin_W_rad_s = random_spin(rng);
+  return b;
+}
+
+/// One of two_balls' throws: an aimed ball released at `release_t` that crosses the view
+/// sideways (`side` +1: to the left) along a `chord` metres long, centred on the camera-frame
+/// direction `ray` at `depth` metres, and passes through that point at mid-flight.
+BallConfig crossing_throw(const ScenarioConfig& c, Rng& rng, const Eigen::Vector3d& ray,
+                          double depth, double chord, double flight_s, double side,
+                          double release_t) {
+  BallConfig b;
+  b.release_t_s = release_t;
+  b.speed_m_s = chord / flight_s;
+  const Eigen::Vector3d at = c.event_camera.position_B_m + depth * ray;
+  // The aimed parabola's middle lies g T^2 / 8 above its chord's middle.
+  const Eigen::Vector3d middle = at - Eigen::Vector3d(0, 0, 9.81 * flight_s * flight_s / 8.0);
+  const Eigen::Vector3d half = 0.5 * chord * Eigen::Vector3d(0, side, 0);
+  b.from_m = middle - half;
+  b.to_m = middle + half;
+  b.spin_W_rad_s = random_spin(rng);
+  return b;
+}
+
 }  // namespace
 
 std::vector<std::string> preset_names() {
-  return {"scene1_no_object", "scene2_ball", "fast_forward", "swing", "hover_headon", "dim"};
+  return {"scene1_no_object", "scene2_ball", "fast_forward", "swing",
+          "hover_headon",     "dim",         "close_pass",   "two_balls"};
 }
 
 ScenarioConfig make_preset(const std::string& name, std::uint64_t seed) {
@@ -148,6 +188,60 @@ ScenarioConfig make_preset(const std::string& name, std::uint64_t seed) {
       c.scene.illuminance_lux = 9.0;            // paper: dim runs at 8-10 lux
       c.event_camera.background_rate_hz = 1.0;  // top of DESIGN's 0.1-1 range: more shot noise
     }
+  } else if (name == "close_pass") {
+    // Issue 25: a ball passes 0.5-1.5 m from a still (tripod) or hovering camera, growing from
+    // a few pixels to a large part of the frame, and leaves through a border.
+    v.motion = MotionKind::kHover;
+    v.start_W_m = {0.0, 0.0, 1.8};
+    if (rng.bernoulli(0.5)) {  // still: on a tripod, no vibration nor wander
+      v.vibration_angle_deg = 0.0;
+      v.vibration_position_m = 0.0;
+      v.wander_position_m = 0.0;
+    }
+    // The ball's image reaches a third of the frame's shorter side near the pass only if the
+    // miss is within ~7.5 radii (passing beside or below) to ~3.5 radii (straight above, where
+    // the ball still descends): the miss is drawn in 0.5-1.5 m up to that bound.
+    const double phi = rng.uniform(0.0, 2.0 * 3.141592653589793);  // 0 left, π/2 above
+    const double rise = std::max(std::sin(phi), 0.0);
+    const double radius = rng.uniform(0.11, 0.16), speed = rng.uniform(11.0, 15.0);
+    const double miss = rng.uniform(0.5, std::clamp(radius * (7.5 - 4.0 * rise), 0.5, 1.5));
+    // Released 110-125 radii away (8.6-9.7 px across at 640x480) so that it starts small. A
+    // long throw descends by ~20 deg at the end and would leave over the top of the view while
+    // still far: a pass with any upward part is a short flat throw from 60-75 radii instead.
+    const double distance = radius * (rise > 0 ? rng.uniform(60.0, 75.0) : rng.uniform(110.0, 125.0));
+    BallConfig b = close_pass_throw(c, rng, distance, speed, miss, phi);
+    b.radius_m = radius;
+    c.balls.push_back(b);
+    const double flight_s = (b.to_m - b.from_m).norm() / speed;
+    c.duration_s = std::ceil((b.release_t_s + flight_s + 0.1) * 10.0) / 10.0;
+    add_panels(c, rng, distance + 2.0, distance + 2.0);
+  } else if (name == "two_balls") {
+    // Issue 25: two balls thrown at once across a hovering camera, a slow one near and a fast
+    // one far, in opposite directions; both pass one viewing direction at mid-flight, so their
+    // images cross (and may overlap) while both are well in view.
+    v.motion = MotionKind::kHover;
+    v.start_W_m = {0.0, 0.0, 1.5};
+    const double deg = 3.141592653589793 / 180.0;
+    const double az = rng.uniform(-6.0, 6.0) * deg, el = rng.uniform(-4.0, 4.0) * deg;
+    const double far_el = el + rng.uniform(-1.5, 1.5) * deg;
+    const auto direction = [](double azimuth, double elevation) {  // x ahead, y left, z up
+      return Eigen::Vector3d(1.0, std::tan(azimuth), std::tan(elevation));
+    };
+    // Both fly for the same 0.3-0.4 s; the chords keep each ball in view from release to catch.
+    const double near_depth = rng.uniform(3.0, 4.0), far_depth = rng.uniform(6.0, 8.0);
+    const double flight_s = rng.uniform(0.3, 0.4);
+    const double near_chord = std::min(flight_s * rng.uniform(5.5, 7.0), 0.8 * near_depth);
+    const double far_chord = std::min(flight_s * rng.uniform(10.0, 14.0), 0.85 * far_depth);
+    const double side = rng.bernoulli(0.5) ? 1.0 : -1.0, release_t = 0.15;
+    BallConfig near = crossing_throw(c, rng, direction(az, el), near_depth, near_chord, flight_s,
+                                     side, release_t);
+    BallConfig far = crossing_throw(c, rng, direction(az, far_el), far_depth, far_chord, flight_s,
+                                    -side, release_t + rng.uniform(0.0, 0.004));
+    near.id = 1;
+    far.id = 2;
+    c.balls = {near, far};
+    c.duration_s = std::ceil((release_t + flight_s + 0.15) * 10.0) / 10.0;
+    add_panels(c, rng, far_depth + 2.0, far_depth + 2.0);
   } else {
     std::string known;
     for (const auto& n : preset_names()) known += (known.empty() ? "" : ", ") + n;

@@ -227,7 +227,8 @@ struct ScenarioConfig {
   Calibration calibration() const;
 };
 
-/// Names of the presets: scene1_no_object, scene2_ball, fast_forward, swing, hover_headon, dim.
+/// Names of the presets: scene1_no_object, scene2_ball, fast_forward, swing, hover_headon, dim,
+/// close_pass, two_balls (docs/SIMULATOR.md, "Scenarios").
 std::vector<std::string> preset_names();
 /// A named preset, randomised by `seed` (panel layout, throw, textures, noise). Throws
 /// ConfigError for an unknown name (listing the known ones).
