@@ -187,7 +187,7 @@ def plot_prediction_error(windows, trajectories, predictions, truth, out):
             ax.plot(since, err, "o-", color=TRACK_COLORS[k % len(TRACK_COLORS)], ms=4,
                     label=f"track {track} vs ball {ball} (true closest approach at {t_ca:.3f} s)")
         ax.set_ylabel("position error at true closest approach [m]")
-        ax.set_yscale("log")
+        ax.set_ylim(bottom=0)
         ax.set_title("Prediction error at the true closest approach (usable fusion solves)")
     else:
         for k, track in enumerate(sorted({p["track"] for p in predictions})):

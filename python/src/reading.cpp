@@ -100,7 +100,8 @@ class EventIterator {
       if (chunk_.events.empty()) continue;
       buffered_ += chunk_.events.size();
       buffer_.push_back(std::move(chunk_.events));
-      chunk_.events = {};
+      chunk_.events = std::move(spare_);  // the reader refills a buffer that is already allocated
+      spare_ = {};
       return true;
     }
     eof_ = true;
@@ -131,6 +132,7 @@ class EventIterator {
       buffered_ -= k;
       front_pos_ += k;
       if (front_pos_ == front.size()) {
+        spare_ = std::move(front);
         buffer_.pop_front();
         front_pos_ = 0;
       }
@@ -141,6 +143,7 @@ class EventIterator {
   std::unique_ptr<RecordingReader> reader_;
   SensorChunk chunk_;
   std::deque<std::vector<Event>> buffer_;
+  std::vector<Event> spare_;  ///< a consumed buffer, handed back to the reader
   std::size_t front_pos_ = 0, buffered_ = 0;
   bool eof_ = false;
   std::optional<TimeNs> delta_t_ns_;
