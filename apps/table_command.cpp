@@ -26,6 +26,7 @@ struct TableArgs {
   std::string seeds = "101-105";
   std::string cache = "out/cache";
   std::string write;  ///< results document; empty: print only
+  std::string any_size_seeds;  ///< table1 only: seeds of issue 25's table, "none"; empty: --seeds
 };
 
 /// stdout of a shell command, or nothing when it cannot run or fails.
@@ -76,9 +77,14 @@ void run_table(const std::string& name, const TableArgs& args, Compute compute) 
   PaperTableOptions options;
   options.seeds = parse_seed_list(args.seeds);
   options.cache_dir = args.cache;
+  if (args.any_size_seeds == "none")
+    options.any_size_seeds.emplace();
+  else if (!args.any_size_seeds.empty())
+    options.any_size_seeds = parse_seed_list(args.any_size_seeds);
   const Table table = compute(options);
   Provenance p;
-  p.command = fmt::format("fdv {} --seeds {} --cache {}{}", name, args.seeds, args.cache,
+  p.command = fmt::format("fdv {} --seeds {} --cache {}{}{}", name, args.seeds, args.cache,
+                          args.any_size_seeds.empty() ? "" : " --any-size-seeds " + args.any_size_seeds,
                           args.write.empty() ? "" : " --write " + args.write);
   p.date = today_utc();
   p.commit = source_revision(args.write);
@@ -108,6 +114,8 @@ void add_table_commands(CLI::App& app) {
   auto* t1 = app.add_subcommand(
       "table1", "paper Table I: compensation time, relative contrast, detection metrics");
   add_table_options(t1, args1);
+  t1->add_option("--any-size-seeds", args1.any_size_seeds,
+                 "seeds of the any-size detection table (issue 25; default: --seeds), or none");
   t1->callback([] { run_table<Table1>("table1", args1, compute_table1); });
   auto* t2 =
       app.add_subcommand("table2", "paper Table II: APE of fusion vs mono; first-estimate latency");

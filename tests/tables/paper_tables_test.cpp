@@ -29,6 +29,74 @@ TEST(Table1Markdown, RowsAndNotesFollowTheTable) {
   EXPECT_NE(md.find("abc1234"), std::string::npos);
 }
 
+// Issue 25's any-size table from hand-made metrics: the bin cells, the cut-ball and fills-view
+// columns, the per-ball table of a scene with two balls, and the targets read off them.
+TEST(Table1Markdown, AnySizeRowsPerBinAndPerBall) {
+  Table1 t;
+  t.seeds = {7};
+  t.window_ns = 20'000'000;
+  AnySizeRow close;
+  close.scene = {"close_pass", 1280, 720, ""};
+  close.balls = 1;
+  DetectionMetrics& c = close.detection;
+  c.windows = 50;
+  c.size_bins[1] = {10, 9, {1.0, 2.0, 3.0}, {20, 20, 20}};  // 90 % of 10, median 2 px
+  c.size_bins[3] = {4, 4, {6.0}, {150}};                    // 6 px ≤ 5 % of 150 px = 7.5 px
+  c.any_size = c.size_bins[1];
+  c.any_size.merge(c.size_bins[3]);
+  c.partial = {5, 4, {2.5}, {120}};
+  c.center_full_errors_px = {4.0, 5.0};
+  c.fills_view_windows = 6;
+  c.fills_view_reported = 5;
+  AnySizeRow two;
+  two.scene = {"two_balls", 0, 0, ""};
+  two.balls = 2;
+  two.detection.windows = 20;
+  two.detection.objects[1] = {{10, 10, {1.0}, {30}}, 3, 1};
+  two.detection.objects[2] = {{10, 8, {2.0}, {30}}, 4, 2};
+  t.any_size_rows = {close, two};
+  t.any_size_seeds = {7};
+
+  const std::string md = to_markdown(t, Provenance{"fdv table1 --seeds 7", "2026-11-26", "abc1234"});
+  EXPECT_NE(md.find("| close_pass | 1280x720 | 50 | 92.9 % of 14, 2.50 px | – | 90.0 % of 10, 2.00 px | – | "
+                    "100.0 % of 4, 6.00 px | 80.0 % of 5, 2.50 px | 4.50 (2) | 5 / 6 | 0.0 % |"),
+            std::string::npos)
+      << md;
+  EXPECT_NE(md.find("(issue 25; rotation_translation; seeds 7)"), std::string::npos) << md;
+  EXPECT_NE(md.find("| two_balls | preset's own | 1 | 10 | 100.0 % | 1.00 | 3; 1 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| two_balls | preset's own | 2 | 10 | 80.0 % | 2.00 | 4; 2 |"), std::string::npos) << md;
+
+  auto target = [&](const std::string& what) {
+    for (const TableTarget& x : table1_targets(t))
+      if (x.what.find(what) != std::string::npos) return x;
+    ADD_FAILURE() << "no target " << what;
+    return TableTarget{};
+  };
+  EXPECT_FALSE(target("recall, 10-40 px bin").met);  // 90 % < 95 %
+  EXPECT_TRUE(target("recall, > 100 px bin").met);
+  EXPECT_TRUE(target("median centre error, > 100 px bin").met);  // 6 px ≤ 7.5 px
+  EXPECT_FALSE(target("recall, < 10 px bin").met);               // nothing eligible
+  EXPECT_TRUE(target("cut by the border").met);                  // 80 % ≥ 80 %
+  EXPECT_FALSE(target("recall, ball 2, two_balls").met);         // 80 % < 90 %
+  EXPECT_TRUE(target("identity switches in one seed (most), ball 1").met);
+  EXPECT_FALSE(target("identity switches in one seed (most), ball 2").met);
+}
+
+TEST(Table1Scenes, VariantsNameTheirCameraAndCacheFolder) {
+  PaperTableOptions o;
+  o.davis346_calibration = "cal/davis346_00000133_calibration.xml";
+  const std::vector<SceneVariant> scenes = table1_any_size_scenes(o);
+  ASSERT_EQ(scenes.size(), 4u * 3 + 4);
+  EXPECT_EQ(scenes[1].cache_name(101), "fast_forward_seed101_346x260");
+  EXPECT_EQ(scenes[0].cache_name(101), "fast_forward_seed101");  // the paper rows' own dataset
+  EXPECT_EQ(scenes[2].camera_label(), "1280x720");
+  const SceneVariant& davis = scenes[12];
+  EXPECT_EQ(davis.preset, "close_pass");
+  EXPECT_EQ(davis.camera_label(), "davis346_00000133_calibration");
+  EXPECT_EQ(davis.cache_name(3), "close_pass_seed3_davis346_00000133_calibration");
+  EXPECT_EQ(scenes.back().preset, "two_balls");
+}
+
 // Table II from hand-made rows: the pooled APE figures, the per-seed column with a seed that had no
 // estimate, the head-on latency, and the targets read off those figures.
 TEST(Table2Markdown, RowsLatenciesAndTargetsFollowTheTable) {

@@ -4,8 +4,10 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <filesystem>
 #include <sstream>
 
+#include "fdv/core/calibration.h"
 #include "fdv/core/error.h"
 #include "fdv/eval/statistics.h"
 #include "fdv/sim/dataset_cache.h"
@@ -22,6 +24,15 @@ constexpr double kFalsePerWindowTarget = 0.05;    // on scene1_no_object
 constexpr double kFusionRmseTarget_m = 0.10;      // Table II, both scenes
 constexpr double kFirstEstimateTarget_s = 0.060;  // hover_headon, release -> first fusion estimate
 constexpr const char* kPipelineMethod = "rotation_translation";
+// Issue 25's targets.
+constexpr double kBinRecallTarget = 0.95;        // every apparent-size bin but the smallest
+constexpr double kSmallBinRecallTarget = 0.85;   // the < 10 px bin
+constexpr double kCenterErrorFloor_px = 3.0;     // median centre error <= this, or ...
+constexpr double kCenterErrorOfSize = 0.05;      // ... this fraction of the size, whichever larger
+constexpr double kPartialRecallTarget = 0.80;    // windows with the ball cut by the border
+constexpr double kPerBallRecallTarget = 0.90;    // each ball of a several-ball scene
+constexpr int kIdSwitchesPerSeedTarget = 1;      // the most in one seed, per ball
+constexpr double kAnySizeFalsePerWindowTarget = 0.02;  // scene1_no_object, every camera
 
 std::string dash_if(bool missing, const std::string& s) { return missing ? "–" : s; }
 
@@ -49,6 +60,20 @@ std::string targets_markdown(const std::vector<TableTarget>& targets) {
   return out;
 }
 
+/// "97.0 % of 120, 1.23 px": a recall with its eligible windows and median centre error.
+std::string recall_cell(const RecallCounts& c) {
+  if (c.eligible == 0) return "–";
+  std::string out = fmt::format("{} of {}", percent(c.recall()), c.eligible);
+  if (!c.center_errors_px.empty())
+    out += fmt::format(", {:.2f} px", summarize(c.center_errors_px).median);
+  return out;
+}
+
+/// Issue 25's centre-error bound for a set of found windows: 3 px or 5 % of their median size.
+double center_error_bound_px(const RecallCounts& c) {
+  return std::max(kCenterErrorFloor_px, kCenterErrorOfSize * summarize(c.sizes_px).median);
+}
+
 struct Dataset {
   std::string dir;
   DatasetTruth truth;
@@ -57,6 +82,29 @@ struct Dataset {
 Dataset dataset(const std::string& scene, std::uint64_t seed, const PaperTableOptions& options) {
   Dataset d;
   d.dir = sim::ensure_simulated(scene, seed, options.cache_dir);
+  d.truth = load_dataset_truth(d.dir);
+  return d;
+}
+
+/// The event camera of a calibration file in place of the preset's (intrinsics, distortion,
+/// resolution).
+void use_event_camera(sim::ScenarioConfig& config, const PinholeCamera& camera) {
+  auto& e = config.event_camera;
+  e.width = camera.width, e.height = camera.height;
+  e.fx = camera.fx, e.fy = camera.fy, e.cx = camera.cx, e.cy = camera.cy;
+  const Distortion& d = camera.distortion;
+  e.distortion = {d.k1, d.k2, d.p1, d.p2, d.k3};
+}
+
+/// A scene variant's dataset: the preset's own cache folder when it has its own camera.
+Dataset dataset(const SceneVariant& v, std::uint64_t seed, const PaperTableOptions& options) {
+  if (v.width == 0 && v.camera_file.empty()) return dataset(v.preset, seed, options);
+  sim::ScenarioConfig config = sim::make_preset(v.preset, seed);
+  if (!v.camera_file.empty()) use_event_camera(config, load_calibration(v.camera_file).event_camera);
+  if (v.width > 0) sim::set_event_resolution(config, v.width, v.height);
+  Dataset d;
+  d.dir = sim::ensure_simulated(
+      config, (std::filesystem::path(options.cache_dir) / v.cache_name(seed)).string());
   d.truth = load_dataset_truth(d.dir);
   return d;
 }
@@ -113,11 +161,67 @@ const std::vector<std::string>& table1_methods() {
   return m;
 }
 
+std::string SceneVariant::camera_label() const {
+  if (!camera_file.empty()) return std::filesystem::path(camera_file).stem().string();
+  return width > 0 ? fmt::format("{}x{}", width, height) : "preset's own";
+}
+
+std::string SceneVariant::cache_name(std::uint64_t seed) const {
+  std::string name = fmt::format("{}_seed{}", preset, seed);
+  if (!camera_file.empty()) name += "_" + std::filesystem::path(camera_file).stem().string();
+  if (width > 0) name += fmt::format("_{}x{}", width, height);
+  return name;
+}
+
+std::vector<SceneVariant> table1_any_size_scenes(const PaperTableOptions& options) {
+  std::vector<SceneVariant> out;
+  for (const std::string& scene : table1_detection_scenes())
+    for (const auto& [w, h] : {std::pair{0, 0}, {346, 260}, {1280, 720}})
+      out.push_back({scene, w, h, ""});
+  out.push_back({"close_pass", 0, 0, options.davis346_calibration});
+  out.push_back({"close_pass", 0, 0, ""});
+  out.push_back({"close_pass", 1280, 720, ""});
+  out.push_back({"two_balls", 0, 0, ""});
+  return out;
+}
+
 const CompensationRow* Table1::row(const std::string& scene, const std::string& method) const {
   for (const CompensationRow& r : rows)
     if (r.scene == scene && r.method == method) return &r;
   return nullptr;
 }
+
+namespace {
+
+/// Issue 25's rows: the pipeline's compensation only; the paper's rows' runs are reused.
+std::vector<AnySizeRow> any_size_rows(const Table1& table, const PaperTableOptions& options) {
+  std::vector<AnySizeRow> rows;
+  for (const SceneVariant& v : table1_any_size_scenes(options)) {
+    if (!v.camera_file.empty() && !std::filesystem::exists(v.camera_file)) {
+      spdlog::warn("table1: {} not found: no {} row with that camera", v.camera_file, v.preset);
+      continue;
+    }
+    AnySizeRow row{v, 0, {}};
+    const CompensationRow* paper = v.width == 0 && v.camera_file.empty()
+                                       ? table.row(v.preset, kPipelineMethod)
+                                       : nullptr;
+    if (paper && table.any_size_seeds == table.seeds) {
+      row.detection = paper->detection;
+      row.balls = static_cast<int>(dataset(v, options.seeds.front(), options).truth.radius_m.size());
+    } else {
+      for (const std::uint64_t seed : table.any_size_seeds) {
+        const Dataset d = dataset(v, seed, options);
+        row.balls = static_cast<int>(d.truth.radius_m.size());
+        row.detection.merge(
+            detection_metrics(d.truth, run(d, options, kPipelineMethod, false).windows));
+      }
+    }
+    rows.push_back(std::move(row));
+  }
+  return rows;
+}
+
+}  // namespace
 
 Table1 compute_table1(const PaperTableOptions& options) {
   if (const std::string why = options.validate(); !why.empty()) throw ConfigError("table1: " + why);
@@ -148,8 +252,60 @@ Table1 compute_table1(const PaperTableOptions& options) {
         row.detection.merge(detection_metrics(d.truth, r.windows));
       }
     }
+  table.any_size_seeds = options.any_size_seeds.value_or(options.seeds);
+  if (!table.any_size_seeds.empty()) table.any_size_rows = any_size_rows(table, options);
   return table;
 }
+
+namespace {
+
+/// Issue 25's targets, read off the any-size rows.
+std::vector<TableTarget> any_size_targets(const Table1& table) {
+  std::vector<TableTarget> out;
+  if (table.any_size_rows.empty()) return out;
+  DetectionMetrics pooled;
+  for (const AnySizeRow& r : table.any_size_rows) pooled.merge(r.detection);
+  const std::string where = "rotation_translation, every any-size scene";
+  for (std::size_t bin = 0; bin < pooled.size_bins.size(); ++bin) {
+    const RecallCounts& c = pooled.size_bins[bin];
+    const double goal = bin == 0 ? kSmallBinRecallTarget : kBinRecallTarget;
+    out.push_back({fmt::format("recall, {} bin, {}", size_bin_label(bin), where),
+                   dash_if(c.eligible == 0, percent(c.recall())),
+                   fmt::format("≥ {:.0f} %", 100 * goal), c.eligible > 0 && c.recall() >= goal});
+    const Summary e = summarize(c.center_errors_px);
+    out.push_back({fmt::format("median centre error, {} bin, {}", size_bin_label(bin), where),
+                   dash_if(e.count == 0, fmt::format("{:.2f} px", e.median)),
+                   dash_if(e.count == 0, fmt::format("≤ {:.2f} px (3 px or 5 % of the median size)",
+                                                     center_error_bound_px(c))),
+                   e.count > 0 && e.median <= center_error_bound_px(c)});
+  }
+  out.push_back({"recall, ball cut by the border (≥ 30 % in view), " + where,
+                 dash_if(pooled.partial.eligible == 0, percent(pooled.partial.recall())),
+                 fmt::format("≥ {:.0f} %", 100 * kPartialRecallTarget),
+                 pooled.partial.eligible > 0 && pooled.partial.recall() >= kPartialRecallTarget});
+  for (const AnySizeRow& r : table.any_size_rows) {
+    const std::string scene = fmt::format("{} ({})", r.scene.preset, r.scene.camera_label());
+    if (r.scene.preset == "scene1_no_object")
+      out.push_back({"false detections / window, rotation_translation, " + scene,
+                     percent(r.detection.false_per_window()),
+                     fmt::format("≤ {:.0f} %", 100 * kAnySizeFalsePerWindowTarget),
+                     r.detection.false_per_window() <= kAnySizeFalsePerWindowTarget});
+    if (r.balls < 2) continue;
+    for (const auto& [id, o] : r.detection.objects) {
+      out.push_back({fmt::format("recall, ball {}, {}", id, scene),
+                     dash_if(o.counts.eligible == 0, percent(o.counts.recall())),
+                     fmt::format("≥ {:.0f} %", 100 * kPerBallRecallTarget),
+                     o.counts.eligible > 0 && o.counts.recall() >= kPerBallRecallTarget});
+      out.push_back({fmt::format("identity switches in one seed (most), ball {}, {}", id, scene),
+                     std::to_string(o.max_id_switches_per_run),
+                     fmt::format("≤ {}", kIdSwitchesPerSeedTarget),
+                     o.max_id_switches_per_run <= kIdSwitchesPerSeedTarget});
+    }
+  }
+  return out;
+}
+
+}  // namespace
 
 std::vector<TableTarget> table1_targets(const Table1& table) {
   std::vector<TableTarget> out;
@@ -178,6 +334,7 @@ std::vector<TableTarget> table1_targets(const Table1& table) {
                    percent(r->detection.false_per_window()),
                    fmt::format("≤ {:.0f} %", 100 * kFalsePerWindowTarget),
                    r->detection.false_per_window() <= kFalsePerWindowTarget});
+  for (const TableTarget& t : any_size_targets(table)) out.push_back(t);
   for (const std::string& scene : table1_compensation_scenes()) {
     const CompensationRow *a = table.row(scene, rt), *b = table.row(scene, "rotation");
     if (!a || !b) continue;
@@ -189,6 +346,56 @@ std::vector<TableTarget> table1_targets(const Table1& table) {
   }
   return out;
 }
+
+namespace {
+
+/// Issue 25's detection table and, for scenes with several balls, its per-ball table.
+std::string any_size_markdown(const Table1& table) {
+  if (table.any_size_rows.empty()) return "";
+  std::string out =
+      fmt::format("\n### Detection at any apparent size, cut by the border, several balls "
+                  "(issue 25; rotation_translation; seeds {})\n\n",
+                  seeds_text(table.any_size_seeds)) +
+      "Each cell: recall of the eligible (window, ball) pairs, their number, and the median "
+      "centre error; definitions in docs/RESULTS.md (\"Detection metrics\").\n\n"
+      "| Scene | Camera | Windows | All sizes |";
+  for (std::size_t bin = 0; bin < kSizeBinEdges_px.size() + 1; ++bin)
+    out += fmt::format(" {} |", size_bin_label(bin));
+  out +=
+      " Cut by the border | Whole-object centre of those [px] (n) | Fills the view: reported / "
+      "windows | False detections / window |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+  for (const AnySizeRow& r : table.any_size_rows) {
+    const DetectionMetrics& m = r.detection;
+    out += fmt::format("| {} | {} | {} | {} |", r.scene.preset, r.scene.camera_label(), m.windows,
+                       recall_cell(m.any_size));
+    for (const RecallCounts& c : m.size_bins) out += fmt::format(" {} |", recall_cell(c));
+    const Summary full = summarize(m.center_full_errors_px);
+    out += fmt::format(" {} | {} | {} / {} | {} |\n", recall_cell(m.partial),
+                       dash_if(full.count == 0, fmt::format("{:.2f} ({})", full.median, full.count)),
+                       m.fills_view_reported, m.fills_view_windows,
+                       percent(m.false_per_window()));
+  }
+  bool several = false;
+  for (const AnySizeRow& r : table.any_size_rows) several = several || r.balls > 1;
+  if (!several) return out;
+  out +=
+      "\n| Scene | Camera | Ball | Eligible windows | Recall | Median centre error [px] | Identity "
+      "switches (all seeds; most in one seed) |\n|---|---|---|---|---|---|---|\n";
+  for (const AnySizeRow& r : table.any_size_rows) {
+    if (r.balls < 2) continue;
+    for (const auto& [id, o] : r.detection.objects) {
+      const Summary e = summarize(o.counts.center_errors_px);
+      out += fmt::format("| {} | {} | {} | {} | {} | {} | {}; {} |\n", r.scene.preset,
+                         r.scene.camera_label(), id, o.counts.eligible,
+                         dash_if(o.counts.eligible == 0, percent(o.counts.recall())),
+                         dash_if(e.count == 0, fmt::format("{:.2f}", e.median)), o.id_switches,
+                         o.max_id_switches_per_run);
+    }
+  }
+  return out;
+}
+
+}  // namespace
 
 std::string to_markdown(const Table1& table, const Provenance& provenance) {
   const double dt_ms = 1e3 * to_seconds(table.window_ns);
@@ -229,6 +436,7 @@ std::string to_markdown(const Table1& table, const Provenance& provenance) {
                          dash_if(e.count == 0, fmt::format("{:.2f}", e.median)),
                          percent(m.false_per_window()));
     }
+  out += any_size_markdown(table);
   out += "\n### Targets\n\n" + targets_markdown(table1_targets(table));
   out += fmt::format(
       "\nNotes. Every figure pools all windows of all seeds (one simulated dataset per scene and "
