@@ -1,5 +1,6 @@
-// `fdv simulate --scenario NAME [--seed N] [--duration S] [--resolution WxH] [--config FILE]
-//  --out DIR`: a simulated dataset folder with exact ground truth, and a JSON summary.
+// `fdv simulate --scenario NAME [--seed N] [--duration S] [--camera FILE] [--resolution WxH]
+//  [--config FILE] --out DIR`: a simulated dataset folder with exact ground truth, and a JSON
+//  summary.
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
@@ -19,7 +20,7 @@ namespace fdv::cli {
 namespace {
 
 struct SimulateArgs {
-  std::string scenario, config, out, resolution;
+  std::string scenario, config, out, resolution, camera;
   std::optional<std::uint64_t> seed;
   std::optional<double> duration_s;
   std::optional<int> threads;
@@ -80,6 +81,7 @@ sim::ScenarioConfig build_config(const SimulateArgs& args) {
   config.seed = seed;
   if (args.duration_s) config.duration_s = *args.duration_s;
   if (args.threads) config.threads = *args.threads;
+  if (!args.camera.empty()) sim::load_event_camera(config, args.camera);
   if (!args.resolution.empty()) {
     int width = 0, height = 0;
     char tail = 0;
@@ -201,8 +203,11 @@ void add_simulate_command(CLI::App& app) {
   cmd->add_option("--seed", args.seed,
                   "randomises the preset (layout, throw, textures, noise); default 1");
   cmd->add_option("--duration", args.duration_s, "simulated seconds (default: the preset's)");
+  cmd->add_option("--camera", args.camera,
+                  "event camera (resolution, intrinsics, distortion) from a calibration file: "
+                  "OpenCV XML/YAML or the project's YAML");
   cmd->add_option("--resolution", args.resolution,
-                  "event sensor WxH, same field of view (e.g. 346x260)");
+                  "event sensor WxH, same field of view (e.g. 346x260); after --camera");
   cmd->add_option("--config", args.config,
                   "YAML file overriding any parameter (see `--print-config`)");
   cmd->add_option("--threads", args.threads, "worker threads (default: all cores)");

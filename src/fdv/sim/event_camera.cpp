@@ -5,6 +5,7 @@
 
 #include "fdv/core/error.h"
 #include "fdv/sim/fast_math.h"
+#include "fdv/sim/geometry.h"
 
 namespace fdv::sim {
 namespace {
@@ -88,7 +89,7 @@ EventCameraSim::EventCameraSim(const ScenarioConfig& config, const Calibration& 
         xn -= J.inverse() * res;
       }
       if (!ok) xn = cam.pixel_to_normalized({u, v});
-      if (!xn.allFinite()) xn = xd;
+      if (!xn.allFinite()) xn = radial_extension(cam, xd);  // beyond the lens model's fold
       guess = xn;
       rx[row * width_ + u] = xn.x(), ry[row * width_ + u] = xn.y();
     }

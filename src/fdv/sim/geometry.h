@@ -42,22 +42,33 @@ inline double lens_monotonic_radius(const PinholeCamera& cam) {
   return r;
 }
 
-/// Normalised (distorted) radius of the image corner farthest from the principal point.
-inline double corner_radius_distorted(const PinholeCamera& cam) {
-  const double dx = std::max(cam.cx + 0.5, cam.width - 0.5 - cam.cx) / cam.fx;
-  const double dy = std::max(cam.cy + 0.5, cam.height - 0.5 - cam.cy) / cam.fy;
-  return std::sqrt(dx * dx + dy * dy);
+/// Normalised (distorted) radius of the largest circle about the principal point that fits in
+/// the image.
+inline double inscribed_radius_distorted(const PinholeCamera& cam) {
+  const double dx = std::min(cam.cx + 0.5, cam.width - 0.5 - cam.cx) / cam.fx;
+  const double dy = std::min(cam.cy + 0.5, cam.height - 0.5 - cam.cy) / cam.fy;
+  return std::min(dx, dy);
 }
 
-/// True when the lens map is monotonic out past every image corner (with 10 % margin), so each
-/// raw pixel has exactly one viewing ray.
-inline bool lens_is_invertible(const PinholeCamera& cam) {
+/// True when the lens map is monotonic out past the largest centred circle in the image (with
+/// 10 % margin). Real calibrations such as the DAVIS346's fold back in the corners, beyond the
+/// calibration pattern's reach; the simulator renders pixels there with radial_extension().
+inline bool lens_is_usable(const PinholeCamera& cam) {
   const double r_max = lens_monotonic_radius(cam);
   const auto& d = cam.distortion;
   const double r2 = r_max * r_max;
   const double rd_max = r_max * (1 + d.k1 * r2 + d.k2 * r2 * r2 + d.k3 * r2 * r2 * r2);
   const double tangential = 2 * (std::abs(d.p1) + std::abs(d.p2)) * r2;
-  return rd_max - tangential > 1.1 * corner_radius_distorted(cam);
+  return rd_max - tangential > 1.1 * inscribed_radius_distorted(cam);
+}
+
+/// Viewing ray (normalised undistorted coordinates) for a distorted point `xd` beyond the radius
+/// where the lens polynomial folds back: the magnification at the fold, continued outwards, so
+/// that rays stay continuous and keep growing towards the corners.
+inline Eigen::Vector2d radial_extension(const PinholeCamera& cam, const Eigen::Vector2d& xd) {
+  const double r = lens_monotonic_radius(cam), r2 = r * r;
+  const auto& d = cam.distortion;
+  return xd / (1 + d.k1 * r2 + d.k2 * r2 * r2 + d.k3 * r2 * r2 * r2);
 }
 
 }  // namespace fdv::sim

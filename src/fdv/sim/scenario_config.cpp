@@ -76,8 +76,9 @@ Problem ScenarioConfig::find_problem() const {
   c.in_range(e.height, 8, 8192, ek + "height");
   const Calibration calib = calibration();
   check_camera(c, calib.event_camera, "event_camera");
-  c.need(lens_is_invertible(calib.event_camera), ek + "distortion",
-         "the lens model folds back inside the image (radial map not monotonic up to the corners)");
+  c.need(lens_is_usable(calib.event_camera), ek + "distortion",
+         "the lens model folds back inside the image's inscribed circle (radial map not "
+         "monotonic)");
   c.finite(e.position_B_m, ek + "position_B_m");
   c.finite(e.mount_rpy_deg, ek + "mount_rpy_deg");
   c.positive(e.contrast_threshold_mean, ek + "contrast_threshold_mean");
@@ -263,6 +264,26 @@ void set_event_resolution(ScenarioConfig& config, int width, int height) {
   e.cy = (e.cy + 0.5) * sy - 0.5;
   e.width = width;
   e.height = height;
+}
+
+void set_event_camera(ScenarioConfig& config, const PinholeCamera& camera) {
+  auto& e = config.event_camera;
+  e.width = camera.width;
+  e.height = camera.height;
+  e.fx = camera.fx;
+  e.fy = camera.fy;
+  e.cx = camera.cx;
+  e.cy = camera.cy;
+  const auto& d = camera.distortion;
+  e.distortion = {d.k1, d.k2, d.p1, d.p2, d.k3};
+}
+
+void load_event_camera(ScenarioConfig& config, const std::string& path) {
+  ScenarioConfig with = config;
+  set_event_camera(with, load_calibration(path).event_camera);
+  if (const auto p = with.find_problem(); p && p->first.starts_with("event_camera"))
+    throw InputError(path, "event camera", "cannot be simulated: " + p->first + ": " + p->second);
+  config = std::move(with);
 }
 
 }  // namespace fdv::sim

@@ -5,8 +5,9 @@
 ///
 ///   ScenarioConfig c = make_preset("fast_forward", /*seed=*/7);   // a named, randomised preset
 ///   apply_scenario_yaml(c, "override.yaml");                       // any field from a YAML file
-///   set_event_resolution(c, 346, 260);                             // same field of view, fewer
-///   pixels if (auto why = c.validate(); !why.empty()) ...                 // "key: reason"
+///   load_event_camera(c, "davis346.xml");                          // a real sensor's lens
+///   set_event_resolution(c, 346, 260);                             // same field of view
+///   if (auto why = c.validate(); !why.empty()) ...                 // "key: reason"
 ///   Simulator sim(c);
 ///
 /// Frames: W world (z up, gravity -z), B body (x forward, y left, z up), E event camera and
@@ -256,5 +257,15 @@ std::string to_yaml(const ScenarioConfig& config);
 /// size (distortion coefficients are in normalised units and stay). Throws ConfigError for a
 /// non-positive size.
 void set_event_resolution(ScenarioConfig& config, int width, int height);
+
+/// Takes the event camera's resolution, intrinsics and distortion from `camera` (e.g.
+/// load_calibration(path).event_camera, from an OpenCV XML/YAML or the project's YAML file);
+/// its mounting, pixel model, the depth camera and everything else stay. Combine with
+/// set_event_resolution() afterwards to change the pixel count at that field of view.
+void set_event_camera(ScenarioConfig& config, const PinholeCamera& camera);
+/// Applies the event camera of the calibration file `path` (load_calibration: OpenCV XML/YAML or
+/// the project's YAML). Throws InputError naming the file for a missing or malformed file, or a
+/// lens the simulator cannot render (one that folds back inside the image's inscribed circle).
+void load_event_camera(ScenarioConfig& config, const std::string& path);
 
 }  // namespace fdv::sim
