@@ -51,6 +51,12 @@ struct SourceWindow {
   /// Scratch of moving-region retrieval, shared by the sources that run it (it is large: a run
   /// list sized for the whole image).
   RegionScratch& region_scratch;
+  /// False in the search for the window's further objects: the pattern source asks for
+  /// GaussianFitSourceOptions::further_min_peak, and the count-contrast source keeps to the gates
+  /// (the count image still holds the objects found).
+  bool first_object = true;
+  /// A source saw an object larger than DetectorOptions::fills_view_fraction (status kFillsView).
+  bool fills_view = false;
   /// Why there is no detection when no source finds one; the pattern sources refine it.
   DetectionStatus why_not = DetectionStatus::kRemovedAsNoise;
 };

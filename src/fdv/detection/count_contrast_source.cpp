@@ -74,7 +74,7 @@ std::optional<Candidate> CountContrastSource::find(SourceWindow& in, DetectionRe
     }
     found.reset();
   }
-  if (!found) found = find_in(in, {0, 0, in.events.width, in.events.height}, true, res);
+  if (!found && in.first_object) found = find_in(in, {0, 0, in.events.width, in.events.height}, true, res);
   res.timings.count_cue_ms = ms_since(t);
   return found;
 }

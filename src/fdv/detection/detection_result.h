@@ -21,6 +21,7 @@ enum class DetectionStatus {
   kNoRegion,           ///< the fit failed and no connected component qualified
   kTooFewEventsInBox,  ///< the final box holds fewer than roi_min_events events
   kWeakEvidence,       ///< the box's peak (score) or event density is below min_peak / min_event_density
+  kFillsView,          ///< an object larger than fills_view_fraction of the image: too near to detect
 };
 std::string_view to_string(DetectionStatus s);
 

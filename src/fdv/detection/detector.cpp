@@ -38,6 +38,7 @@ std::string_view to_string(DetectionStatus s) {
     case DetectionStatus::kNoRegion: return "no plausible region";
     case DetectionStatus::kTooFewEventsInBox: return "too few events in box";
     case DetectionStatus::kWeakEvidence: return "weak evidence";
+    case DetectionStatus::kFillsView: return "object fills the view";
   }
   return "?";
 }
@@ -46,7 +47,8 @@ std::string DetectorOptions::validate() const {
   std::ostringstream why;
   auto odd_positive = [](int k) { return k >= 1 && k % 2 == 1 && k <= 31; };
   const double coeffs[] = {threshold_a_s_per_rad, threshold_b_s_per_m, threshold_c, fit_delta_center_px,
-                           fit_delta_size_px, fit_min_size_px, roi_max_aspect, max_segmented_fraction,
+                           fit_delta_size_px, fit_delta_fraction, fit_min_size_px, roi_max_aspect,
+                           max_segmented_fraction, fills_view_fraction,
                            refine_box_scale, min_event_density, prior_gate_scale, prior_min_gate_px};
   for (double v : coeffs)
     if (!std::isfinite(v)) return "non-finite detector parameter";
@@ -59,6 +61,11 @@ std::string DetectorOptions::validate() const {
   else if (fit_max_iterations < 1) why << "fit_max_iterations (K) must be positive, got " << fit_max_iterations;
   else if (!(fit_delta_center_px > 0)) why << "fit_delta_center_px (δ_C) must be positive, got " << fit_delta_center_px;
   else if (!(fit_delta_size_px > 0)) why << "fit_delta_size_px (δ_L) must be positive, got " << fit_delta_size_px;
+  else if (!(fit_delta_fraction >= 0 && fit_delta_fraction <= 0.1))
+    why << "fit_delta_fraction must be in [0, 0.1], got " << fit_delta_fraction;
+  else if (max_objects < 1 || max_objects > 16) why << "max_objects must be in [1, 16], got " << max_objects;
+  else if (!(fills_view_fraction > 0 && fills_view_fraction <= 1))
+    why << "fills_view_fraction must be in (0, 1], got " << fills_view_fraction;
   else if (!(fit_min_size_px >= 1)) why << "fit_min_size_px must be at least 1, got " << fit_min_size_px;
   else if (!(prior_gate_scale > 0)) why << "prior_gate_scale must be positive, got " << prior_gate_scale;
   else if (!(prior_min_gate_px >= 0)) why << "prior_min_gate_px must be >= 0, got " << prior_min_gate_px;
@@ -99,6 +106,9 @@ Detector::Detector(const DetectorOptions& options, const PinholeCamera& event_ca
 void Detector::allocate(int width, int height) {
   S_.create(height, width, CV_32F);
   S_.setTo(0);
+  rest_.create(height, width, CV_32F);
+  rest_.setTo(0);
+  rest_bounds_ = {};
   pre_.allocate({width, height});
   region_.reserve(width, height);
   for (CandidateSource* source : sources()) source->allocate(width, height);
@@ -146,11 +156,11 @@ DetectionResult Detector::detect(const CompensatedEventsView& window, std::span<
   auto finish = [&](DetectionStatus s) {
     if (s != DetectionStatus::kDetected && s != DetectionStatus::kNoRegion &&
         s != DetectionStatus::kTooFewEventsInBox && s != DetectionStatus::kRemovedAsNoise &&
-        s != DetectionStatus::kWeakEvidence)
+        s != DetectionStatus::kWeakEvidence && s != DetectionStatus::kFillsView)
       pre_.clear();  // no stale image from an earlier window
     res.status = s;
     res.timings.total_ms = ms_since(t_total);
-    return res;
+    return std::move(res);  // not a copy: the list of detections would be allocated twice
   };
 
   auto t = Clock::now();
@@ -177,26 +187,80 @@ DetectionResult Detector::detect(const CompensatedEventsView& window, std::span<
   gates_.clear();
   for (const DetectionPrior& prior : priors)
     if (const auto gate = prior_gate(prior)) gates_.push_back(*gate);
-  SourceWindow in{.events = window,
-                  .ti = ti_,
-                  .S = S_,
-                  .P = P,
-                  .P_support = pre_.nonzero_bounds(),
-                  .P_max = pre_.first_max(),
-                  .theta = res.theta,
-                  .window_s = to_seconds(window.t_end - window.t_start),
-                  .gates = gates_,
-                  .region_scratch = region_,
-                  .why_not = res.segmented_pixels == 0 ? DetectionStatus::kNothingSegmented
-                                                       : DetectionStatus::kRemovedAsNoise};
-  // The first source whose candidate passes its gates wins.
-  for (CandidateSource* source : sources()) {
-    if (const std::optional<Candidate> found = source->find(in, res)) {
-      res.detections.push_back(to_detection(window, *found, res));
-      return finish(DetectionStatus::kDetected);
+  const cv::Rect support = pre_.nonzero_bounds();
+  const cv::Mat* image = &P;  // P, then P with the objects found so far blanked
+  MaxLocation image_max = pre_.first_max();
+  DetectionStatus why_not = DetectionStatus::kRemovedAsNoise;
+  bool fills_view = false;
+  // One object per pass: the first source whose candidate passes its gates wins; its region is
+  // then blanked, and the search goes on for the next object (docs/DETECTION.md, "Several objects").
+  for (int pass = 0; pass < o.max_objects; ++pass) {
+    SourceWindow in{.events = window,
+                    .ti = ti_,
+                    .S = S_,
+                    .P = *image,
+                    .P_support = support,
+                    .P_max = image_max,
+                    .theta = res.theta,
+                    .window_s = to_seconds(window.t_end - window.t_start),
+                    .gates = gates_,
+                    .region_scratch = region_,
+                    .first_object = pass == 0,
+                    .why_not = res.segmented_pixels == 0 ? DetectionStatus::kNothingSegmented
+                                                         : DetectionStatus::kRemovedAsNoise};
+    // The diagnostics are the first object's; a later pass adds its candidates and times.
+    DetectionResult later;
+    DetectionResult& out = pass == 0 ? res : later;
+    std::optional<Candidate> found;
+    for (CandidateSource* source : sources())
+      if ((found = source->find(in, out))) break;
+    std::optional<Detection2D> d;
+    if (found && !already_found(res.detections, found->center)) d = to_detection(window, *found, out);
+    if (pass == 0) why_not = in.fills_view ? DetectionStatus::kFillsView : in.why_not;
+    else add_later_pass(later, res);
+    if (!d) break;
+    if (std::max(d->box_raw.width(), d->box_raw.height()) > o.fills_view_fraction * std::min(w, h)) {
+      fills_view = true;
+      break;
     }
+    if (image == &P) {  // only P's support is copied; rest_ is kept 0 elsewhere
+      zero_rect(rest_, rest_bounds_);
+      if (support.area() > 0) P(support).copyTo(rest_(support));
+      rest_bounds_ = support;
+      image = &rest_;
+    }
+    zero_rect(rest_, box_pixels(blanked_region(d->box_undistorted), w, h));
+    image_max = first_maximum(rest_, support);
+    // A track whose gate holds this object has its detection: the later passes skip its gate.
+    std::erase_if(gates_, [&](const Box2D& gate) { return gate.contains(d->center_undistorted); });
+    if (res.detections.empty()) res.detections.reserve(o.max_objects);  // the result's one allocation
+    res.detections.push_back(*d);
   }
-  return finish(in.why_not);
+  if (!res.detections.empty()) return finish(DetectionStatus::kDetected);
+  return finish(fills_view ? DetectionStatus::kFillsView : why_not);
+}
+
+void Detector::add_later_pass(const DetectionResult& later, DetectionResult& res) {
+  res.candidates += later.candidates;
+  DetectionTimings& t = res.timings;
+  const DetectionTimings& l = later.timings;
+  t.fit_ms += l.fit_ms;
+  t.retrieval_ms += l.retrieval_ms;
+  t.refine_ms += l.refine_ms;
+  t.motion_cue_ms += l.motion_cue_ms;
+  t.count_cue_ms += l.count_cue_ms;
+}
+
+Box2D Detector::blanked_region(const Box2D& box) const {
+  // The pattern of P reaches beyond the object's box: the filters' reach, and the sweep of a fast
+  // object, which trails it by up to about its own size within a window.
+  const double grow = std::max(box.width(), box.height()) + 0.5 * (options_.mean_filter_px + options_.opening_px);
+  return {box.x0 - grow, box.y0 - grow, box.x1 + grow, box.y1 + grow};
+}
+
+bool Detector::already_found(std::span<const Detection2D> found, const Eigen::Vector2d& center) const {
+  return std::any_of(found.begin(), found.end(),
+                     [&](const Detection2D& d) { return blanked_region(d.box_undistorted).contains(center); });
 }
 
 Detection2D Detector::to_detection(const CompensatedEventsView& window, const Candidate& found, DetectionResult& res) {
@@ -227,6 +291,14 @@ Detection2D Detector::to_detection(const CompensatedEventsView& window, const Ca
   d.center_normalized = {(seen.x() - camera_.cx) / camera_.fx, (seen.y() - camera_.cy) / camera_.fy};
   d.center_raw = undistorted_to_raw(seen);
   d.box_raw = undistorted_box_to_raw(box.moved_by(seen - center));
+  // Cut by the border: the square is centred on the visible events' centroid, its side the
+  // object's extent across the motion (border_cut.h).
+  if (const auto cut = border_cut(d.box_raw)) {
+    d.partial = true;
+    d.visible_fraction = cut->visible_fraction;
+    d.center_full_raw = cut->center_full;
+    d.box_raw = cut->visible;
+  }
   d.events = events;
   d.score = found.score;
   d.event_density = found.event_density;

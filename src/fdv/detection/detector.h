@@ -27,6 +27,7 @@
 #include <vector>
 
 #include "fdv/core/camera.h"
+#include "fdv/detection/border_cut.h"
 #include "fdv/detection/candidate_source.h"
 #include "fdv/detection/count_contrast_source.h"
 #include "fdv/detection/dense_motion_source.h"
@@ -64,6 +65,16 @@ class Detector {
   /// The winning candidate as a detection: centre and time from the events (EventRefiner), the
   /// reported box, and both seen by the camera at the detection's time, in raw pixels too.
   Detection2D to_detection(const CompensatedEventsView& window, const Candidate& found, DetectionResult& res);
+  /// What a found object's box blanks of P for the next pass, and whether a candidate centre lies
+  /// in an object found before (the sources that read I rather than P can find it again).
+  Box2D blanked_region(const Box2D& box) const;
+  /// A later object's pass adds its candidates and stage times to the window's result.
+  static void add_later_pass(const DetectionResult& later, DetectionResult& res);
+  bool already_found(std::span<const Detection2D> found, const Eigen::Vector2d& center) const;
+  /// The raw box against the sensor's border (border_cut.h).
+  std::optional<BorderCut> border_cut(const Box2D& box_raw) const {
+    return fdv::border_cut(box_raw, camera_.width, camera_.height);
+  }
   /// Sizes every image buffer for width × height (S = P = 0).
   void allocate(int width, int height);
   DetectorOptions options_;
@@ -73,6 +84,8 @@ class Detector {
   TimeImages ti_;
   cv::Mat S_;
   Preprocessor pre_;
+  cv::Mat rest_;          ///< P with the window's objects found so far blanked, zero outside rest_bounds_
+  cv::Rect rest_bounds_;
   RegionScratch region_;      ///< retrieval's scratch, shared by the two pattern sources
   std::vector<Box2D> gates_;  ///< this window's tracks' gates
   // The candidate sources, tried in this order (sources()).

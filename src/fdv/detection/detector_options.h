@@ -24,12 +24,22 @@ struct GaussianFitSourceOptions {
   /// P_max ≥ min_peak²: an isolated noise pixel gives ≤ 1/9 after the 3x3 mean filter, a moving
   /// object's recent sweep a solid patch of N ≈ 0.5-0.8. YAML `min_peak`; tuned.
   double min_peak = 0.35;
+  /// The same for the window's further objects, once one is found [-]: the texture patterns the
+  /// first object outshone would otherwise come through (docs/DETECTION.md, "Several objects").
+  /// YAML `further_min_peak`; tuned.
+  double further_min_peak = 0.6;
   /// Patterns tried per window: a pattern with no plausible box, or failing the evidence gates, is
   /// blanked and the next strongest one is fitted. YAML `max_candidates`; provisional.
   int max_candidates = 3;
-  /// A fitted side longer than this fraction of the image side is implausible [-] (then retrieval).
+  /// A fitted side longer than this fraction of the image side is implausible [-] (then retrieval,
+  /// whose connected regions may be larger, up to DetectorOptions::fills_view_fraction): Algorithm
+  /// 1 from the half-image ROI spreads over texture as readily as over a large object.
   /// YAML `roi_max_fraction`; provisional.
   double roi_max_fraction = 0.35;
+  /// A retrieved region beyond that size is an object only when it is this many times denser in
+  /// events than the rest of the image [-]: a large region of evenly active texture is connected
+  /// too, but no denser than its surroundings. YAML `large_region_min_contrast`; provisional.
+  double large_region_min_contrast = 2.0;
   /// Smaller initial ROIs [px]: when the half-image fit's box fails the gates, Algorithm 1 reruns
   /// from the same seed with L⁰ halved while its shorter side is ≥ this; 0 = off (the paper: one
   /// fit). A small object merged with clutter converges alone from a smaller window
@@ -47,8 +57,10 @@ struct GaussianFitSourceOptions {
 template <class V>
 void describe(V& v, GaussianFitSourceOptions& o) {
   v("min_peak", o.min_peak, "-", "source 1: evidence, the strongest pattern's value in the filtered S; tuned");
+  v("further_min_peak", o.further_min_peak, "-", "source 1: the same for a window's further objects; tuned");
   v("max_candidates", o.max_candidates, "-", "source 1: patterns tried per window; provisional");
-  v("roi_max_fraction", o.roi_max_fraction, "-", "a fitted side longer than this fraction of the image is implausible");
+  v("roi_max_fraction", o.roi_max_fraction, "-", "a fitted side longer than this fraction of the image side is implausible (then retrieval)");
+  v("large_region_min_contrast", o.large_region_min_contrast, "-", "a region beyond that size must be this many times denser in events than the rest");
   v("refit_min_roi_px", o.refit_min_roi_px, "px", "smaller initial ROIs: halve L⁰ while its shorter side ≥ this (0 = off, the paper); tuned");
   v("refit_local_scale", o.refit_local_scale, "-", "a smaller-ROI box must stand out within this × its side (0 = no test); tuned");
 }
@@ -157,6 +169,9 @@ struct DetectorOptions {
   /// δ_L: change of each side below which it has converged [px]. L ← 4σ contracts by ≈ 0.7 per
   /// iteration near its fixed point, so the stopped L is within ≈ 2.5·δ_L of it.
   double fit_delta_size_px = 0.5;
+  /// Both δ grow with the pattern: at least this fraction of the current side L [-], so that a
+  /// large pattern converges in as many iterations as a small one (0 = the fixed δ only).
+  double fit_delta_fraction = 0.01;
   /// Sides are floored here so a tiny blob cannot collapse the ROI [px] (also source 3's box).
   double fit_min_size_px = 3.0;
   int region_min_area_px = 4;  ///< moving-region retrieval ignores smaller components [px]
@@ -188,6 +203,15 @@ struct DetectorOptions {
   /// the motion; a round object is as long along it (docs/DETECTION.md, "The box").
   bool square_box = true;
 
+  // Several objects and large ones (docs/DETECTION.md, "Several objects", "Any apparent size").
+  /// Most objects reported per window: after each, its region is blanked and the search goes on.
+  int max_objects = 4;
+  /// A region or reported box with a side longer than this fraction of the image's shorter side is
+  /// no detection: a connected region that large which passes the evidence gates, or a reported
+  /// box, gives the window the status "object fills the view" (docs/DETECTION.md, "Any apparent
+  /// size").
+  double fills_view_fraction = 0.5;
+
   // Whole-window guards.
   int min_window_events = 30;  ///< fewer compensated events: no detection ("too few events")
   /// More than this fraction of the image above θ means the compensation failed or a burst
@@ -216,6 +240,7 @@ void describe(V& v, DetectorOptions& o) {
   v("fit_max_iterations", o.fit_max_iterations, "-", "K of Algorithm 1; provisional");
   v("fit_delta_center_px", o.fit_delta_center_px, "px", "δ_C: the fit has converged below this centre change");
   v("fit_delta_size_px", o.fit_delta_size_px, "px", "δ_L: ... and below this change of each side");
+  v("fit_delta_fraction", o.fit_delta_fraction, "-", "both δ are at least this fraction of the current side L");
   v("fit_min_size_px", o.fit_min_size_px, "px", "floor of L");
   v("region_min_area_px", o.region_min_area_px, "px", "moving-region retrieval ignores smaller components");
   v("roi_max_aspect", o.roi_max_aspect, "-", "a box's long side / short side above this is implausible");
@@ -226,6 +251,8 @@ void describe(V& v, DetectorOptions& o) {
   v("refine_box_scale", o.refine_box_scale, "-", "centre and time re-estimated from the events in the box × this (0 = off)");
   v("refine_recentre_passes", o.refine_recentre_passes, "-", "mean-shift re-centring passes of that region (0 = stays on the box)");
   v("square_box", o.square_box, "-", "report the box as a square of its longer side on the refined centre");
+  v("max_objects", o.max_objects, "-", "most objects reported per window (each found one is blanked, the search goes on)");
+  v("fills_view_fraction", o.fills_view_fraction, "-", "a longer visible side above this × the image's shorter side: \"object fills the view\"");
   v("min_window_events", o.min_window_events, "events", "fewer compensated events in a window: no detection");
   v("max_segmented_fraction", o.max_segmented_fraction, "-", "more of the image above θ: no detection (flooded)");
   describe(v, o.gaussian_fit);

@@ -121,8 +121,11 @@ iterative_gaussian_fit(const cv::Mat& P, const Eigen::Vector2d& c0, const Eigen:
     const Eigen::Vector2d var(std::max(0.0, sxx / sw - mu.x() * mu.x()), std::max(0.0, syy / sw - mu.y() * mu.y()));
     const Eigen::Vector2d l_next(std::max(o.fit_min_size_px, 4 * std::sqrt(var.x())),
                                  std::max(o.fit_min_size_px, 4 * std::sqrt(var.y())));
-    const bool done = (mu - c).norm() < o.fit_delta_center_px && std::abs(l_next.x() - l.x()) < o.fit_delta_size_px &&
-                      std::abs(l_next.y() - l.y()) < o.fit_delta_size_px;
+    // δ_C, δ_L in pixels, or a fraction of the side for a large pattern.
+    const double relative = o.fit_delta_fraction * l.minCoeff();
+    const double delta_c = std::max(o.fit_delta_center_px, relative), delta_l = std::max(o.fit_delta_size_px, relative);
+    const bool done = (mu - c).norm() < delta_c && std::abs(l_next.x() - l.x()) < delta_l &&
+                      std::abs(l_next.y() - l.y()) < delta_l;
     c = mu;
     l = l_next;
     if (done) {

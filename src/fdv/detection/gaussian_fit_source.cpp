@@ -9,7 +9,8 @@ namespace fdv {
 using detection_internal::ms_since;
 
 std::string GaussianFitSourceOptions::validate() const {
-  for (double v : {refit_min_roi_px, refit_local_scale, roi_max_fraction, min_peak})
+  for (double v : {refit_min_roi_px, refit_local_scale, roi_max_fraction, large_region_min_contrast, min_peak,
+                   further_min_peak})
     if (!std::isfinite(v)) return "non-finite detector parameter";
   std::ostringstream why;
   if (!(refit_min_roi_px == 0 || refit_min_roi_px >= 1))
@@ -18,6 +19,10 @@ std::string GaussianFitSourceOptions::validate() const {
   else if (max_candidates < 1 || max_candidates > 100)
     why << "max_candidates must be in [1, 100], got " << max_candidates;
   else if (!(min_peak >= 0 && min_peak <= 1)) why << "min_peak must be in [0, 1], got " << min_peak;
+  else if (!(further_min_peak >= 0 && further_min_peak <= 1))
+    why << "further_min_peak must be in [0, 1], got " << further_min_peak;
+  else if (!(large_region_min_contrast >= 0))
+    why << "large_region_min_contrast must be >= 0, got " << large_region_min_contrast;
   else if (!(roi_max_fraction > 0 && roi_max_fraction <= 1))
     why << "roi_max_fraction must be in (0, 1], got " << roi_max_fraction;
   return why.str();
@@ -28,6 +33,8 @@ std::optional<Candidate> evaluate_pattern(const DetectorOptions& o, SourceWindow
   using Clock = std::chrono::steady_clock;
   const GaussianFitSourceOptions& g = o.gaussian_fit;
   const int w = in.events.width, h = in.events.height;
+  const double fit_max_w = g.roi_max_fraction * w, fit_max_h = g.roi_max_fraction * h;
+  const double region_max_side = o.fills_view_fraction * std::min(w, h);
   // Algorithm 1 from the seed pattern, half-image initial ROI.
   auto t = Clock::now();
   const Eigen::Vector2d c0(seed.x, seed.y), l0(0.5 * w, 0.5 * h);
@@ -40,35 +47,11 @@ std::optional<Candidate> evaluate_pattern(const DetectorOptions& o, SourceWindow
   };
   res.fit_rejected = {};
   if (!fit.converged) res.fit_rejected = fit.empty_roi ? "empty roi" : fit.diverged ? "diverged" : "not converged";
-  else if (fit.size.x() > g.roi_max_fraction * w || fit.size.y() > g.roi_max_fraction * h) res.fit_rejected = "too large";
+  else if (fit.size.x() > fit_max_w || fit.size.y() > fit_max_h) res.fit_rejected = "too large";
   else if (fit.size.maxCoeff() > o.roi_max_aspect * fit.size.minCoeff()) res.fit_rejected = "aspect ratio";
   else if (events_in(fit.roi()) < o.roi_min_events) res.fit_rejected = "too few events";
   res.timings.fit_ms += ms_since(t);
 
-  Candidate c;
-  if (res.fit_rejected.empty()) {
-    c.box = fit.roi();
-    c.center = fit.center;
-    c.source = DetectionSource::kGaussianFit;
-  } else {
-    // Moving-region retrieval: components within the initial (half-image) ROI around the seed;
-    // the heaviest one overlapping the failed ROI, else the heaviest overall.
-    t = Clock::now();
-    const cv::Rect search = box_pixels(initial, w, h);
-    const std::array<Box2D, 2> rois{fit.roi(), initial};
-    const std::optional<Region> region = retrieve_region(
-        P, std::span<const Box2D>(rois).subspan(fit.empty_roi ? 1 : 0), search, o, in.region_scratch);
-    res.timings.retrieval_ms += ms_since(t);
-    if (!region || region->box.width() > g.roi_max_fraction * w || region->box.height() > g.roi_max_fraction * h) {
-      in.why_not = DetectionStatus::kNoRegion;
-      if (region) blank = region->box;
-      return std::nullopt;
-    }
-    c.box = region->box;
-    c.center = region->center;
-    c.source = DetectionSource::kRegionRetrieval;
-  }
-  blank = c.box;
   // The evidence gates: events, the peak of P (score) and events per pixel in the box.
   auto passes_gates = [&](Candidate& k) {
     k.events = events_in(k.box);
@@ -87,6 +70,57 @@ std::optional<Candidate> evaluate_pattern(const DetectorOptions& o, SourceWindow
     k.t_mean_s = cv::sum(in.ti.sum_time_s(r))[0] / k.events;
     return true;
   };
+  Candidate c;
+  if (res.fit_rejected.empty()) {
+    c.box = fit.roi();
+    c.center = fit.center;
+    c.source = DetectionSource::kGaussianFit;
+  } else {
+    // Moving-region retrieval: components within the initial (half-image) ROI around the seed;
+    // the heaviest one overlapping the failed ROI, else the heaviest overall.
+    t = Clock::now();
+    const cv::Rect search = box_pixels(initial, w, h);
+    const std::array<Box2D, 2> rois{fit.roi(), initial};
+    const auto roi_list = std::span<const Box2D>(rois).subspan(fit.empty_roi ? 1 : 0);
+    std::optional<Region> region = retrieve_region(P, roi_list, search, o, in.region_scratch);
+    // A region the search area cut (it reaches one of its inner edges) may be an object larger than
+    // the area: labelled again over the whole image, so that its size is its own.
+    auto cut_by_search = [&](const Box2D& b) {
+      return (search.x > 0 && b.x0 <= search.x + 1) || (search.y > 0 && b.y0 <= search.y + 1) ||
+             (search.x + search.width < w && b.x1 >= search.x + search.width - 2) ||
+             (search.y + search.height < h && b.y1 >= search.y + search.height - 2);
+    };
+    if (region && cut_by_search(region->box)) region = retrieve_region(P, roi_list, {0, 0, w, h}, o, in.region_scratch);
+    res.timings.retrieval_ms += ms_since(t);
+    // A region larger than a plausible fit must stand out from the rest of the image in density.
+    auto denser_than_the_rest = [&](const Box2D& box) {
+      const cv::Rect r = box_pixels(box, w, h);
+      const double inside = events_in(box), outside_px = static_cast<double>(w) * h - r.area();
+      if (!(outside_px > 0)) return false;
+      return inside / r.area() >= g.large_region_min_contrast * (in.ti.events - inside) / outside_px;
+    };
+    if (region && (region->box.width() > fit_max_w || region->box.height() > fit_max_h) &&
+        !denser_than_the_rest(region->box)) {
+      blank = region->box;
+      in.why_not = DetectionStatus::kNoRegion;
+      return std::nullopt;
+    }
+    if (!region || region->box.width() >= region_max_side || region->box.height() >= region_max_side) {
+      if (region) {
+        blank = region->box;
+        // A connected moving pattern this large, with an object's evidence, is an object too near.
+        Candidate large{.box = region->box, .center = region->center};
+        in.fills_view = in.fills_view || passes_gates(large);
+      }
+      in.why_not = DetectionStatus::kNoRegion;
+      return std::nullopt;
+    }
+    c.box = region->box;
+    c.center = region->center;
+    c.source = DetectionSource::kRegionRetrieval;
+  }
+  blank = c.box;
+  if (passes_gates(c)) return c;
   if (passes_gates(c)) return c;
   if (!(g.refit_min_roi_px > 0)) return std::nullopt;
 
@@ -135,7 +169,7 @@ std::optional<Candidate> evaluate_pattern(const DetectorOptions& o, SourceWindow
     t = Clock::now();
     const GaussianFit f = iterative_gaussian_fit(P, c0, l, o);
     res.timings.fit_ms += ms_since(t);
-    if (!f.converged || f.size.x() > g.roi_max_fraction * w || f.size.y() > g.roi_max_fraction * h ||
+    if (!f.converged || f.size.x() > fit_max_w || f.size.y() > fit_max_h ||
         f.size.maxCoeff() > o.roi_max_aspect * f.size.minCoeff())
       continue;
     Candidate k;
@@ -163,6 +197,8 @@ std::optional<Candidate> GaussianFitSource::find(SourceWindow& in, DetectionResu
   const int w = in.events.width, h = in.events.height;
   const cv::Mat& P = in.P;
   const cv::Rect& support = in.P_support;
+  const double min_peak =
+      in.first_object ? o.gaussian_fit.min_peak : std::max(o.gaussian_fit.min_peak, o.gaussian_fit.further_min_peak);
   // Algorithm 1 from the strongest pattern; a candidate that yields no plausible box or fails the
   // evidence gates is blanked and the next strongest pattern is tried. The blanking works on a
   // copy: P stays as pre-processed.
@@ -171,10 +207,10 @@ std::optional<Candidate> GaussianFitSource::find(SourceWindow& in, DetectionResu
     const MaxLocation peak = image == &P ? in.P_max : first_maximum(*image, support);
     const double p_max = peak.value;
     const cv::Point arg_max = peak.at;
-    if (!(p_max > 0) || p_max < o.gaussian_fit.min_peak * o.gaussian_fit.min_peak) break;  // none left can pass
+    if (!(p_max > 0) || p_max < min_peak * min_peak) break;  // none left can pass
     ++res.candidates;
     Box2D blank;
-    if (auto found = evaluate_pattern(o, in, *image, arg_max, o.gaussian_fit.min_peak, res, blank)) return found;
+    if (auto found = evaluate_pattern(o, in, *image, arg_max, min_peak, res, blank)) return found;
     if (image == &P) {
       // Only P's support is copied; blanked_ is kept 0 elsewhere.
       zero_rect(blanked_, blanked_bounds_);

@@ -251,7 +251,7 @@ void Perception::process_window(PendingWindow& w) {
   result.timings.tracking_ms = ms_since(tracking_start);
   for (int id : step.deleted) estimators_.erase(id);
   for (const TrackAssignment& a : step.assignments) result.detections.push_back({det.detections[a.detection], a.track_id});
-  const std::vector<int> to_solve = add_event_observations(step);
+  const std::vector<int> to_solve = add_event_observations(step, det.detections);
   segment_depth_since_first_detection(step.confirmed);
   for (int id : to_solve) estimate(id, w.t_end);
 
@@ -322,7 +322,7 @@ void Perception::vouch_by_trajectory() {
 // The assigned detections as event observations of their tracks' estimators (paper §IV-C.3).
 // Returns the tracks to solve: those confirmed in this step, and the confirmed ones that got a
 // detection.
-std::vector<int> Perception::add_event_observations(const TrackerStep& step) {
+std::vector<int> Perception::add_event_observations(const TrackerStep& step, std::span<const Detection2D> detections) {
   std::vector<int> to_solve = step.confirmed;
   if (!options_.estimate_trajectories) return to_solve;
   for (const TrackAssignment& a : step.assignments) {
@@ -338,6 +338,7 @@ std::vector<int> Perception::add_event_observations(const TrackerStep& step) {
     obs.t = d.t;
     obs.xn = d.center_normalized;
     obs.T_W_E = *T_W_E;
+    if (const Detection2D& found = detections[a.detection]; found.partial) partial_observation(found, obs);
     TrackEstimators& e = estimators_for(a.track_id);
     e.fusion_new |= e.fusion.add(obs) == AddResult::kAccepted;
     if (e.mono) e.mono_new |= e.mono->add(obs) == AddResult::kAccepted;
@@ -347,6 +348,19 @@ std::vector<int> Perception::add_event_observations(const TrackerStep& step) {
       to_solve.push_back(a.track_id);
   }
   return to_solve;
+}
+
+// An object cut by the frame's border (docs/DETECTION.md, "Objects cut by the border"): the
+// whole object's centre where the detector could estimate it, else the visible part's, with the
+// centre noise σ grown by 1 / visible fraction, since the estimate's error grows with the part
+// out of view.
+void Perception::partial_observation(const Detection2D& found, EventObservation& obs) const {
+  if (found.center_full_raw) {
+    const Eigen::Vector2d xn = calibration_.event_camera.pixel_to_normalized(*found.center_full_raw);
+    if (xn.allFinite()) obs.xn = xn;
+  }
+  const double sigma_n = options_.estimation.event_sigma_px / options_.estimation.event_focal_px;
+  obs.sigma_n = sigma_n / std::clamp(found.visible_fraction, 0.1, 1.0);
 }
 
 // Tracks confirmed now missed the depth frames segmented while they were tentative: those since

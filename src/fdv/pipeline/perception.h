@@ -270,7 +270,8 @@ class Perception {
   DetectionResult detect(const CompensatedWindow& cw);
   TrackerStep associate(TimeNs t, std::span<const Detection2D> detections);
   void vouch_by_trajectory();  ///< fills vouched_ for tracker_inputs_
-  std::vector<int> add_event_observations(const TrackerStep& step);
+  std::vector<int> add_event_observations(const TrackerStep& step, std::span<const Detection2D> detections);
+  void partial_observation(const Detection2D& found, EventObservation& obs) const;
   void segment_depth_since_first_detection(std::span<const int> confirmed);
   /// Every depth segmentation of the pending frames starts here: the frames up to `up_to`, for
   /// every confirmed track, each accepted observation then solved.
