@@ -7,7 +7,6 @@
 #include <filesystem>
 #include <sstream>
 
-#include "fdv/core/calibration.h"
 #include "fdv/core/error.h"
 #include "fdv/eval/statistics.h"
 #include "fdv/sim/dataset_cache.h"
@@ -86,21 +85,11 @@ Dataset dataset(const std::string& scene, std::uint64_t seed, const PaperTableOp
   return d;
 }
 
-/// The event camera of a calibration file in place of the preset's (intrinsics, distortion,
-/// resolution).
-void use_event_camera(sim::ScenarioConfig& config, const PinholeCamera& camera) {
-  auto& e = config.event_camera;
-  e.width = camera.width, e.height = camera.height;
-  e.fx = camera.fx, e.fy = camera.fy, e.cx = camera.cx, e.cy = camera.cy;
-  const Distortion& d = camera.distortion;
-  e.distortion = {d.k1, d.k2, d.p1, d.p2, d.k3};
-}
-
 /// A scene variant's dataset: the preset's own cache folder when it has its own camera.
 Dataset dataset(const SceneVariant& v, std::uint64_t seed, const PaperTableOptions& options) {
   if (v.width == 0 && v.camera_file.empty()) return dataset(v.preset, seed, options);
   sim::ScenarioConfig config = sim::make_preset(v.preset, seed);
-  if (!v.camera_file.empty()) use_event_camera(config, load_calibration(v.camera_file).event_camera);
+  if (!v.camera_file.empty()) sim::load_event_camera(config, v.camera_file);
   if (v.width > 0) sim::set_event_resolution(config, v.width, v.height);
   Dataset d;
   d.dir = sim::ensure_simulated(
