@@ -9,8 +9,9 @@ Runs: the training seeds 1-4 of fast_forward, swing, hover_headon and
 scene2_ball, simulated by the same build (a change to the simulator shows as a change of the
 outputs), and every recording in ../shared/data/real (the DAVIS346 throw also with its
 calibration). Compared: detections.jsonl, depth.jsonl, trajectories.jsonl, predictions.jsonl
-line by line, and summary.json without its timing (`timing_ms`) and input path. Numbers must be
-equal to the bit: the pipeline is deterministic for a given build and thread count.
+line by line, and summary.json without its timing (`timing_ms`) and input path; not timing.csv
+(wall-clock). Numbers must be equal to the bit: the pipeline is deterministic for a given build and
+thread count.
 
 The stored run lives in tests/reference_outputs/RUN/; a commit that changes results on purpose
 records it anew in a commit of its own, with the differences explained. Work files go to

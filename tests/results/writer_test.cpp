@@ -359,6 +359,58 @@ TEST(ResultsWriter, TumFilesHoldTheFinalUsableEstimateOfEachTrackEvery5Ms) {
   EXPECT_EQ(read_trajectories(dir).size(), 2u);
 }
 
+TEST(ResultsWriter, TimingCsvHoldsEachWindowsStageTimesAsWritten) {
+  const std::string dir = test::scratch_dir("results_timing");
+  // Three windows (index 4 after two skipped ones) with times of their own, a third of a ms apart so
+  // the text must round-trip; region retrieval ran only in the second.
+  std::vector<WindowResult> windows(3);
+  const std::uint64_t indices[] = {0, 1, 4};
+  for (std::size_t i = 0; i < windows.size(); ++i) {
+    WindowResult& w = windows[i];
+    const double k = static_cast<double>(i);
+    w.index = indices[i];
+    w.t_start = 1'000'000'007 + static_cast<TimeNs>(w.index) * 25 * kNsPerMs;
+    w.t_end = w.t_start + 25 * kNsPerMs;
+    WindowTimings& t = w.timings;
+    t.compensation_ms = (k + 1) / 3.0;
+    t.detection = {.time_images_ms = 0.5 + k, .segmentation_ms = 0.25, .preprocess_ms = 0.125,
+                   .fit_ms = 2.0 / 3.0, .total_ms = 4.0 + k};
+    t.tracking_ms = 0.0625;
+    t.total_ms = 5.0 + k / 7.0;
+  }
+  windows[1].timings.detection.retrieval_ms = 1.75;
+  {
+    ResultsWriter out(dir);
+    for (const WindowResult& w : windows) out.window(w);
+    out.finish(RunSummary{});
+  }
+  const std::vector<WindowTimingRow> rows = read_timing(dir);
+  ASSERT_EQ(rows.size(), read_windows(dir).size());
+  ASSERT_EQ(rows.size(), 3u);
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const WindowTimings& t = windows[i].timings;
+    const double k = static_cast<double>(i);
+    EXPECT_EQ(rows[i].window, indices[i]);
+    EXPECT_EQ(rows[i].t_start_s, to_seconds(windows[i].t_start));  // exactly: the shortest round-trip text
+    EXPECT_EQ(rows[i].stage_ms.at("compensation"), (k + 1) / 3.0);
+    EXPECT_EQ(rows[i].stage_ms.at("time_images"), 0.5 + k);
+    EXPECT_EQ(rows[i].stage_ms.at("segmentation"), 0.25);
+    EXPECT_EQ(rows[i].stage_ms.at("preprocess"), 0.125);
+    EXPECT_EQ(rows[i].stage_ms.at("gaussian_fit"), 2.0 / 3.0);
+    EXPECT_EQ(rows[i].stage_ms.at("detection_total"), 4.0 + k);
+    EXPECT_EQ(rows[i].stage_ms.at("tracking"), 0.0625);
+    EXPECT_EQ(rows[i].stage_ms.at("window_total"), t.total_ms);
+    EXPECT_EQ(rows[i].stage_ms.count("count_cue"), 0u);  // ran in no window: an empty cell
+    EXPECT_EQ(rows[i].stage_ms.count("region_retrieval"), i == 1 ? 1u : 0u);
+  }
+  EXPECT_EQ(rows[1].stage_ms.at("region_retrieval"), 1.75);
+  std::ifstream in(dir + "/timing.csv");
+  std::string header;
+  std::getline(in, header);
+  EXPECT_EQ(header, "window,t_start,compensation,time_images,segmentation,preprocess,gaussian_fit,"
+                    "region_retrieval,count_cue,detection_total,tracking,window_total");
+}
+
 TEST(ResultsReader, MalformedLinesAreErrorsNamingFileAndLine) {
   const std::string dir = test::scratch_dir("results_malformed");
   const std::string good_window = R"({"t_start":0,"t_end":0.025,"detections":[]})";
@@ -382,6 +434,10 @@ TEST(ResultsReader, MalformedLinesAreErrorsNamingFileAndLine) {
             "line 2 |");
   write(dir + "/summary.json", R"({"input":"x"})");
   EXPECT_NE(test::input_error_of(dir + "/summary.json", [&] { read_summary(dir); }), "no error");
+  write(dir + "/timing.csv", "window,t_start,compensation\n0,0.1,0.5\n1,0.125\n");
+  EXPECT_EQ(test::input_error_of(dir + "/timing.csv", [&] { read_timing(dir); }).substr(0, 8), "line 3 |");
+  write(dir + "/timing.csv", "window,t_start,compensation\n0,0.1,fast\n");
+  EXPECT_EQ(test::input_error_of(dir + "/timing.csv", [&] { read_timing(dir); }).substr(0, 8), "line 2 |");
   // Files a run always writes are required; the others may be absent (no 3D estimation).
   const std::string empty = test::scratch_dir("results_missing");
   EXPECT_THROW(read_windows(empty), InputError);
@@ -389,6 +445,7 @@ TEST(ResultsReader, MalformedLinesAreErrorsNamingFileAndLine) {
   EXPECT_TRUE(read_trajectories(empty).empty());
   EXPECT_TRUE(read_predictions(empty).empty());
   EXPECT_TRUE(read_depth(empty).empty());
+  EXPECT_TRUE(read_timing(empty).empty());  // results of an fdv before timing.csv
 }
 
 }  // namespace

@@ -1,9 +1,13 @@
 #include "fdv/results/reader.h"
 
+#include <fmt/format.h>
+
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
 #include "fdv/core/error.h"
+#include "fdv/io/text_fields.h"
 
 namespace fdv {
 namespace {
@@ -77,6 +81,40 @@ RunSummary read_summary(const std::string& results_dir) {
   } catch (const std::exception& e) {
     throw InputError(path, "", e.what());
   }
+}
+
+std::vector<WindowTimingRow> read_timing(const std::string& results_dir) {
+  const std::string path = results_dir + "/" + kTimingFile;
+  std::vector<WindowTimingRow> out;
+  if (!std::filesystem::exists(path)) return out;
+  LineReader in(path);
+  std::string_view line;
+  std::vector<std::string_view> cells;
+  if (!in.next(line)) return out;
+  split_fields(line, ',', cells);
+  if (cells.size() < 2 || cells[0] != "window" || cells[1] != "t_start")
+    throw InputError(path, in.where(), "header does not start with \"window,t_start\"");
+  const std::vector<std::string> columns(cells.begin(), cells.end());
+  while (in.next(line)) {
+    split_fields(line, ',', cells);
+    if (cells.size() != columns.size())
+      throw InputError(path, in.where(),
+                       fmt::format("{} cells, the header has {}", cells.size(), columns.size()));
+    WindowTimingRow row;
+    std::int64_t window = 0;
+    if (!parse_int64(cells[0], window) || window < 0)
+      throw InputError(path, in.where(), fmt::format("window '{}' is not an index", cells[0]));
+    row.window = static_cast<std::uint64_t>(window);
+    for (std::size_t c = 1; c < cells.size(); ++c) {
+      if (cells[c].empty() && c > 1) continue;  // the stage did not run in this window
+      double value = 0;
+      if (!parse_double(cells[c], value))
+        throw InputError(path, in.where(), fmt::format("{} '{}' is not a number", columns[c], cells[c]));
+      (c == 1 ? row.t_start_s : row.stage_ms[columns[c]]) = value;
+    }
+    out.push_back(std::move(row));
+  }
+  return out;
 }
 
 std::vector<WindowDetections> window_detections(const std::vector<WindowRow>& rows) {

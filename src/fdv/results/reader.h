@@ -30,6 +30,10 @@ std::vector<PredictionRow> read_predictions(const std::string& results_dir);
 std::vector<TumPose> read_tum(const std::string& path);
 /// RESULTS/summary.json. Throws InputError when it is missing or malformed.
 RunSummary read_summary(const std::string& results_dir);
+/// RESULTS/timing.csv, one row per window (empty when absent: results of an older fdv). Stage
+/// columns are taken by their header names. Throws InputError (file, line) for a header that does
+/// not start "window,t_start", a line with another number of cells, or a cell that is no number.
+std::vector<WindowTimingRow> read_timing(const std::string& results_dir);
 
 /// The windows as detection metrics take them (times in ns).
 std::vector<WindowDetections> window_detections(const std::vector<WindowRow>& rows);

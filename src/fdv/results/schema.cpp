@@ -418,4 +418,19 @@ PredictionRow prediction_row(const PredictionResult& p) {
   return r;
 }
 
+WindowTimingRow window_timing_row(const WindowResult& w) {
+  WindowTimingRow r;
+  r.window = w.index;
+  r.t_start_s = to_seconds(w.t_start);
+  const WindowTimings& t = w.timings;
+  r.stage_ms = {{"compensation", t.compensation_ms},       {"time_images", t.detection.time_images_ms},
+                {"segmentation", t.detection.segmentation_ms}, {"preprocess", t.detection.preprocess_ms},
+                {"gaussian_fit", t.detection.fit_ms},        {"detection_total", t.detection.total_ms},
+                {"tracking", t.tracking_ms},                 {"window_total", t.total_ms}};
+  // Stages that run only in some windows: a time where they ran (summary "count": in how many).
+  if (t.detection.retrieval_ms > 0) r.stage_ms["region_retrieval"] = t.detection.retrieval_ms;
+  if (t.detection.count_cue_ms > 0) r.stage_ms["count_cue"] = t.detection.count_cue_ms;
+  return r;
+}
+
 }  // namespace fdv

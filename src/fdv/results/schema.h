@@ -9,6 +9,7 @@
 ///   RESULTS/predictions.jsonl   one PredictionRow per usable fusion estimate with a vehicle state
 ///   RESULTS/track_ID_fusion.tum, track_ID_mono.tum   TumPose lines of each track's final usable fit
 ///   RESULTS/summary.json        RunSummary
+///   RESULTS/timing.csv          one WindowTimingRow per event window, in window order
 ///
 /// Times are stream seconds (double) in the files and here; lengths metres; pixels raw sensor
 /// pixels unless the key says "undistorted". Enumerations are their to_string() text. Keys are
@@ -35,6 +36,13 @@ inline constexpr const char* kDepthFile = "depth.jsonl";
 inline constexpr const char* kTrajectoriesFile = "trajectories.jsonl";
 inline constexpr const char* kPredictionsFile = "predictions.jsonl";
 inline constexpr const char* kSummaryFile = "summary.json";
+inline constexpr const char* kTimingFile = "timing.csv";
+
+/// timing.csv's stage columns in order: the stages of summary.json's "timing_ms" that run per event
+/// window (depth segmentation and estimation run per frame and per solve: in the summary only).
+inline constexpr std::array<const char*, 10> kWindowTimingStages = {
+    "compensation",     "time_images", "segmentation",    "preprocess", "gaussian_fit",
+    "region_retrieval", "count_cue",   "detection_total", "tracking",   "window_total"};
 
 /// One detection of a window (an element of WindowRow::detections).
 struct DetectionRow {
@@ -132,6 +140,16 @@ struct TumPose {
   Eigen::Vector3d p_W = Eigen::Vector3d::Zero();
 };
 
+/// A line of timing.csv: one event window's wall-clock time per stage [ms] (steady clock; not
+/// deterministic). CSV with the header "window,t_start," then kWindowTimingStages; numbers in the
+/// shortest form that reads back to the same double. A stage that did not run in the window
+/// (region_retrieval, count_cue) is an empty cell.
+struct WindowTimingRow {
+  std::uint64_t window = 0;  ///< "window": the windower's index (as in window_INDEX.png)
+  double t_start_s = 0;      ///< "t_start" [s], as detections.jsonl's line of the window
+  std::map<std::string, double> stage_ms;  ///< stage column → ms; absent: did not run
+};
+
 /// summary.json. "counts" holds the PerceptionCounters under these keys: events_read (events),
 /// events (events_in_windows), windows, windows_skipped_in_gaps (windows_skipped), detections,
 /// events_dropped (sum) and events_dropped_by_reason, windows_by_status, windows_by_method,
@@ -182,5 +200,6 @@ WindowRow window_row(const WindowResult& w);
 DepthRow depth_row(const DepthResult& d);
 TrajectoryRow trajectory_row(const EstimateResult& e);
 PredictionRow prediction_row(const PredictionResult& p);
+WindowTimingRow window_timing_row(const WindowResult& w);
 
 }  // namespace fdv

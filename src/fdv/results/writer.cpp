@@ -9,10 +9,14 @@ namespace fdv {
 ResultsWriter::ResultsWriter(const std::filesystem::path& dir) : dir_(dir) {
   std::filesystem::create_directories(dir);
   for (auto [name, stream] : {std::pair{kDetectionsFile, &detections_}, {kDepthFile, &depth_},
-                              {kTrajectoriesFile, &trajectories_}, {kPredictionsFile, &predictions_}}) {
+                              {kTrajectoriesFile, &trajectories_}, {kPredictionsFile, &predictions_},
+                              {kTimingFile, &timing_csv_}}) {
     stream->open(dir / name);
     if (!*stream) throw InputError((dir / name).string(), "", "cannot create output file");
   }
+  timing_csv_ << "window,t_start";
+  for (const char* stage : kWindowTimingStages) timing_csv_ << "," << stage;
+  timing_csv_ << "\n";
 }
 
 void ResultsWriter::write(const WindowRow& row) { detections_ << nlohmann::json(row).dump() << "\n"; }
@@ -20,20 +24,20 @@ void ResultsWriter::write(const DepthRow& row) { depth_ << nlohmann::json(row).d
 void ResultsWriter::write(const TrajectoryRow& row) { trajectories_ << nlohmann::json(row).dump() << "\n"; }
 void ResultsWriter::write(const PredictionRow& row) { predictions_ << nlohmann::json(row).dump() << "\n"; }
 
+void ResultsWriter::write(const WindowTimingRow& row) {
+  // fmt's "{}" is the shortest text that reads back to the same double.
+  timing_csv_ << fmt::format("{},{}", row.window, row.t_start_s);
+  for (const char* stage : kWindowTimingStages) {
+    const auto it = row.stage_ms.find(stage);
+    timing_csv_ << (it == row.stage_ms.end() ? "," : fmt::format(",{}", it->second));
+  }
+  timing_csv_ << "\n";
+  for (const auto& [stage, ms] : row.stage_ms) timing_[stage].push_back(ms);
+}
+
 void ResultsWriter::window(const WindowResult& w) {
   write(window_row(w));
-  const auto& t = w.timings;
-  timing_["compensation"].push_back(t.compensation_ms);
-  timing_["time_images"].push_back(t.detection.time_images_ms);
-  timing_["segmentation"].push_back(t.detection.segmentation_ms);
-  timing_["preprocess"].push_back(t.detection.preprocess_ms);
-  timing_["gaussian_fit"].push_back(t.detection.fit_ms);
-  // Stages that run only in some windows: timed where they ran ("count" says in how many).
-  if (t.detection.retrieval_ms > 0) timing_["region_retrieval"].push_back(t.detection.retrieval_ms);
-  if (t.detection.count_cue_ms > 0) timing_["count_cue"].push_back(t.detection.count_cue_ms);
-  timing_["detection_total"].push_back(t.detection.total_ms);
-  timing_["tracking"].push_back(t.tracking_ms);
-  timing_["window_total"].push_back(t.total_ms);
+  write(window_timing_row(w));
 }
 
 void ResultsWriter::depth(const DepthResult& d) {
@@ -57,7 +61,7 @@ std::map<std::string, Summary> ResultsWriter::timing_ms() const {
 }
 
 void ResultsWriter::finish(const RunSummary& summary) {
-  for (std::ofstream* f : {&detections_, &depth_, &trajectories_, &predictions_}) f->close();
+  for (std::ofstream* f : {&detections_, &depth_, &trajectories_, &predictions_, &timing_csv_}) f->close();
   for (const auto& [name, finals] : {std::pair{"fusion", &final_fusion_}, {"mono", &final_mono_}})
     for (const auto& [id, est] : *finals) {
       std::ofstream f(dir_ / fmt::format("track_{}_{}.tum", id, name));

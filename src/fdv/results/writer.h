@@ -1,8 +1,8 @@
 #pragma once
-/// Writes a `fdv run` results folder (schema.h): the JSON-lines files as the pipeline's callbacks
-/// arrive, then the TUM trajectories and summary.json.
+/// Writes a `fdv run` results folder (schema.h): the JSON-lines files and timing.csv as the
+/// pipeline's callbacks arrive, then the TUM trajectories and summary.json.
 ///
-///   ResultsWriter out(dir);                       // creates dir and the four .jsonl files
+///   ResultsWriter out(dir);                       // creates dir, the four .jsonl files, timing.csv
 ///   callbacks.on_window = [&](const WindowResult& w) { out.window(w); };   // likewise on_depth,
 ///   ...                                           // on_estimate, on_prediction
 ///   RunSummary s;  s.counts = replay(...);  s.timing_ms = out.timing_ms();  ...
@@ -36,6 +36,8 @@ class ResultsWriter {
   void write(const DepthRow& row);
   void write(const TrajectoryRow& row);
   void write(const PredictionRow& row);
+  /// A timing.csv line; its stages go into timing_ms() too.
+  void write(const WindowTimingRow& row);
 
   /// Wall-clock time per stage [ms] over the callbacks so far (summary.json's "timing_ms").
   std::map<std::string, Summary> timing_ms() const;
@@ -46,7 +48,7 @@ class ResultsWriter {
 
  private:
   std::filesystem::path dir_;
-  std::ofstream detections_, depth_, trajectories_, predictions_;
+  std::ofstream detections_, depth_, trajectories_, predictions_, timing_csv_;
   std::map<std::string, std::vector<double>> timing_;
   std::map<int, TrajectoryEstimate> final_fusion_, final_mono_;
 };
