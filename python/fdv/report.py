@@ -5,7 +5,8 @@
 Writes DIR/report.html (DIR defaults to RESULTS_DIR/report) and its PNGs: the detection timeline
 (u, v per track, the true ball's projection beside it with --truth), each track's 3D trajectory in
 top and side views against the truth, the prediction error at the true closest approach against
-the time since the track's first detection, the latency of each stage, and a strip of window
+the time since the track's first detection, a latency histogram of each stage (timing.csv; older
+results folders without it: median, p99 and max bars from summary.json), and a strip of window
 images (when the run had --visualize). The files are read as the results schema writes them
 (docs/FORMATS.md "fdv run outputs").
 """
@@ -29,6 +30,15 @@ def read_jsonl(path):
         return []
     with open(path) as f:
         return [json.loads(line) for line in f if line.strip()]
+
+
+def read_timing(results):
+    """RESULTS/timing.csv: a structured array, one row per window, fields `window`, `t_start` [s] and
+    each stage [ms] (NaN where the stage did not run); None when absent (older results)."""
+    path = Path(results) / "timing.csv"
+    if not path.exists():
+        return None
+    return np.atleast_1d(np.genfromtxt(path, delimiter=",", names=True, dtype=float))
 
 
 class Truth:
@@ -204,8 +214,40 @@ def plot_prediction_error(windows, trajectories, predictions, truth, out):
     return save(fig, out, "prediction_error.png")
 
 
+def plot_latency_histograms(timing, out):
+    """One histogram per stage of every window's time (timing.csv), median and p99 marked; log-x
+    bins when the slowest window took over 10 times the fastest (a window where the stage took 0 ms
+    then falls outside them)."""
+    stages = [name for name in timing.dtype.names[2:] if np.isfinite(timing[name]).any()]
+    cols = 3
+    rows = -(-len(stages) // cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(12, 2.6 * rows + 0.6), squeeze=False)
+    for ax, stage in zip(axes.flat, stages):
+        ms = timing[stage][np.isfinite(timing[stage])]
+        positive = ms[ms > 0]
+        wide = positive.size > 1 and positive.max() > 10 * positive.min()
+        if wide:
+            ax.hist(positive, bins=np.geomspace(positive.min(), positive.max(), 40), color="#1f5f99")
+            ax.set_xscale("log")
+        else:
+            ax.hist(ms, bins=40, color="#1f5f99")
+        for q, style, label in [(50, "-", "median"), (99, "--", "p99")]:
+            ax.axvline(np.percentile(ms, q), color="#e8833a", linestyle=style, label=label)
+        ax.set_title(f"{stage} (n={ms.size})", fontsize=10)
+        ax.set_xlabel("ms")
+        ax.grid(alpha=0.3)
+    for ax in list(axes.flat)[len(stages):]:
+        ax.set_axis_off()
+    if stages:
+        axes.flat[0].set_ylabel("windows")
+        axes.flat[0].legend(fontsize=8)
+    fig.suptitle("Latency per stage: wall-clock time of each window")
+    return save(fig, out, "latency_histograms.png")
+
+
 def plot_latency(summary, out):
-    """Each stage's latency distribution, from summary.json's timing_ms (count, median, p99, max)."""
+    """Each stage's median, p99 and max from summary.json's timing_ms: the fallback for results
+    folders written before timing.csv."""
     timing = summary.get("timing_ms", {})
     stages = [s for s in timing if timing[s].get("count", 0) > 0]
     fig, ax = plt.subplots(figsize=(10, 0.45 * len(stages) + 1.5))
@@ -261,7 +303,10 @@ def write_report(results_dir, truth_dir=None, out_dir=None):
     sections.append(("3D trajectories (final usable fusion estimate per track)",
                      plot_trajectories(results, trajectories, truth, out)))
     sections.append(("Prediction error", [plot_prediction_error(windows, trajectories, predictions, truth, out)]))
-    if summary.get("timing_ms"):
+    timing = read_timing(results)
+    if timing is not None and timing.size:
+        sections.append(("Latency per stage", [plot_latency_histograms(timing, out)]))
+    elif summary.get("timing_ms"):
         sections.append(("Latency per stage", [plot_latency(summary, out)]))
     strip = plot_window_strip(results, windows, out)
     sections.append(("Window images", [strip] if strip else []))
