@@ -5,15 +5,13 @@
 #include <cmath>
 
 #include "fdv/core/error.h"
+#include "fdv/sim/preset_parts.h"
 #include "fdv/sim/random.h"
+#include "fdv/sim/random_throw.h"
 #include "fdv/sim/scenario_config.h"
 
 namespace fdv::sim {
-namespace {
 
-/// Free-standing panels facing the flight direction (+x), left, right of or above the flight
-/// corridor (|y| < 1.2 m, z < 2.7 m stays free), plus banners on the side walls. Side panels
-/// start at x_side_min so that they never hide a ball crossing nearer than that.
 void add_panels(ScenarioConfig& c, Rng& rng, double x_side_min, double x_overhead_min) {
   const auto& lo = c.scene.room_min_W_m;
   const auto& hi = c.scene.room_max_W_m;
@@ -57,6 +55,8 @@ Eigen::Vector3d random_spin(Rng& rng) {
   const Eigen::Vector3d axis = rng.normal3();
   return axis.normalized() * rng.uniform(8.0, 20.0);  // [rad/s], 1.3-3.2 rev/s
 }
+
+namespace {
 
 /// A ball thrown across the flight path from one side to the other: it crosses the camera's
 /// line of sight `ahead` metres in front of the vehicle at t_cross, flying at `speed`.
@@ -134,10 +134,13 @@ BallConfig crossing_throw(const ScenarioConfig& c, Rng& rng, const Eigen::Vector
 
 std::vector<std::string> preset_names() {
   return {"scene1_no_object", "scene2_ball", "fast_forward", "swing",
-          "hover_headon",     "dim",         "close_pass",   "two_balls"};
+          "hover_headon",     "dim",         "close_pass",   "two_balls",
+          "random_throw"};
 }
 
 ScenarioConfig make_preset(const std::string& name, std::uint64_t seed) {
+  // Issue 26: every parameter drawn from the seed (random_throw.h).
+  if (name == "random_throw") return random_throw_config(sample_random_throw(seed));
   ScenarioConfig c;
   c.name = name;
   c.seed = seed;

@@ -16,6 +16,8 @@
 #include <optional>
 #include <string>
 
+#include <yaml-cpp/yaml.h>
+
 #include <Eigen/Core>
 
 #include "fdv/sim/scenario_config.h"
@@ -62,9 +64,16 @@ nlohmann::json to_json(const RandomThrowParameters& p);
 /// value of the wrong type.
 RandomThrowParameters random_throw_from_json(const nlohmann::json& j, const std::string& source);
 
-/// The `random_throw` section a random_throw dataset's dataset.yaml carries (written by
-/// Simulator::manifest_yaml). nullopt when the dataset has none (another scenario); InputError
-/// naming the file for an unreadable dataset.yaml or a malformed section.
+/// The same fields as a YAML mapping (numbers as their shortest exact text).
+YAML::Node random_throw_yaml(const RandomThrowParameters& p);
+/// The `random_throw` section of dataset.yaml for a simulation of `config` (Simulator::
+/// manifest_yaml writes it): the seed's parameters when `config` is exactly
+/// random_throw_config(sample_random_throw(config.seed)) (thread count aside), else nullopt
+/// (another scenario, or one changed by --config, --resolution, --duration...).
+std::optional<YAML::Node> random_throw_manifest(const ScenarioConfig& config);
+/// The `random_throw` section of `dataset_dir`/dataset.yaml. nullopt when there is none (another
+/// scenario); InputError naming the file (and key) for an unreadable dataset.yaml or a malformed
+/// section.
 std::optional<RandomThrowParameters> read_random_throw(const std::string& dataset_dir);
 
 }  // namespace fdv::sim

@@ -10,6 +10,7 @@
 #include "fdv/core/error.h"
 #include "fdv/core/thread_pool.h"
 #include "fdv/sim/event_camera.h"
+#include "fdv/sim/random_throw.h"
 #include "fdv/sim/scene.h"
 #include "fdv/sim/sensor_models.h"
 
@@ -234,6 +235,8 @@ std::string Simulator::manifest_yaml() const {
   out << YAML::EndMap;
   out << YAML::EndMap;
   out << YAML::Key << "event_labels" << YAML::Value << kLabelsFile;
+  if (const auto drawn = random_throw_manifest(c))  // issue 26: the throw's drawn parameters
+    out << YAML::Key << "random_throw" << YAML::Value << *drawn;
   // The full configuration, less the thread count (which never changes the output).
   YAML::Node full = YAML::Load(to_yaml(c));
   full.remove("threads");
