@@ -270,6 +270,8 @@ TEST(DodgePlanner, RefusesNonFiniteInputWithoutNaNSetPoints) {
   EXPECT_EQ(d->action, DodgeAction::kRefused);
   EXPECT_NE(d->reason.find("probability"), std::string::npos) << d->reason;
   EXPECT_FALSE(d->maneuver);
+  EXPECT_EQ(d->probability, 0.0);  // rows hold no NaN
+  EXPECT_TRUE(std::isfinite(d->miss_distance_m));
 
   VehicleState nan_state = hovering(1.0);
   nan_state.odometry.v_W.x() = std::numeric_limits<double>::infinity();

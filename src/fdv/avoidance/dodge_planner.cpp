@@ -254,10 +254,11 @@ std::optional<DodgeDecision> DodgePlanner::update(int track_id, const CollisionR
     d.t = t;
     d.track_id = track_id;
     d.action = DodgeAction::kRefused;
+    // The risk's figures where finite (0 and infinity stand for the others: rows hold no NaN).
     d.probability = std::isfinite(risk.probability) ? risk.probability : 0.0;
-    d.time_to_contact_s = std::numeric_limits<double>::infinity();
-    d.miss_distance_m = std::numeric_limits<double>::quiet_NaN();
-    if (std::isfinite(risk.nominal.closest.miss_distance_m)) d.miss_distance_m = risk.nominal.closest.miss_distance_m;
+    d.time_to_contact_s = std::isnan(risk.nominal.time_to_contact_s) ? std::numeric_limits<double>::infinity()
+                                                                      : risk.nominal.time_to_contact_s;
+    d.miss_distance_m = std::isfinite(risk.nominal.closest.miss_distance_m) ? risk.nominal.closest.miss_distance_m : 0.0;
     if (active_) d.maneuver = active_->maneuver;
     d.committed = active_ && active_->committed;
     d.reason = std::move(why);
