@@ -390,6 +390,11 @@ TEST(ManeuverPlayback, PiecewiseConstantAccelerationIntegratedExactly) {
       Eigen::Vector3d(0, -10 * (0.005 + 0.1 * 0.35), 5 * (0.5 * 0.15 * 0.15 + 0.15 * 0.2)), 1e-9))
       << end.position_W.transpose();
 
+  // A cancel rebuilt without effective_t takes effect at its own time, 1.25 s: +z for 0.1 s.
+  std::vector<DodgeDecision> no_effective_t = d;
+  no_effective_t[3].effective_t = 0;
+  EXPECT_NEAR(commanded_offset(no_effective_t, at(1.5)).velocity_W.z(), 0.5, 1e-9);
+
   // Without the cancel, the replan's set-point runs its full 0.2 s.
   const ManeuverOffset uncancelled = commanded_offset(std::span(d).first(3), at(1.5));
   EXPECT_NEAR(uncancelled.velocity_W.z(), 1.0, 1e-9);

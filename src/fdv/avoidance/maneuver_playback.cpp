@@ -27,7 +27,8 @@ ManeuverOffset commanded_offset(std::span<const DodgeDecision> decisions, TimeNs
   for (const DodgeDecision& d : decisions) {
     if (d.action == DodgeAction::kRefused) continue;
     if (d.action == DodgeAction::kCancel || !d.maneuver) {
-      clear_from(pieces, d.effective_t);
+      // A decision rebuilt from a row without effective_t (0) takes effect at its own time.
+      clear_from(pieces, std::max(d.effective_t, d.t));
       continue;
     }
     const DodgeManeuver& m = *d.maneuver;

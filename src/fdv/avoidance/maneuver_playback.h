@@ -9,7 +9,8 @@
 /// Model: piecewise-constant acceleration, integrated exactly. A decision carrying a manoeuvre
 /// (kDodge, kReplan, kCommit) sets its acceleration from maneuver.start_t for duration_s, replacing
 /// whatever was set from then on; after the duration the acceleration is zero (the velocity gained
-/// is kept). kCancel sets zero from its effective_t (t + response delay); kRefused changes nothing.
+/// is kept). kCancel sets zero from its effective_t (t + response delay; t when effective_t is
+/// unset, i.e. earlier than t); kRefused changes nothing.
 /// The offset is zero before the first set-point takes effect. Thread-safe (pure).
 #include <Eigen/Core>
 #include <span>
