@@ -1,5 +1,7 @@
 // Issue 26's random throws: the drawn parameters, the geometry of the configured throw (checked
 // on the simulator's own trajectories, no rendering), and the round trip through a dataset.
+#include "fdv/sim/random_throw.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -10,7 +12,6 @@
 #include "fdv/core/error.h"
 #include "fdv/sim/dataset_sink.h"
 #include "fdv/sim/geometry.h"
-#include "fdv/sim/random_throw.h"
 #include "fdv/sim/simulator.h"
 #include "fdv/sim/trajectory.h"
 #include "test_support.h"
@@ -105,7 +106,8 @@ TEST(RandomThrow, ParametersStayInTheirRanges) {
     EXPECT_EQ(c.event_camera.height, p.height);
     EXPECT_DOUBLE_EQ(c.scene.illuminance_lux, p.illuminance_lux);
     EXPECT_EQ(c.scene.panels.empty(), p.texture == "bare");
-    EXPECT_EQ(c.vehicle.motion, p.vehicle_motion == "forward" ? MotionKind::kForward : MotionKind::kHover);
+    EXPECT_EQ(c.vehicle.motion,
+              p.vehicle_motion == "forward" ? MotionKind::kForward : MotionKind::kHover);
     EXPECT_DOUBLE_EQ(c.vehicle.speed_m_s, p.vehicle_speed_m_s);
     EXPECT_GT(c.vehicle.vibration_angle_deg, 0.0);  // the presets' vibration
     EXPECT_DOUBLE_EQ(c.duration_s, p.duration_s);
@@ -113,10 +115,12 @@ TEST(RandomThrow, ParametersStayInTheirRanges) {
     // Released `distance` from the body origin; chord speed = straight flight / flight time.
     const VehicleTrajectory vehicle(c.vehicle, c.seed, c.gravity_W_m_s2);
     const BallTrajectory ball(c.balls[0], vehicle, c.gravity_W_m_s2, c.duration_s);
-    EXPECT_NEAR((ball.at(p.release_t_s).p_W - vehicle.at(p.release_t_s).p_W).norm(), p.distance_m, 1e-9);
+    EXPECT_NEAR((ball.at(p.release_t_s).p_W - vehicle.at(p.release_t_s).p_W).norm(), p.distance_m,
+                1e-9);
     const double flight_s = p.closest_approach_t_s - p.release_t_s;
-    EXPECT_NEAR((ball.at(p.closest_approach_t_s).p_W - ball.at(p.release_t_s).p_W).norm() / flight_s,
-                p.speed_m_s, 1e-6);
+    EXPECT_NEAR(
+        (ball.at(p.closest_approach_t_s).p_W - ball.at(p.release_t_s).p_W).norm() / flight_s,
+        p.speed_m_s, 1e-6);
   }
 }
 

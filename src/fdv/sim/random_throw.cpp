@@ -17,13 +17,12 @@
 namespace fdv::sim {
 namespace {
 
-constexpr double kPi = 3.141592653589793;
-constexpr double kReleaseT = 0.2;   ///< [s] as hover_headon: the scene settles first
-constexpr double kAfterPassS = 0.3; ///< [s] simulated after the closest approach
+constexpr double kReleaseT = 0.2;     ///< [s] as hover_headon: the scene settles first
+constexpr double kAfterPassS = 0.3;   ///< [s] simulated after the closest approach
 constexpr double kThreatMissM = 0.5;  ///< [m] issue 26's safety radius
-constexpr double kHandMinZ = 0.5;     ///< [m] lowest release height above the floor (a thrower's hand)
+constexpr double kHandMinZ = 0.5;  ///< [m] lowest release height above the floor (a thrower's hand)
 constexpr double kMinInViewFraction = 0.5;  ///< "in view for most of its flight" (issue 26)
-constexpr int kMaxAttempts = 1000;            ///< draws before giving up (~5 % are redrawn)
+constexpr int kMaxAttempts = 1000;          ///< draws before giving up (~7 % are redrawn)
 
 struct Resolution {
   int width, height;
@@ -66,8 +65,7 @@ struct Solved {
   double t_c = 0;
 };
 Solved solve_release(const VehicleTrajectory& vehicle, const Eigen::Vector3d& g,
-                     const Eigen::Vector3d& p0, double t_r, double speed, double miss,
-                     double phi) {
+                     const Eigen::Vector3d& p0, double t_r, double speed, double miss, double phi) {
   const Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
   Eigen::Vector3d toward = (p0 - vehicle.at(t_r).p_W).normalized();  // from vehicle to ball
   double T = (p0 - vehicle.at(t_r).p_W).norm() / speed;
@@ -103,7 +101,8 @@ double in_view_fraction(const ScenarioConfig& c, const VehicleTrajectory& vehicl
         p.origin_W_m + p.velocity_W_m_s * tau + 0.5 * c.gravity_W_m_s2 * tau * tau;
     const BodyState b = vehicle.at(p.release_t_s + tau);
     const Eigen::Matrix3d R_W_E = b.R_W_B * calib.T_B_E.linear();
-    const Eigen::Vector3d X = R_W_E.transpose() * (ball - (b.p_W + b.R_W_B * calib.T_B_E.translation()));
+    const Eigen::Vector3d X =
+        R_W_E.transpose() * (ball - (b.p_W + b.R_W_B * calib.T_B_E.translation()));
     if (X.z() <= 0 || X.head<2>().norm() / X.z() > r_max) continue;
     in_view += calib.event_camera.in_image(calib.event_camera.project(X)) ? 1 : 0;
   }
@@ -124,6 +123,7 @@ void visit_fields(P& p, F&& f) {
   f("release_t_s", p.release_t_s);
   f("closest_approach_t_s", p.closest_approach_t_s);
   f("in_view_fraction", p.in_view_fraction);
+  f("draws", p.draws);
   f("origin_W_m", p.origin_W_m);
   f("velocity_W_m_s", p.velocity_W_m_s);
   f("diameter_m", p.diameter_m);
@@ -176,8 +176,8 @@ RandomThrowParameters sample_random_throw(std::uint64_t seed) {
   // (speed, distance) pairs are drawn again (docs/SIMULATOR.md, "random_throw").
   for (int attempt = 0;; ++attempt) {
     if (attempt == kMaxAttempts)
-      throw ConfigError(fmt::format("random_throw seed {}: no throw in view after {} draws", seed,
-                                    kMaxAttempts));
+      throw ConfigError(
+          fmt::format("random_throw seed {}: no throw in view after {} draws", seed, kMaxAttempts));
     p.speed_m_s = rng.uniform(5.0, 15.0);
     p.distance_m = rng.uniform(4.0, 12.0);
     p.release_azimuth_deg = rng.uniform(-15.0, 15.0);
@@ -188,19 +188,20 @@ RandomThrowParameters sample_random_throw(std::uint64_t seed) {
     const double az = p.release_azimuth_deg * kDegToRad;
     const double T = p.distance_m / (p.speed_m_s + p.vehicle_speed_m_s * std::cos(az));
     const double sweep = 9.81 * T * T / (2.0 * p.distance_m);
-    const double lowest = std::max(-20.0 * kDegToRad,
-                                   std::asin(std::max(-1.0, (kHandMinZ - body.z()) / p.distance_m)));
+    const double lowest = std::max(
+        -20.0 * kDegToRad, std::asin(std::max(-1.0, (kHandMinZ - body.z()) / p.distance_m)));
     const double el = std::max(std::atan(-0.5 * sweep) + elevation_jitter_deg * kDegToRad, lowest);
     p.release_elevation_deg = el / kDegToRad;
     const Eigen::Vector3d direction(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az),
                                     std::sin(el));
     p.origin_W_m = body + p.distance_m * direction;
-    const Solved s = solve_release(vehicle, c.gravity_W_m_s2, p.origin_W_m, p.release_t_s,
-                                   p.speed_m_s, p.miss_distance_m,
-                                   p.offset_direction_deg * kDegToRad);
+    const Solved s =
+        solve_release(vehicle, c.gravity_W_m_s2, p.origin_W_m, p.release_t_s, p.speed_m_s,
+                      p.miss_distance_m, p.offset_direction_deg * kDegToRad);
     p.velocity_W_m_s = s.v0;
     p.closest_approach_t_s = s.t_c;
     p.in_view_fraction = in_view_fraction(c, vehicle, p);
+    p.draws = attempt + 1;
     if (p.in_view_fraction >= kMinInViewFraction) break;
   }
   p.duration_s = std::ceil((p.closest_approach_t_s + kAfterPassS) * 20.0) / 20.0;

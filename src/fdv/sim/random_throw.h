@@ -11,14 +11,13 @@
 /// scripted path (vibration and wander included), with no manoeuvre: the ball is released so
 /// that this holds exactly (to solver precision, < 1 mm), gravity and the vehicle's motion
 /// included. Pure functions of the seed; thread-safe.
+#include <yaml-cpp/yaml.h>
+
+#include <Eigen/Core>
 #include <cstdint>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
-
-#include <yaml-cpp/yaml.h>
-
-#include <Eigen/Core>
 
 #include "fdv/sim/scenario_config.h"
 
@@ -31,22 +30,26 @@ struct RandomThrowParameters {
   double distance_m = 0;       ///< [m] release point to the body origin at release
   double miss_distance_m = 0;  ///< [m] drawn closest approach without a manoeuvre
   bool threat = false;         ///< the Bernoulli draw: miss drawn in [0, 0.5) m, else [0.5, 1.5)
-  double offset_direction_deg = 0;  ///< [deg] miss direction around the line of flight, 0 left, 90 up
-  double release_azimuth_deg = 0;   ///< [deg] release direction from the body, left of the heading
-  double release_elevation_deg = 0; ///< [deg] idem, above the horizon
-  double release_t_s = 0.2;         ///< [s]
-  double closest_approach_t_s = 0;  ///< [s] when the ball is nearest the body origin
-  double in_view_fraction = 0;      ///< share of release..closest approach with the centre in the image
+  /// [deg] direction of the miss about the relative velocity at the pass: 0 left, 90 above
+  double offset_direction_deg = 0;
+  double release_azimuth_deg = 0;    ///< [deg] release direction from the body, left of the heading
+  double release_elevation_deg = 0;  ///< [deg] idem, above the horizon
+  double release_t_s = 0.2;          ///< [s]
+  double closest_approach_t_s = 0;   ///< [s] when the ball is nearest the body origin
+  /// share of the time from release to closest approach with the ball's centre in the image
+  double in_view_fraction = 0;
+  /// speed / distance / direction draws it took to get a throw in view (1: the first; see docs)
+  int draws = 1;
   Eigen::Vector3d origin_W_m = Eigen::Vector3d::Zero();      ///< release position
   Eigen::Vector3d velocity_W_m_s = Eigen::Vector3d::Zero();  ///< release velocity
-  double diameter_m = 0;            ///< [m] ball diameter
+  double diameter_m = 0;                                     ///< [m] ball diameter
   // --- the vehicle
   std::string vehicle_motion = "hover";  ///< "hover" or "forward"
   double vehicle_speed_m_s = 0;          ///< [m/s] forward speed (0 when hovering)
   // --- the scene and the sensor
-  std::string lighting = "bright";  ///< "bright" or "dim"
-  double illuminance_lux = 500;     ///< [lux]
-  std::string texture = "panels";   ///< "panels" (the presets' layout) or "bare" (room only)
+  std::string lighting = "bright";     ///< "bright" or "dim"
+  double illuminance_lux = 500;        ///< [lux]
+  std::string texture = "panels";      ///< "panels" (the presets' layout) or "bare" (room only)
   std::string resolution = "640x480";  ///< event sensor WxH, the preset set's field of view
   int width = 640, height = 480;       ///< [px] the same
   double duration_s = 0;               ///< [s] closest approach + 0.3 s, rounded up to 50 ms
