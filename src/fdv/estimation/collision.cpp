@@ -58,6 +58,10 @@ std::string PredictionOptions::validate() const {
   if (!(horizon_s > 0) || !std::isfinite(horizon_s)) return "horizon_s must be > 0";
   if (!(safety_radius_m >= 0) || !std::isfinite(safety_radius_m))
     return "safety_radius_m must be >= 0";
+  if (!(odometry_position_sigma_m >= 0) || !std::isfinite(odometry_position_sigma_m))
+    return "odometry_position_sigma_m must be >= 0";
+  if (!(odometry_velocity_sigma_m_s >= 0) || !std::isfinite(odometry_velocity_sigma_m_s))
+    return "odometry_velocity_sigma_m_s must be >= 0";
   return {};
 }
 

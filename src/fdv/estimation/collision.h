@@ -29,6 +29,11 @@ struct PredictionOptions {
   /// Radius of the sphere around the body origin that counts as contact [m]: the paper's vehicle
   /// is 0.57 m across (half-diagonal ~0.4 m) plus a ball radius and margin.
   double safety_radius_m = 0.5;
+  /// The odometry's assumed std of position [m] and velocity [m/s] per axis, for the collision
+  /// risk (collision_risk.h): the datasets' odometry messages carry no covariance; a few cm and
+  /// 0.1 m/s is the order of a visual-inertial odometry's drift over the seconds of a throw.
+  double odometry_position_sigma_m = 0.05;
+  double odometry_velocity_sigma_m_s = 0.1;
   std::string validate() const;
 };
 
@@ -37,6 +42,9 @@ template <class V>
 void describe(V& v, PredictionOptions& o) {
   v("horizon_s", o.horizon_s, "s", "how far ahead to look");
   v("safety_radius_m", o.safety_radius_m, "m", "radius around the body origin that counts as contact");
+  v("odometry_position_sigma_m", o.odometry_position_sigma_m, "m", "the odometry's assumed position std per axis");
+  v("odometry_velocity_sigma_m_s", o.odometry_velocity_sigma_m_s, "m/s",
+    "the odometry's assumed velocity std per axis");
 }
 
 struct ClosestApproach {
