@@ -317,7 +317,7 @@ TEST(CollisionRisk, LinearPropagationAgainstSampling) {
   const Matrix6d veh = diagonal6(0.05, 0.1);
   std::vector<Case> cases = {
       {"dead centre", make_throw(Eigen::Vector3d::Zero(), 0.6, rel_v, est, veh)},
-      {"offset 1 sigma", make_throw(miss_normal_to(rel_v, 0.6, 0.65, 0.5), 0.6, rel_v, est, veh)},
+      {"offset 0.65 m", make_throw(miss_normal_to(rel_v, 0.6, 0.65, 0.5), 0.6, rel_v, est, veh)},
       {"clear miss", make_throw(miss_normal_to(rel_v, 0.6, 1.5, -1.0), 0.6, rel_v, est, veh)},
       {"vehicle moving, yawed", make_throw(miss_normal_to(rel_v, 0.5, 0.45, 2.0), 0.5, rel_v, est, veh, {2, 0.5, 0.2}, 1.0)},
       {"vehicle covariance only", make_throw(miss_normal_to(rel_v, 0.6, 0.4, 1.0), 0.6, rel_v, Matrix6d::Zero(),
@@ -418,6 +418,9 @@ TEST(CollisionRisk, BadInputGivesAReason) {
   t = good;
   (*t.estimate.covariance)(2, 2) = std::numeric_limits<double>::infinity();
   EXPECT_EQ(reason(t), "estimate covariance is not finite");
+  t = good;
+  (*t.estimate.covariance)(1, 4) += 0.01;
+  EXPECT_EQ(reason(t), "estimate covariance is not symmetric");
   t = good;
   t.vehicle.odometry.p_W_B.x() = nan;
   EXPECT_EQ(reason(t), "vehicle state (p_W_B, v_W, q_W_B) is not finite");
