@@ -247,6 +247,26 @@ TEST(DodgePlanner, ReplansWhenTheBestDirectionMoves) {
   EXPECT_EQ(replan->maneuver->start_t, at(1.1));
 }
 
+// Near a tie the direction in force stays: a passage 2 cm to the left (dodge right, -y) then 2 cm
+// to the right gains the other side under 0.1 m of expected clearance, so nothing is re-planned;
+// with replan_gain_m 0 the same jitter swings the set-point to the other side.
+TEST(DodgePlanner, KeepsTheDirectionInForceNearATie) {
+  DodgePlanner planner{DodgeOptions{}, kR};
+  const auto first = planner.update(1, threat({0, 0.02, 0}, 0.9, 0.2, 0.9, 1.0), hovering(1.0));
+  ASSERT_TRUE(first);
+  const Eigen::Vector3d a_first = first->maneuver->acceleration_W;
+  const DodgePlan other_side = plan_dodge(threat({0, -0.02, 0}, 0.85, 0.2, 0.9, 1.05), hovering(1.05), DodgeOptions{}, kR);
+  EXPECT_LT(other_side.maneuver.acceleration_W.dot(a_first), 0.0);  // the best alone is the other side
+  EXPECT_FALSE(planner.update(1, threat({0, -0.02, 0}, 0.85, 0.2, 0.9, 1.05), hovering(1.05)));
+  DodgeOptions no_hysteresis;
+  no_hysteresis.replan_gain_m = 0;
+  DodgePlanner swinging{no_hysteresis, kR};
+  ASSERT_TRUE(swinging.update(1, threat({0, 0.02, 0}, 0.9, 0.2, 0.9, 1.0), hovering(1.0)));
+  const auto swung = swinging.update(1, threat({0, -0.02, 0}, 0.85, 0.2, 0.9, 1.05), hovering(1.05));
+  ASSERT_TRUE(swung);
+  EXPECT_EQ(swung->action, DodgeAction::kReplan);
+}
+
 // Two tracks: the planner acts on the more probable one and ignores the less probable.
 TEST(DodgePlanner, TheMostThreateningTrackWins) {
   DodgePlanner planner{DodgeOptions{}, kR};

@@ -138,6 +138,8 @@ std::string DodgeOptions::validate() const {
     if (auto err = bad_duration(key, s); !err.empty()) return err;
   if (!(replan_angle_deg > 0 && replan_angle_deg <= 180))
     return fmt::format("replan_angle_deg must be in (0, 180] (got {})", replan_angle_deg);
+  if (!std::isfinite(replan_gain_m) || replan_gain_m < 0)
+    return fmt::format("replan_gain_m must be finite and >= 0 (got {})", replan_gain_m);
   if (!(replan_probability_step > 0 && replan_probability_step <= 1))
     return fmt::format("replan_probability_step must be in (0, 1] (got {})", replan_probability_step);
   if (directions < 4 || directions > 3600)
@@ -146,7 +148,7 @@ std::string DodgeOptions::validate() const {
 }
 
 DodgePlan plan_dodge(const CollisionRisk& risk, const VehicleState& vehicle, const DodgeOptions& options,
-                     double safety_radius_m) {
+                     double safety_radius_m, const std::optional<Eigen::Vector3d>& in_force) {
   const VehicleLimits& limits = options.limits;
   const ClosestApproach& closest = risk.nominal.closest;
   const double R = safety_radius_m;
@@ -179,6 +181,15 @@ DodgePlan plan_dodge(const CollisionRisk& risk, const VehicleState& vehicle, con
       best_a = candidates[k];
       best_z = best_a.z();
     }
+  }
+  // Hysteresis: the candidate nearest the direction in force stays unless the best beats it by
+  // replan_gain_m.
+  if (in_force && in_force->norm() > 0) {
+    int nearest = 0;
+    for (int k = 1; k < options.directions; ++k)
+      if (candidates[k].normalized().dot(*in_force) > candidates[nearest].normalized().dot(*in_force)) nearest = k;
+    if (candidates[nearest].norm() > 0 && scores[nearest] >= best_score - options.replan_gain_m)
+      best_a = candidates[nearest];
   }
   DodgePlan plan;
   DodgeManeuver& m = plan.maneuver;
@@ -278,7 +289,10 @@ std::optional<DodgeDecision> DodgePlanner::update(int track_id, const CollisionR
     active_.reset();
   if (active_ && active_->committed) return std::nullopt;
 
-  const DodgePlan plan = plan_dodge(risk, vehicle, options_, safety_radius_m_);
+  const DodgePlan plan = plan_dodge(risk, vehicle, options_, safety_radius_m_,
+                                    active_ && active_->track_id == track_id && active_->maneuver
+                                        ? std::optional<Eigen::Vector3d>(active_->maneuver->acceleration_W)
+                                        : std::nullopt);
   auto set = [&](DodgeAction action, std::string reason) {
     DodgeDecision d = decide(action, track_id, risk, t, plan, plan.maneuver, std::move(reason));
     d.committed = plan.commit;

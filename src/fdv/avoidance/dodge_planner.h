@@ -75,6 +75,10 @@ struct DodgeOptions {
   double cancel_probability = 0.05;
   /// Re-plan when the best direction moves by more than this [deg] ...
   double replan_angle_deg = 20.0;
+  /// ... where a new direction is best only when its expected clearance beats that of the
+  /// direction in force by this much [m]: near a tie (a dead-centre throw) the estimate's jitter
+  /// would otherwise swing the set-point from side to side and waste the time it has.
+  double replan_gain_m = 0.1;
   /// ... or the probability changes by at least this since the manoeuvre was set.
   double replan_probability_step = 0.2;
   /// The manoeuvre is held until the nominal closest approach plus this [s].
@@ -95,6 +99,7 @@ void describe(V& v, DodgeOptions& o) {
   v("commit_margin_s", o.commit_margin_s, "s", "commit: t_c <= t_need + this");
   v("cancel_probability", o.cancel_probability, "-", "cancel an uncommitted manoeuvre below this probability");
   v("replan_angle_deg", o.replan_angle_deg, "deg", "re-plan when the best direction moves more than this");
+  v("replan_gain_m", o.replan_gain_m, "m", "a new direction is best only when it adds this much expected clearance");
   v("replan_probability_step", o.replan_probability_step, "-", "re-plan when the probability moves this much");
   v("duration_margin_s", o.duration_margin_s, "s", "hold the set-point until the closest approach + this");
   v("directions", o.directions, "-", "candidate directions in the plane normal to the relative velocity");
@@ -154,8 +159,10 @@ struct DodgePlan {
 
 /// The plan for `risk` at `vehicle` (pure): the manoeuvre maximising the expected clearance over
 /// options.directions candidates, and the trigger figures. `risk` and `vehicle` must be finite.
+/// `in_force`: the acceleration of the manoeuvre in force, if any; its direction is kept unless
+/// the best beats it by options.replan_gain_m.
 DodgePlan plan_dodge(const CollisionRisk& risk, const VehicleState& vehicle, const DodgeOptions& options,
-                     double safety_radius_m);
+                     double safety_radius_m, const std::optional<Eigen::Vector3d>& in_force = std::nullopt);
 
 class DodgePlanner {
  public:
