@@ -25,12 +25,15 @@ namespace {
 struct Approach {
   double t_s = 0, distance_m = 0;
 };
+/// Scanned to 0.5 s past the scene's end: a scene that ends when the ball hits the camera
+/// stops before the closest approach (the trajectories go on).
 Approach closest_approach(const ScenarioConfig& c) {
+  const double end_s = c.duration_s + 0.5;
   const VehicleTrajectory vehicle(c.vehicle, c.seed, c.gravity_W_m_s2);
-  const BallTrajectory ball(c.balls.at(0), vehicle, c.gravity_W_m_s2, c.duration_s);
+  const BallTrajectory ball(c.balls.at(0), vehicle, c.gravity_W_m_s2, end_s);
   const auto distance = [&](double t) { return (ball.at(t).p_W - vehicle.at(t).p_W).norm(); };
   Approach best{0, distance(0)};
-  for (double t = 0.001; t <= c.duration_s; t += 0.001)
+  for (double t = 0.001; t <= end_s; t += 0.001)
     if (const double d = distance(t); d < best.distance_m) best = {t, d};
   double a = best.t_s - 0.001, b = best.t_s + 0.001;
   const double r = 0.5 * (std::sqrt(5.0) - 1.0);
@@ -94,8 +97,16 @@ TEST(RandomThrow, ParametersStayInTheirRanges) {
     EXPECT_EQ(resolutions.count(p.resolution), 1u) << p.resolution;
     EXPECT_EQ(p.resolution, std::to_string(p.width) + "x" + std::to_string(p.height));
     EXPECT_DOUBLE_EQ(p.release_t_s, 0.2);
-    EXPECT_GE(p.duration_s, p.closest_approach_t_s + 0.3);
-    EXPECT_LT(p.duration_s, p.closest_approach_t_s + 0.3 + 0.05 + 1e-9);
+    EXPECT_GE(p.draws, 1);
+    if (p.contact_t_s > 0) {  // hits the camera: ends there
+      EXPECT_GT(p.contact_t_s, p.release_t_s);
+      EXPECT_LE(p.contact_t_s, p.closest_approach_t_s);
+      EXPECT_LE(p.duration_s, p.contact_t_s);
+      EXPECT_GT(p.duration_s, p.contact_t_s - 0.005);
+    } else {
+      EXPECT_GE(p.duration_s, p.closest_approach_t_s + 0.3);
+      EXPECT_LT(p.duration_s, p.closest_approach_t_s + 0.3 + 0.05 + 1e-9);
+    }
 
     // The configuration carries them: ball size, sensor, light, vehicle, release state.
     const ScenarioConfig c = make_preset("random_throw", seed);
@@ -158,6 +169,37 @@ TEST(RandomThrow, RealisedMissIsTheDrawnOne) {
     EXPECT_NEAR(a.distance_m, p.miss_distance_m, 1e-4) << "seed " << seed << ": solver precision";
     EXPECT_NEAR(a.t_s, p.closest_approach_t_s, 1e-3) << "seed " << seed;
   }
+}
+
+TEST(RandomThrow, SceneEndsWhenTheBallHitsTheCamera) {
+  // contact_t_s: the ball's surface 0.1 m from the camera centre, first reached then; never
+  // reached by the others (1 ms scan over the whole flight on the simulator's trajectories).
+  int hits = 0;
+  for (std::uint64_t seed = 1; seed <= 100; ++seed) {
+    SCOPED_TRACE(seed);
+    const RandomThrowParameters p = sample_random_throw(seed);
+    const ScenarioConfig c = make_preset("random_throw", seed);
+    const double end_s = p.closest_approach_t_s + 0.3;
+    const VehicleTrajectory vehicle(c.vehicle, c.seed, c.gravity_W_m_s2);
+    const BallTrajectory ball(c.balls[0], vehicle, c.gravity_W_m_s2, end_s);
+    const auto clearance = [&](double t) {
+      const BodyState b = vehicle.at(t);
+      return (ball.at(t).p_W - (b.p_W + b.R_W_B * c.event_camera.position_B_m)).norm() -
+             c.balls[0].radius_m;
+    };
+    double first = 0;
+    for (double t = p.release_t_s; t <= end_s && first == 0; t += 0.001)
+      if (clearance(t) <= 0.1) first = t;
+    if (p.contact_t_s > 0) {
+      ++hits;
+      EXPECT_NEAR(clearance(p.contact_t_s), 0.1, 1e-3);
+      EXPECT_NEAR(first, p.contact_t_s, 0.0011);
+      EXPECT_LE(c.duration_s, p.contact_t_s);
+    } else {
+      EXPECT_EQ(first, 0.0) << "reaches the camera at " << first << " s unnoticed";
+    }
+  }
+  EXPECT_GT(hits, 0) << "some threats hit the camera";
 }
 
 TEST(RandomThrow, BallStartsInViewAndComesAtTheVehicle) {

@@ -52,7 +52,11 @@ struct RandomThrowParameters {
   std::string texture = "panels";      ///< "panels" (the presets' layout) or "bare" (room only)
   std::string resolution = "640x480";  ///< event sensor WxH, the preset set's field of view
   int width = 640, height = 480;       ///< [px] the same
-  double duration_s = 0;               ///< [s] closest approach + 0.3 s, rounded up to 50 ms
+  /// [s] when the ball's surface first comes within 0.1 m of the event camera's centre (it hits
+  /// the vehicle's front; the scene ends there); 0 for a ball that does not
+  double contact_t_s = 0;
+  /// [s] closest approach + 0.3 s rounded up to 50 ms, or contact_t_s rounded down to 5 ms
+  double duration_s = 0;
 };
 
 /// The parameters seed `seed` draws (the same ones make_preset("random_throw", seed) uses).
