@@ -124,6 +124,7 @@ void run_recording(const RunArgs& args) {
   callbacks.on_depth = [&](const DepthResult& d) { out.depth(d); };
   callbacks.on_estimate = [&](const EstimateResult& e) { out.estimate(e); };
   callbacks.on_prediction = [&](const PredictionResult& p) { out.prediction(p); };
+  callbacks.on_dodge = [&](const DodgeDecision& d) { out.dodge(d); };
   callbacks.on_warning = warn;
   ReadReport reader_report;
   const PerceptionCounters c = replay(std::move(reader), calib, options, callbacks, &reader_report);

@@ -8,7 +8,7 @@ the real recordings, and compares what it wrote with a stored run, field by fiel
 Runs: the training seeds 1-4 of fast_forward, swing, hover_headon and
 scene2_ball, simulated by the same build (a change to the simulator shows as a change of the
 outputs), and every recording in ../shared/data/real (the DAVIS346 throw also with its
-calibration). Compared: detections.jsonl, depth.jsonl, trajectories.jsonl, predictions.jsonl
+calibration). Compared: detections.jsonl, depth.jsonl, trajectories.jsonl, predictions.jsonl, dodge.jsonl
 line by line, and summary.json without its timing (`timing_ms`) and input path; not timing.csv
 (wall-clock). Numbers must be equal to the bit: the pipeline is deterministic for a given build and
 thread count.
@@ -29,7 +29,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 REAL = Path("..") / "shared" / "data" / "real"
 STORED = Path("tests") / "reference_outputs"
-JSONL = ["detections.jsonl", "depth.jsonl", "trajectories.jsonl", "predictions.jsonl"]
+JSONL = ["detections.jsonl", "depth.jsonl", "trajectories.jsonl", "predictions.jsonl", "dodge.jsonl"]
 SUMMARY_EXCLUDED = {"timing_ms", "input"}
 TRAINING_SCENARIOS = ["fast_forward", "swing", "hover_headon", "scene2_ball"]
 TRAINING_SEEDS = [1, 2, 3, 4]

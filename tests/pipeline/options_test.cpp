@@ -559,7 +559,7 @@ struct DocsTable {
 constexpr DocsTable kDocsTables[] = {
     {"compensation", "DETECTION.md"},     {"detector", "DETECTION.md"},  {"depth_registration", "DETECTION.md"},
     {"", "ESTIMATION.md"},                {"tracking", "ESTIMATION.md"}, {"depth_segmentation", "ESTIMATION.md"},
-    {"estimation", "ESTIMATION.md"},      {"prediction", "ESTIMATION.md"},
+    {"estimation", "ESTIMATION.md"},      {"prediction", "ESTIMATION.md"}, {"dodge", "AVOIDANCE.md"},
 };
 
 std::string marker(const std::string& section, const char* end) {

@@ -42,6 +42,7 @@ struct Collected {
   std::vector<std::pair<int, DepthObservation>> depth;  // accepted observations and their track
   std::vector<std::pair<int, TimeNs>> depth_segmented;   // every segmentation: track, frame time
   std::vector<std::string> warnings;
+  std::vector<DodgeDecision> dodge;
   PerceptionCounters counters;  // at the end of the run
 };
 
@@ -67,6 +68,7 @@ PerceptionCallbacks collect(Collected& c) {
     if (e.mode == EstimatorMode::kFusion) c.fusion_t.push_back(e.t);
   };
   cb.on_warning = [&c](const std::string& w) { c.warnings.push_back(w); };
+  cb.on_dodge = [&c](const DodgeDecision& d) { c.dodge.push_back(d); };
   return cb;
 }
 
@@ -379,6 +381,45 @@ TEST(Perception, TheTrajectoryEstimateKeepsAHeadOnBallInOneTrack) {
   EXPECT_GE(tracks(without), 3u);  // the scenario splits the ball's track without the aid
   EXPECT_LT(tracks(with), tracks(without));
   EXPECT_GE(longest(with), longest(without) + 4);
+}
+
+// The dodge decisions (PerceptionOptions::dodge_from): made on usable estimates only, at the
+// time the estimate exists, counted; none when switched off; with the covariance ignored the
+// probability is the hard threshold's 0 or 1; and like every result, independent of the streams'
+// interleaving within the lateness bound.
+TEST(Perception, DodgeDecisionsFollowTheirSource) {
+  const SimulatedThrow& s = simulated_throw();
+  // The ball passes the camera a few metres away: a 5 m safety sphere makes it a threat.
+  PerceptionOptions wide;
+  wide.prediction.safety_radius_m = 5.0;
+  const Collected fusion = run(0, s, wide);
+  ASSERT_FALSE(fusion.dodge.empty());
+  EXPECT_EQ(fusion.counters.dodge_decisions, fusion.dodge.size());
+  TimeNs first_usable = std::numeric_limits<TimeNs>::max();
+  for (std::size_t i = 0; i < fusion.fusion.size(); ++i)
+    if (fusion.fusion[i].usable) first_usable = std::min(first_usable, fusion.fusion_t[i]);
+  for (const DodgeDecision& d : fusion.dodge) {
+    EXPECT_GE(d.t, first_usable);
+    EXPECT_GE(d.effective_t, d.t);
+    EXPECT_NE(d.action, DodgeAction::kRefused) << d.reason;
+  }
+  EXPECT_EQ(fusion.dodge.front().action, DodgeAction::kDodge);
+  const Collected late = run(30 * kNsPerMs, s, wide);
+  ASSERT_EQ(late.dodge.size(), fusion.dodge.size());
+  for (std::size_t i = 0; i < late.dodge.size(); ++i) {
+    EXPECT_EQ(late.dodge[i].t, fusion.dodge[i].t);
+    EXPECT_EQ(late.dodge[i].reason, fusion.dodge[i].reason);
+  }
+
+  PerceptionOptions none = wide, point = wide;
+  none.dodge_from = DodgeSource::kNone;
+  point.dodge_from = DodgeSource::kFusionPointEstimate;
+  const Collected off = run(0, s, none);
+  EXPECT_TRUE(off.dodge.empty());
+  EXPECT_EQ(off.counters.dodge_decisions, 0u);
+  const Collected hard = run(0, s, point);
+  ASSERT_FALSE(hard.dodge.empty());
+  for (const DodgeDecision& d : hard.dodge) EXPECT_TRUE(d.probability == 0.0 || d.probability == 1.0) << d.probability;
 }
 
 TEST(Perception, CountersOfASmallSyntheticRunMatchAHandCount) {

@@ -448,5 +448,67 @@ TEST(ResultsReader, MalformedLinesAreErrorsNamingFileAndLine) {
   EXPECT_TRUE(read_timing(empty).empty());  // results of an fdv before timing.csv
 }
 
+// dodge.jsonl: a decision with a manoeuvre and a cancel without one survive the writer and come
+// back as the decisions they were (times to the nanosecond the JSON's seconds allow); an unknown
+// action is an error naming the line.
+TEST(ResultsWriter, DodgeDecisionsRoundTrip) {
+  const std::string dir = test::scratch_dir("results_dodge");
+  DodgeDecision dodge;
+  dodge.t = 450 * kNsPerMs;
+  dodge.effective_t = 500 * kNsPerMs;
+  dodge.track_id = 3;
+  dodge.action = DodgeAction::kDodge;
+  dodge.probability = 0.625;
+  dodge.time_to_contact_s = 0.5;
+  dodge.miss_distance_m = 0.25;
+  dodge.reason = "p 0.625 >= act 0.50";
+  dodge.maneuver = DodgeManeuver{{1.5, -2.25, 9.5}, 500 * kNsPerMs, 0.75, 1.125, 0.0625};
+  DodgeDecision cancel = dodge;
+  cancel.t = 475 * kNsPerMs;
+  cancel.effective_t = 525 * kNsPerMs;
+  cancel.action = DodgeAction::kCancel;
+  cancel.time_to_contact_s = std::numeric_limits<double>::infinity();  // the mean misses
+  cancel.maneuver.reset();
+  cancel.committed = false;
+  {
+    ResultsWriter out(dir);
+    out.dodge(dodge);
+    out.dodge(cancel);
+    out.finish(RunSummary{});
+  }
+  const std::vector<DodgeRow> rows = read_dodge(dir);
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[0].action, "dodge");
+  EXPECT_FALSE(rows[1].time_to_contact_s.has_value());
+  const std::vector<DodgeDecision> back = dodge_decisions(rows);
+  ASSERT_EQ(back.size(), 2u);
+  for (std::size_t i = 0; i < 2; ++i) {
+    const DodgeDecision& want = i == 0 ? dodge : cancel;
+    EXPECT_EQ(back[i].t, want.t);
+    EXPECT_EQ(back[i].effective_t, want.effective_t);
+    EXPECT_EQ(back[i].track_id, want.track_id);
+    EXPECT_EQ(back[i].action, want.action);
+    EXPECT_EQ(back[i].probability, want.probability);
+    EXPECT_EQ(back[i].time_to_contact_s, want.time_to_contact_s);
+    EXPECT_EQ(back[i].miss_distance_m, want.miss_distance_m);
+    EXPECT_EQ(back[i].reason, want.reason);
+    ASSERT_EQ(back[i].maneuver.has_value(), want.maneuver.has_value());
+  }
+  const DodgeManeuver& m = *back[0].maneuver;
+  EXPECT_EQ(m.acceleration_W, dodge.maneuver->acceleration_W);
+  EXPECT_EQ(m.start_t, dodge.maneuver->start_t);
+  EXPECT_EQ(m.duration_s, 0.75);
+  EXPECT_EQ(m.expected_clearance_m, 1.125);
+  EXPECT_EQ(m.probability_after, 0.0625);
+
+  write(dir + "/dodge.jsonl", R"({"t":0.1,"action":"dodge"})" "\n" R"({"t":0.2,"action":"jump"})" "\n");
+  try {
+    dodge_decisions(read_dodge(dir));
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("line 2"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace fdv

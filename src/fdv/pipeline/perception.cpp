@@ -31,6 +31,16 @@ void trim_history(std::vector<T>& v) {
 
 }  // namespace
 
+const char* to_string(DodgeSource s) {
+  switch (s) {
+    case DodgeSource::kFusion: return "fusion";
+    case DodgeSource::kMonocular: return "monocular";
+    case DodgeSource::kFusionPointEstimate: return "fusion_point_estimate";
+    case DodgeSource::kNone: return "none";
+  }
+  return "?";
+}
+
 std::string PerceptionOptions::validate() const {
   // Window and top-level messages name the YAML keys (fdv/pipeline/options_yaml.h renames the
   // windower's window_ns to window_ms).
@@ -43,6 +53,7 @@ std::string PerceptionOptions::validate() const {
       {"tracking", tracking.validate()},
       {"depth_segmentation", depth_segmentation.validate()},
       {"prediction", prediction.validate()},
+      {"dodge", dodge.validate()},
   };
   for (const auto& [name, why] : parts)
     if (!why.empty()) return std::string(name) + ": " + why;
@@ -94,6 +105,8 @@ Perception::Perception(const Calibration& calibration, PerceptionOptions options
       detector_(options_.detection, calibration.event_camera),
       tracker_(options_.tracking) {
   if (calibration.depth_camera) registrar_.emplace(calibration, options_.depth_registration);
+  if (options_.estimate_trajectories && options_.dodge_from != DodgeSource::kNone)
+    planner_.emplace(options_.dodge, options_.prediction.safety_radius_m);
 }
 
 Perception::~Perception() = default;
@@ -474,13 +487,49 @@ void Perception::estimate(int track_id, TimeNs t) {
     return &est;
   };
   const TrajectoryEstimate* fused = solve_and_emit(e.fusion, EstimatorMode::kFusion, e.fusion_new);
-  if (e.mono) solve_and_emit(*e.mono, EstimatorMode::kMonocular, e.mono_new);
+  const TrajectoryEstimate* mono = e.mono ? solve_and_emit(*e.mono, EstimatorMode::kMonocular, e.mono_new) : nullptr;
+  const TrajectoryEstimate* dodge_on = options_.dodge_from == DodgeSource::kMonocular ? mono : fused;
+  if (dodge_on && dodge_on->usable) decide_dodge(track_id, *dodge_on, t);
   if (fused && fused->method == EstimateMethod::kEventOnly && counters_.depth_frames == 0)
     warn_once("no depth", "no depth frames: 3D estimates are event-only, their range observable only through "
                           "gravity (docs/ESTIMATION.md)");
   if (!fused || !fused->usable || !callbacks_.on_prediction) return;
   if (const auto vehicle = vehicle_state(t))
     callbacks_.on_prediction({t, track_id, predict_collision(fused->trajectory, *vehicle, options_.prediction)});
+}
+
+// The dodge (docs/AVOIDANCE.md): the risk of the new estimate against the vehicle's state at the
+// time the result exists (a window's estimate exists at the window's end; a depth frame's once the
+// windows up to it are processed), then the planner. A refusal is reported once per track and reason.
+void Perception::decide_dodge(int track_id, const TrajectoryEstimate& estimate, TimeNs t) {
+  if (!planner_) return;
+  const TimeNs now = std::max(t, processed_until_);
+  const auto odometry = vehicle_state(now);
+  if (!odometry) return;
+  VehicleState vehicle{*odometry, vehicle_state_covariance(options_.prediction)};
+  RiskAssessment assessed;
+  if (options_.dodge_from == DodgeSource::kFusionPointEstimate) {
+    TrajectoryEstimate mean_only = estimate;
+    mean_only.covariance = Eigen::Matrix<double, 6, 6>::Zero();
+    vehicle.covariance.setZero();
+    assessed = assess_collision_risk(mean_only, vehicle, options_.prediction);
+  } else {
+    assessed = assess_collision_risk(estimate, vehicle, options_.prediction);
+  }
+  std::optional<DodgeDecision> decision;
+  if (assessed.risk) {
+    decision = planner_->update(track_id, *assessed.risk, vehicle);
+  } else if (refused_[track_id] != assessed.reason) {
+    refused_[track_id] = assessed.reason;
+    decision.emplace();
+    decision->t = decision->effective_t = now;
+    decision->track_id = track_id;
+    decision->action = DodgeAction::kRefused;
+    decision->reason = assessed.reason;
+  }
+  if (!decision) return;
+  ++counters_.dodge_decisions;
+  if (callbacks_.on_dodge) callbacks_.on_dodge(*decision);
 }
 
 }  // namespace fdv

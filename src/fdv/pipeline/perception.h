@@ -35,6 +35,7 @@
 /// arrival if they already are. A depth frame that arrives late is therefore used late.
 /// Callbacks run on the caller's thread, inside the push/finish call; references passed to them are
 /// valid only during the call. Not thread-safe: one instance per thread.
+#include <array>
 #include <deque>
 #include <functional>
 #include <map>
@@ -44,17 +45,31 @@
 #include <string>
 #include <vector>
 
+#include "fdv/avoidance/dodge_planner.h"
 #include "fdv/compensation/compensator.h"
 #include "fdv/core/calibration.h"
 #include "fdv/depth/depth_registration.h"
 #include "fdv/depth/depth_segmentation.h"
 #include "fdv/detection/detector.h"
 #include "fdv/estimation/collision.h"
+#include "fdv/estimation/collision_risk.h"
 #include "fdv/estimation/trajectory_estimator.h"
 #include "fdv/pipeline/event_windower.h"
 #include "fdv/tracking/tracker.h"
 
 namespace fdv {
+
+/// Which estimate the dodge decisions are made on (PerceptionOptions::dodge_from).
+enum class DodgeSource {
+  kFusion,               ///< the fusion estimate and its covariance (the paper's system)
+  kMonocular,            ///< the monocular baseline's estimate and its covariance
+  kFusionPointEstimate,  ///< the fusion estimate, covariance ignored: a hard threshold on the mean
+  kNone,                 ///< no dodge decisions
+};
+const char* to_string(DodgeSource s);
+constexpr std::array<DodgeSource, 4> all_values(DodgeSource) {
+  return {DodgeSource::kFusion, DodgeSource::kMonocular, DodgeSource::kFusionPointEstimate, DodgeSource::kNone};
+}
 
 struct PerceptionOptions {
   EventWindowerOptions windows;
@@ -81,6 +96,10 @@ struct PerceptionOptions {
   /// delay (docs/ESTIMATION.md §2, "The pipeline's query").
   bool depth_since_first_detection = true;
   PredictionOptions prediction;
+  /// Dodge decisions (fdv/avoidance, docs/AVOIDANCE.md) on the collision risk of each usable
+  /// estimate of the source's kind, at the time the estimate is made.
+  DodgeSource dodge_from = DodgeSource::kFusion;
+  DodgeOptions dodge;
   /// How long (stream time) a completed window may wait for IMU and odometry to catch up [ns].
   TimeNs max_lateness_ns = 50 * kNsPerMs;
   /// Odometry extrapolation allowed when a pose is needed beyond the newest sample [ns].
@@ -129,7 +148,10 @@ void describe(V& v, PerceptionOptions& o) {
               if (e.event_focal_px == 0) e.event_focal_px = 1.0;
               return e.validate();
             });
-  v.section("prediction", o.prediction, "collision prediction");
+  v.section("prediction", o.prediction, "collision prediction and risk");
+  v("dodge_from", o.dodge_from, "-",
+    "estimate the dodge decisions use: fusion, monocular, fusion_point_estimate (covariance ignored), none");
+  v.section("dodge", o.dodge, "dodge decision: vehicle limits, trigger policy (docs/AVOIDANCE.md)");
 }
 
 /// Wall-clock time of each stage of one window [ms] (steady clock).
@@ -187,6 +209,8 @@ struct PerceptionCallbacks {
   std::function<void(const DepthResult&)> on_depth;
   std::function<void(const EstimateResult&)> on_estimate;
   std::function<void(const PredictionResult&)> on_prediction;
+  /// Each dodge decision (trigger, re-plan, commit, cancel, refusal) of PerceptionOptions::dodge_from.
+  std::function<void(const DodgeDecision&)> on_dodge;
   /// Once-per-cause notices (e.g. "no odometry: 3D estimation skipped").
   std::function<void(const std::string&)> on_warning;
 };
@@ -219,6 +243,7 @@ struct PerceptionCounters {
   std::uint64_t odometry = 0, odometry_out_of_order = 0;
   std::uint64_t depth_frames = 0, depth_rejected_registration = 0, depth_observations = 0;
   std::uint64_t estimates = 0;
+  std::uint64_t dodge_decisions = 0;  ///< every on_dodge decision, refusals included
   /// Counts one processed window (Perception does, before on_window).
   void count_window(const WindowResult& w);
 };
@@ -284,6 +309,9 @@ class Perception {
   /// Every 3D solve starts here (after a window's event observations, after a depth observation):
   /// nothing unless estimate_trajectories.
   void estimate(int track_id, TimeNs t);
+  /// The dodge decision on one track's new estimate (dodge_from's kind), made at stream time
+  /// max(t, the last processed window's end): when the result exists.
+  void decide_dodge(int track_id, const TrajectoryEstimate& estimate, TimeNs t);
   std::optional<Eigen::Isometry3d> camera_pose(TimeNs t) const;
   std::optional<OdometrySample> vehicle_state(TimeNs t) const;
   TrackEstimators& estimators_for(int track_id);
@@ -311,6 +339,8 @@ class Perception {
   std::vector<TrackerDetection> tracker_inputs_;  ///< per window, reused: the tracker's input
   std::vector<ExternalGate> vouched_;   ///< per window, reused (estimate_aided_association)
   std::map<int, TrackEstimators> estimators_;
+  std::optional<DodgePlanner> planner_;  ///< none when dodge_from is none
+  std::map<int, std::string> refused_;   ///< per track, the last refusal reason reported
   TimeNs stream_time_ = std::numeric_limits<TimeNs>::min();
   TimeNs processed_until_ = std::numeric_limits<TimeNs>::min();  ///< t_end of the last window done
   std::vector<std::string> warned_;

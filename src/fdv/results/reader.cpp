@@ -2,8 +2,10 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 
 #include "fdv/core/error.h"
@@ -54,6 +56,10 @@ std::vector<TrajectoryRow> read_trajectories(const std::string& results_dir) {
 
 std::vector<PredictionRow> read_predictions(const std::string& results_dir) {
   return read_lines<PredictionRow>(results_dir + "/" + kPredictionsFile, false);
+}
+
+std::vector<DodgeRow> read_dodge(const std::string& results_dir) {
+  return read_lines<DodgeRow>(results_dir + "/" + kDodgeFile, false);
 }
 
 std::vector<TumPose> read_tum(const std::string& path) {
@@ -129,6 +135,34 @@ std::vector<WindowDetections> window_detections(const std::vector<WindowRow>& ro
       w.detections.push_back({from_seconds(d.t_s), d.center, d.track, d.partial,
                               d.visible_fraction, d.center_full});
     out.push_back(std::move(w));
+  }
+  return out;
+}
+
+std::vector<DodgeDecision> dodge_decisions(const std::vector<DodgeRow>& rows) {
+  constexpr DodgeAction kActions[] = {DodgeAction::kDodge, DodgeAction::kReplan, DodgeAction::kCommit,
+                                      DodgeAction::kCancel, DodgeAction::kRefused};
+  std::vector<DodgeDecision> out;
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const DodgeRow& r = rows[i];
+    DodgeDecision d;
+    const auto* action = std::find_if(std::begin(kActions), std::end(kActions),
+                                      [&](DodgeAction a) { return r.action == to_string(a); });
+    if (action == std::end(kActions))
+      throw InputError(kDodgeFile, "line " + std::to_string(i + 1), "unknown action '" + r.action + "'");
+    d.t = from_seconds(r.t_s);
+    d.effective_t = from_seconds(r.effective_t_s);
+    d.track_id = r.track;
+    d.action = *action;
+    d.probability = r.probability;
+    d.time_to_contact_s = r.time_to_contact_s.value_or(std::numeric_limits<double>::infinity());
+    d.miss_distance_m = r.miss_distance_m;
+    d.committed = r.committed;
+    d.reason = r.reason;
+    if (const auto& m = r.maneuver)
+      d.maneuver = DodgeManeuver{m->acceleration_W, from_seconds(m->start_t_s), m->duration_s,
+                                 m->expected_clearance_m, m->probability_after};
+    out.push_back(d);
   }
   return out;
 }

@@ -26,6 +26,8 @@ std::vector<DepthRow> read_depth(const std::string& results_dir);
 std::vector<TrajectoryRow> read_trajectories(const std::string& results_dir);
 /// RESULTS/predictions.jsonl (empty when absent).
 std::vector<PredictionRow> read_predictions(const std::string& results_dir);
+/// RESULTS/dodge.jsonl (empty when absent: results of an older fdv).
+std::vector<DodgeRow> read_dodge(const std::string& results_dir);
 /// A TUM trajectory file (track_ID_{fusion,mono}.tum). Throws InputError when it is missing.
 std::vector<TumPose> read_tum(const std::string& path);
 /// RESULTS/summary.json. Throws InputError when it is missing or malformed.
@@ -39,6 +41,9 @@ std::vector<WindowTimingRow> read_timing(const std::string& results_dir);
 std::vector<WindowDetections> window_detections(const std::vector<WindowRow>& rows);
 /// The converged solves as estimate metrics take them, in file order.
 std::vector<EstimateRecord> estimate_records(const std::vector<TrajectoryRow>& rows);
+/// The decisions the rows record (times in ns), for replaying a manoeuvre
+/// (fdv/avoidance/maneuver_playback.h). Throws InputError for an unknown action text.
+std::vector<DodgeDecision> dodge_decisions(const std::vector<DodgeRow>& rows);
 
 /// window_detections(read_windows(results_dir)).
 std::vector<WindowDetections> read_detections(const std::string& results_dir);

@@ -1,5 +1,6 @@
 #include "fdv/results/schema.h"
 
+#include <cmath>
 #include <limits>
 
 namespace fdv {
@@ -77,6 +78,7 @@ json counts_json(const PerceptionCounters& c) {
           {"depth_frames_rejected", c.depth_rejected_registration},
           {"depth_observations", c.depth_observations},
           {"estimates", c.estimates},
+          {"dodge_decisions", c.dodge_decisions},
           {"imu_out_of_order", c.imu_out_of_order},
           {"odometry_out_of_order", c.odometry_out_of_order}};
 }
@@ -108,6 +110,7 @@ PerceptionCounters counters_of(const json& j) {
   c.depth_rejected_registration = j.at("depth_frames_rejected");
   c.depth_observations = j.at("depth_observations");
   c.estimates = j.at("estimates");
+  optional_key(j, "dodge_decisions", c.dodge_decisions);
   c.imu_out_of_order = j.at("imu_out_of_order");
   c.odometry_out_of_order = j.at("odometry_out_of_order");
   return c;
@@ -305,6 +308,46 @@ void from_json(const json& j, PredictionRow& r) {
   if (const auto it = j.find("time_to_contact"); it != j.end()) r.time_to_contact_s = it->get<double>();
 }
 
+void to_json(json& j, const DodgeRow& r) {
+  j = {{"t", r.t_s},
+       {"effective_t", r.effective_t_s},
+       {"track", r.track},
+       {"action", r.action},
+       {"probability", r.probability},
+       {"miss_distance", r.miss_distance_m},
+       {"committed", r.committed},
+       {"reason", r.reason}};
+  if (r.time_to_contact_s) j["time_to_contact"] = *r.time_to_contact_s;
+  if (const auto& m = r.maneuver)
+    j["maneuver"] = {{"acceleration_W", vec_json(m->acceleration_W)},
+                     {"start_t", m->start_t_s},
+                     {"duration", m->duration_s},
+                     {"expected_clearance", m->expected_clearance_m},
+                     {"probability_after", m->probability_after}};
+}
+
+void from_json(const json& j, DodgeRow& r) {
+  r.t_s = j.at("t");
+  r.action = j.at("action");
+  r.effective_t_s = r.t_s;
+  optional_key(j, "effective_t", r.effective_t_s);
+  optional_key(j, "track", r.track);
+  optional_key(j, "probability", r.probability);
+  optional_key(j, "miss_distance", r.miss_distance_m);
+  optional_key(j, "committed", r.committed);
+  optional_key(j, "reason", r.reason);
+  if (const auto it = j.find("time_to_contact"); it != j.end()) r.time_to_contact_s = it->get<double>();
+  if (const auto it = j.find("maneuver"); it != j.end()) {
+    DodgeRow::Maneuver m;
+    m.acceleration_W = vec3_of(it->at("acceleration_W"));
+    m.start_t_s = it->at("start_t");
+    m.duration_s = it->at("duration");
+    optional_key(*it, "expected_clearance", m.expected_clearance_m);
+    optional_key(*it, "probability_after", m.probability_after);
+    r.maneuver = m;
+  }
+}
+
 void to_json(json& j, const RunSummary& s) {
   json timing = json::object();
   for (const auto& [stage, t] : s.timing_ms)
@@ -415,6 +458,23 @@ PredictionRow prediction_row(const PredictionResult& p) {
   r.passage_B = c.closest.offset_B;
   r.receding = c.closest.receding;
   if (c.contact) r.time_to_contact_s = c.time_to_contact_s;
+  return r;
+}
+
+DodgeRow dodge_row(const DodgeDecision& d) {
+  DodgeRow r;
+  r.t_s = to_seconds(d.t);
+  r.effective_t_s = to_seconds(d.effective_t);
+  r.track = d.track_id;
+  r.action = to_string(d.action);
+  r.probability = d.probability;
+  if (std::isfinite(d.time_to_contact_s)) r.time_to_contact_s = d.time_to_contact_s;
+  r.miss_distance_m = d.miss_distance_m;
+  r.committed = d.committed;
+  r.reason = d.reason;
+  if (const auto& m = d.maneuver)
+    r.maneuver = DodgeRow::Maneuver{m->acceleration_W, to_seconds(m->start_t), m->duration_s,
+                                    m->expected_clearance_m, m->probability_after};
   return r;
 }
 

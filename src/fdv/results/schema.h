@@ -7,6 +7,7 @@
 ///   RESULTS/depth.jsonl         one DepthRow per (depth frame, live track) segmentation
 ///   RESULTS/trajectories.jsonl  one TrajectoryRow per estimator solve
 ///   RESULTS/predictions.jsonl   one PredictionRow per usable fusion estimate with a vehicle state
+///   RESULTS/dodge.jsonl         one DodgeRow per dodge decision (trigger, re-plan, commit, cancel, refusal)
 ///   RESULTS/track_ID_fusion.tum, track_ID_mono.tum   TumPose lines of each track's final usable fit
 ///   RESULTS/summary.json        RunSummary
 ///   RESULTS/timing.csv          one WindowTimingRow per event window, in window order
@@ -35,6 +36,7 @@ inline constexpr const char* kDetectionsFile = "detections.jsonl";
 inline constexpr const char* kDepthFile = "depth.jsonl";
 inline constexpr const char* kTrajectoriesFile = "trajectories.jsonl";
 inline constexpr const char* kPredictionsFile = "predictions.jsonl";
+inline constexpr const char* kDodgeFile = "dodge.jsonl";
 inline constexpr const char* kSummaryFile = "summary.json";
 inline constexpr const char* kTimingFile = "timing.csv";
 
@@ -133,6 +135,28 @@ struct PredictionRow {
   std::optional<double> time_to_contact_s;  ///< "time_to_contact" [s]: only when it enters the safety sphere
 };
 
+/// A line of dodge.jsonl: one decision of the dodge planner (docs/AVOIDANCE.md).
+struct DodgeRow {
+  double t_s = 0;               ///< "t": the decision's time, the vehicle state's [s] (required)
+  double effective_t_s = 0;     ///< "effective_t": t + response delay, when the change takes effect [s]
+  int track = -1;               ///< "track"
+  std::string action;           ///< "action": DodgeAction text (required)
+  double probability = 0;       ///< "probability": of entering the safety sphere within the horizon
+  std::optional<double> time_to_contact_s;  ///< "time_to_contact" [s]: only when the mean enters the sphere
+  double miss_distance_m = 0;   ///< "miss_distance": the mean's closest approach [m]
+  bool committed = false;       ///< "committed"
+  std::string reason;           ///< "reason": why, in words
+  /// "maneuver": the set-point in force, absent after a cancel or a refusal.
+  struct Maneuver {
+    Eigen::Vector3d acceleration_W = Eigen::Vector3d::Zero();  ///< "acceleration_W" [m/s²]
+    double start_t_s = 0;             ///< "start_t": decision time + response delay [s]
+    double duration_s = 0;            ///< "duration" [s]
+    double expected_clearance_m = 0;  ///< "expected_clearance" [m]: E|miss| − safety radius
+    double probability_after = 0;     ///< "probability_after": of entering the sphere despite it
+  };
+  std::optional<Maneuver> maneuver;
+};
+
 /// A line of track_ID_{fusion,mono}.tum: "t x y z qx qy qz qw" (t as %.9f, position as %.6f;
 /// orientation identity, a ball has none), sampled every 5 ms over the observed interval.
 struct TumPose {
@@ -187,6 +211,8 @@ void to_json(nlohmann::json& j, const TrajectoryRow& r);
 void from_json(const nlohmann::json& j, TrajectoryRow& r);
 void to_json(nlohmann::json& j, const PredictionRow& r);
 void from_json(const nlohmann::json& j, PredictionRow& r);
+void to_json(nlohmann::json& j, const DodgeRow& r);
+void from_json(const nlohmann::json& j, DodgeRow& r);
 void to_json(nlohmann::json& j, const RunSummary& s);
 void from_json(const nlohmann::json& j, RunSummary& s);
 
@@ -200,6 +226,7 @@ WindowRow window_row(const WindowResult& w);
 DepthRow depth_row(const DepthResult& d);
 TrajectoryRow trajectory_row(const EstimateResult& e);
 PredictionRow prediction_row(const PredictionResult& p);
+DodgeRow dodge_row(const DodgeDecision& d);
 WindowTimingRow window_timing_row(const WindowResult& w);
 
 }  // namespace fdv

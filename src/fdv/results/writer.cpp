@@ -10,7 +10,7 @@ ResultsWriter::ResultsWriter(const std::filesystem::path& dir) : dir_(dir) {
   std::filesystem::create_directories(dir);
   for (auto [name, stream] : {std::pair{kDetectionsFile, &detections_}, {kDepthFile, &depth_},
                               {kTrajectoriesFile, &trajectories_}, {kPredictionsFile, &predictions_},
-                              {kTimingFile, &timing_csv_}}) {
+                              {kDodgeFile, &dodge_}, {kTimingFile, &timing_csv_}}) {
     stream->open(dir / name);
     if (!*stream) throw InputError((dir / name).string(), "", "cannot create output file");
   }
@@ -23,6 +23,7 @@ void ResultsWriter::write(const WindowRow& row) { detections_ << nlohmann::json(
 void ResultsWriter::write(const DepthRow& row) { depth_ << nlohmann::json(row).dump() << "\n"; }
 void ResultsWriter::write(const TrajectoryRow& row) { trajectories_ << nlohmann::json(row).dump() << "\n"; }
 void ResultsWriter::write(const PredictionRow& row) { predictions_ << nlohmann::json(row).dump() << "\n"; }
+void ResultsWriter::write(const DodgeRow& row) { dodge_ << nlohmann::json(row).dump() << "\n"; }
 
 void ResultsWriter::write(const WindowTimingRow& row) {
   // fmt's "{}" is the shortest text that reads back to the same double.
@@ -53,6 +54,7 @@ void ResultsWriter::estimate(const EstimateResult& e) {
 }
 
 void ResultsWriter::prediction(const PredictionResult& p) { write(prediction_row(p)); }
+void ResultsWriter::dodge(const DodgeDecision& d) { write(dodge_row(d)); }
 
 std::map<std::string, Summary> ResultsWriter::timing_ms() const {
   std::map<std::string, Summary> out;
@@ -61,7 +63,7 @@ std::map<std::string, Summary> ResultsWriter::timing_ms() const {
 }
 
 void ResultsWriter::finish(const RunSummary& summary) {
-  for (std::ofstream* f : {&detections_, &depth_, &trajectories_, &predictions_, &timing_csv_}) f->close();
+  for (std::ofstream* f : {&detections_, &depth_, &trajectories_, &predictions_, &dodge_, &timing_csv_}) f->close();
   for (const auto& [name, finals] : {std::pair{"fusion", &final_fusion_}, {"mono", &final_mono_}})
     for (const auto& [id, est] : *finals) {
       std::ofstream f(dir_ / fmt::format("track_{}_{}.tum", id, name));

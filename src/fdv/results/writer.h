@@ -4,7 +4,7 @@
 ///
 ///   ResultsWriter out(dir);                       // creates dir, the four .jsonl files, timing.csv
 ///   callbacks.on_window = [&](const WindowResult& w) { out.window(w); };   // likewise on_depth,
-///   ...                                           // on_estimate, on_prediction
+///   ...                                           // on_estimate, on_prediction, on_dodge
 ///   RunSummary s;  s.counts = replay(...);  s.timing_ms = out.timing_ms();  ...
 ///   out.finish(s);                                // TUM files and summary.json
 ///
@@ -30,12 +30,14 @@ class ResultsWriter {
   void depth(const DepthResult& d);
   void estimate(const EstimateResult& e);
   void prediction(const PredictionResult& p);
+  void dodge(const DodgeDecision& d);
 
   // Rows as they are.
   void write(const WindowRow& row);
   void write(const DepthRow& row);
   void write(const TrajectoryRow& row);
   void write(const PredictionRow& row);
+  void write(const DodgeRow& row);
   /// A timing.csv line; its stages go into timing_ms() too.
   void write(const WindowTimingRow& row);
 
@@ -48,7 +50,7 @@ class ResultsWriter {
 
  private:
   std::filesystem::path dir_;
-  std::ofstream detections_, depth_, trajectories_, predictions_, timing_csv_;
+  std::ofstream detections_, depth_, trajectories_, predictions_, dodge_, timing_csv_;
   std::map<std::string, std::vector<double>> timing_;
   std::map<int, TrajectoryEstimate> final_fusion_, final_mono_;
 };
