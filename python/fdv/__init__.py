@@ -31,6 +31,7 @@ class Results:
     depth: list = field(default_factory=list)         # depth.jsonl
     trajectories: list = field(default_factory=list)  # trajectories.jsonl
     predictions: list = field(default_factory=list)   # predictions.jsonl
+    dodge: list = field(default_factory=list)         # dodge.jsonl
     warnings: list = field(default_factory=list)
     counts: dict = field(default_factory=dict)        # summary.json "counts"
     reader_report: dict = field(default_factory=dict)

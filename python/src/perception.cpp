@@ -20,8 +20,8 @@
 namespace fdv::python {
 namespace {
 
-enum class RowKind { kWindow, kDepth, kTrajectory, kPrediction, kWarning };
-constexpr const char* kListNames[] = {"windows", "depth", "trajectories", "predictions", "warnings"};
+enum class RowKind { kWindow, kDepth, kTrajectory, kPrediction, kDodge, kWarning };
+constexpr const char* kListNames[] = {"windows", "depth", "trajectories", "predictions", "dodge", "warnings"};
 
 /// Rows in the order the pipeline produced them, kept until the GIL is held again.
 struct RowQueue {
@@ -43,6 +43,10 @@ struct RowQueue {
     c.on_prediction = [this, writer](const PredictionResult& p) {
       rows.emplace_back(RowKind::kPrediction, prediction_row(p));
       if (writer) writer->prediction(p);
+    };
+    c.on_dodge = [this, writer](const DodgeDecision& d) {
+      rows.emplace_back(RowKind::kDodge, dodge_row(d));
+      if (writer) writer->dodge(d);
     };
     c.on_warning = [this](const std::string& w) { rows.emplace_back(RowKind::kWarning, w); };
     return c;
@@ -97,10 +101,10 @@ class PyPerception {
  public:
   PyPerception(const Calibration& calibration, const PerceptionOptions& options, const std::string& time_unit,
                py::object on_window, py::object on_depth, py::object on_estimate, py::object on_prediction,
-               py::object on_warning)
+               py::object on_dodge, py::object on_warning)
       : unit_(parse_time_unit(time_unit)),
         handlers_{std::move(on_window), std::move(on_depth), std::move(on_estimate), std::move(on_prediction),
-                  std::move(on_warning)} {
+                  std::move(on_dodge), std::move(on_warning)} {
     perception_ = std::make_unique<Perception>(calibration, options, queue_.callbacks());
   }
 
@@ -231,8 +235,8 @@ class PyPerception {
   }
 
   TimeUnit unit_;
-  std::array<py::object, 5> handlers_;
-  std::array<py::list, 5> lists_;
+  std::array<py::object, 6> handlers_;
+  std::array<py::list, 6> lists_;
   RowQueue queue_;
   std::unique_ptr<Perception> perception_;
   std::vector<Event> events_;
@@ -302,13 +306,13 @@ void register_perception(py::module_& m) {
                            "The streaming pipeline (fdv::Perception). Push each stream in its time order; "
                            "results are dicts with the keys of the `fdv run` JSONL lines, given to the "
                            "on_* callbacks at the end of the push that produced them, else kept in the "
-                           "lists windows, depth, trajectories, predictions, warnings.")
+                           "lists windows, depth, trajectories, predictions, dodge, warnings.")
       .def(py::init<const Calibration&, const PerceptionOptions&, const std::string&, py::object, py::object,
-                    py::object, py::object, py::object>(),
+                    py::object, py::object, py::object, py::object>(),
            py::arg("calibration"), py::arg("options") = PerceptionOptions{}, py::kw_only(),
            py::arg("time_unit") = "us", py::arg("on_window") = py::none(), py::arg("on_depth") = py::none(),
            py::arg("on_estimate") = py::none(), py::arg("on_prediction") = py::none(),
-           py::arg("on_warning") = py::none())
+           py::arg("on_dodge") = py::none(), py::arg("on_warning") = py::none())
       .def("push_events", &PyPerception::push_events, py::arg("events"), "a 1-D contiguous fdv.EVENT_DTYPE array")
       .def("push_imu", &PyPerception::push_imu, py::arg("imu"), "fdv.IMU_DTYPE samples")
       .def("push_odometry", &PyPerception::push_odometry, py::arg("odometry"), "fdv.ODOMETRY_DTYPE samples")
@@ -321,6 +325,7 @@ void register_perception(py::module_& m) {
       .def_property_readonly("depth", [](const PyPerception& p) { return p.list(RowKind::kDepth); })
       .def_property_readonly("trajectories", [](const PyPerception& p) { return p.list(RowKind::kTrajectory); })
       .def_property_readonly("predictions", [](const PyPerception& p) { return p.list(RowKind::kPrediction); })
+      .def_property_readonly("dodge", [](const PyPerception& p) { return p.list(RowKind::kDodge); })
       .def_property_readonly("warnings", [](const PyPerception& p) { return p.list(RowKind::kWarning); });
 
   m.def("_run", &run, py::arg("path"), py::arg("calibration"), py::arg("calibration_name"), py::arg("options"),

@@ -6,7 +6,7 @@ import fdv
 from conftest import cli, read_jsonl
 
 FILES = {"windows": "detections.jsonl", "depth": "depth.jsonl", "trajectories": "trajectories.jsonl",
-         "predictions": "predictions.jsonl"}
+         "predictions": "predictions.jsonl", "dodge": "dodge.jsonl"}
 
 
 def push_merged(perception, recording):
