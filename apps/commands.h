@@ -10,5 +10,6 @@ void add_run_command(CLI::App& app);
 void add_eval_command(CLI::App& app);
 void add_demo_command(CLI::App& app);
 void add_table_commands(CLI::App& app);  ///< table1, table2
+void add_dodge_eval_command(CLI::App& app);
 
 }  // namespace fdv::cli

@@ -1,0 +1,349 @@
+#include "fdv/tables/dodge_eval.h"
+
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <mutex>
+
+#include "fdv/avoidance/maneuver_playback.h"
+#include "fdv/core/error.h"
+#include "fdv/core/thread_pool.h"
+#include "fdv/io/recording.h"
+#include "fdv/pipeline/options_yaml.h"
+#include "fdv/pipeline/replay.h"
+#include "fdv/results/writer.h"
+#include "fdv/sim/dataset_cache.h"
+#include "fdv/sim/random_throw.h"
+
+namespace fdv {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+constexpr TimeNs kOutcomeStepNs = kNsPerMs;
+
+/// What one pipeline run gives the evaluation: its decisions, its window ends and the first
+/// detection of the ball (the oracle starts there).
+struct MethodRun {
+  std::vector<DodgeDecision> decisions;
+  std::vector<TimeNs> window_ends;
+  std::optional<TimeNs> first_ball_detection;
+};
+
+/// Whether a detection at raw pixel `center` and time t is the ball: within two apparent radii
+/// (at least 10 px) of the true centre's projection.
+bool is_ball(const DatasetTruth& truth, int ball, TimeNs t, const Eigen::Vector2d& center) {
+  const auto object = truth.object_at(ball, t);
+  if (!object) return false;
+  const Eigen::Isometry3d T_W_E = truth.body_at(t).T_W_B() * truth.calibration.T_B_E;
+  const Eigen::Vector3d p_E = T_W_E.inverse() * object->p_W;
+  if (!(p_E.z() > 0.05)) return false;
+  const Eigen::Vector2d projected = truth.calibration.event_camera.project(p_E);
+  const double radius_px = truth.calibration.event_camera.fx * truth.radius_m.at(ball) / p_E.z();
+  return (projected - center).norm() <= std::max(10.0, 2.0 * radius_px);
+}
+
+MethodRun run_method(const DatasetTruth& truth, int ball, const PerceptionOptions& options,
+                     const std::string& results_dir) {
+  MethodRun run;
+  std::optional<ResultsWriter> writer;
+  if (!results_dir.empty()) writer.emplace(results_dir);
+  PerceptionCallbacks callbacks;
+  callbacks.on_window = [&](const WindowResult& w) {
+    run.window_ends.push_back(w.t_end);
+    if (!run.first_ball_detection)
+      for (const TrackedDetection& d : w.detections)
+        if (is_ball(truth, ball, d.detection.t, d.detection.center_raw)) {
+          run.first_ball_detection = w.t_end;
+          break;
+        }
+    if (writer) writer->window(w);
+  };
+  callbacks.on_dodge = [&](const DodgeDecision& d) {
+    run.decisions.push_back(d);
+    if (writer) writer->dodge(d);
+  };
+  if (writer) {
+    callbacks.on_depth = [&](const DepthResult& d) { writer->depth(d); };
+    callbacks.on_estimate = [&](const EstimateResult& e) { writer->estimate(e); };
+    callbacks.on_prediction = [&](const PredictionResult& p) { writer->prediction(p); };
+  }
+  std::vector<std::string> warnings;
+  callbacks.on_warning = [&](const std::string& w) { warnings.push_back(w); };
+  const PerceptionCounters counts = replay(open_recording(truth.dir), truth.calibration, options, callbacks);
+  if (writer) {
+    RunSummary summary;
+    summary.input = truth.dir;
+    summary.format = "fdv_dataset";
+    summary.width = truth.calibration.event_camera.width;
+    summary.height = truth.calibration.event_camera.height;
+    summary.calibration = "the dataset's";
+    summary.method_requested = summary.method = to_string(options.compensation.method);
+    summary.threads = options.threads;
+    summary.counts = counts;
+    summary.timing_ms = writer->timing_ms();
+    summary.warnings = warnings;
+    summary.options = to_json(options);
+    writer->finish(summary);
+  }
+  return run;
+}
+
+/// The oracle: from the first detection of the ball on, at each window's end, the planner gets
+/// the true trajectory and the true vehicle state, both exact (zero covariance).
+std::vector<DodgeDecision> oracle_decisions(const DatasetTruth& truth, int ball, const MethodRun& run,
+                                            const PerceptionOptions& options) {
+  std::vector<DodgeDecision> decisions;
+  if (!run.first_ball_detection) return decisions;
+  DodgePlanner planner(options.dodge, options.prediction.safety_radius_m);
+  for (TimeNs t : run.window_ends) {
+    if (t < *run.first_ball_detection) continue;
+    const auto object = truth.object_at(ball, t);
+    if (!object) continue;
+    TrajectoryEstimate truth_estimate;
+    truth_estimate.usable = truth_estimate.converged = true;
+    truth_estimate.method = EstimateMethod::kFusion;
+    truth_estimate.trajectory = BallisticTrajectory{t, object->p_W, object->v_W, truth.gravity_W};
+    truth_estimate.covariance = Eigen::Matrix<double, 6, 6>::Zero();
+    truth_estimate.t_first = truth_estimate.t_last = t;
+    const VehicleState vehicle{truth.body_at(t), Eigen::Matrix<double, 6, 6>::Zero()};
+    const RiskAssessment r = assess_collision_risk(truth_estimate, vehicle, options.prediction);
+    if (!r.risk) continue;
+    if (auto d = planner.update(ball, *r.risk, vehicle)) decisions.push_back(*d);
+  }
+  return decisions;
+}
+
+}  // namespace
+
+DodgeOutcome dodge_outcome(const DatasetTruth& truth, int ball, const std::vector<DodgeDecision>& decisions,
+                           double safety_radius_m) {
+  DodgeOutcome out;
+  std::vector<DodgeDecision> flown;
+  for (const DodgeDecision& d : decisions) {
+    if (d.action == DodgeAction::kRefused) continue;
+    flown.push_back(d);
+    if (d.action == DodgeAction::kDodge && !out.decision_t) {
+      out.maneuvered = true;
+      out.decision_t = d.t;
+      out.maneuver = d.maneuver;
+      out.predicted_miss_m = d.miss_distance_m;
+    }
+  }
+  out.decisions = static_cast<int>(decisions.size());
+  if (truth.body.empty()) throw InputError(truth.dir, "truth", "no vehicle truth");
+  double closest = std::numeric_limits<double>::infinity();
+  for (TimeNs t = truth.body.front().t; t <= truth.body.back().t; t += kOutcomeStepNs) {
+    const auto object = truth.object_at(ball, t);
+    if (!object) continue;
+    const Eigen::Vector3d vehicle = truth.body_at(t).p_W_B + commanded_offset(flown, t).position_W;
+    closest = std::min(closest, (object->p_W - vehicle).norm());
+  }
+  out.miss_with_maneuver_m = closest;
+  out.escaped = closest >= safety_radius_m;
+  return out;
+}
+
+DodgeThrow score_dodge_dataset(const std::string& dataset, const DodgeEvalOptions& options,
+                               const std::string& run_dir) {
+  DodgeThrow row;
+  const DatasetTruth truth = load_dataset_truth(dataset);
+  if (truth.radius_m.empty()) throw InputError(dataset, "truth", "no ball in the ground truth");
+  const int ball = truth.radius_m.begin()->first;
+  const double radius = options.perception.prediction.safety_radius_m;
+
+  row.true_miss_m = dodge_outcome(truth, ball, {}, radius).miss_with_maneuver_m;
+  row.threat = row.true_miss_m < radius;
+  row.non_threat = row.true_miss_m > kNonThreatMissM;
+  row.near_miss = !row.threat && !row.non_threat;
+  const std::optional<TimeNs> contact = true_contact_time(truth, ball, radius);
+  if (contact) row.true_contact_t_s = to_seconds(*contact);
+
+  PerceptionOptions ours = options.perception;
+  ours.threads = 1;
+  std::map<std::string, PerceptionOptions> variants;
+  variants["ours"] = ours;
+  variants["point_estimate"] = ours;
+  variants["point_estimate"].dodge_from = DodgeSource::kFusionPointEstimate;
+  variants["mono"] = ours;
+  variants["mono"].dodge_from = DodgeSource::kMonocular;
+  variants["mono"].monocular_baseline = true;
+  variants["rotation"] = ours;
+  variants["rotation"].compensation.method = CompensationMethod::kRotation;
+
+  std::map<std::string, std::vector<DodgeDecision>> decisions;
+  std::optional<TimeNs> first_detection;
+  for (const auto& [method, perception] : variants) {
+    const MethodRun run = run_method(truth, ball, perception, method == "ours" ? run_dir : "");
+    decisions[method] = run.decisions;
+    if (method == "ours") {
+      decisions["oracle"] = oracle_decisions(truth, ball, run, ours);
+      first_detection = run.first_ball_detection;
+    }
+  }
+  for (const std::string& method : kDodgeMethods) {
+    DodgeOutcome o = dodge_outcome(truth, ball, decisions[method], radius);
+    o.escaped = row.threat && o.escaped;
+    if (o.decision_t && contact) o.warning_time_s = to_seconds(*contact - *o.decision_t);
+    if (!o.maneuvered) o.reason = first_detection ? "no manoeuvre decided" : "never detected";
+    row.outcomes[method] = o;
+  }
+  return row;
+}
+
+DodgeThrow evaluate_dodge_throw(std::uint64_t seed, const DodgeEvalOptions& options, const std::string& throw_dir) {
+  const auto start = Clock::now();
+  const sim::RandomThrowParameters parameters = sim::sample_random_throw(seed);
+  sim::ScenarioConfig config = sim::random_throw_config(parameters);
+  config.threads = 1;
+  const std::string dataset = throw_dir + "/dataset";
+  sim::ensure_simulated(config, dataset);
+  DodgeThrow row = score_dodge_dataset(dataset, options, options.keep ? throw_dir + "/run" : "");
+  row.seed = seed;
+  row.parameters = sim::to_json(parameters);
+  if (!options.keep) std::filesystem::remove_all(dataset);
+  row.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  return row;
+}
+
+DodgeTotals dodge_totals(const std::vector<DodgeThrow>& throws, const std::string& method) {
+  DodgeTotals t;
+  for (const DodgeThrow& row : throws) {
+    const auto it = row.outcomes.find(method);
+    if (it == row.outcomes.end()) continue;
+    const DodgeOutcome& o = it->second;
+    if (row.threat) {
+      ++t.threats;
+      t.escaped += o.escaped;
+      if (o.warning_time_s) t.warning_times_s.push_back(*o.warning_time_s);
+    } else if (row.non_threat) {
+      ++t.non_threats;
+      t.false_alarms += o.maneuvered;
+    } else {
+      ++t.near_misses;
+      t.near_miss_maneuvers += o.maneuvered;
+    }
+    if (o.predicted_miss_m) t.miss_errors_m.push_back(std::abs(*o.predicted_miss_m - row.true_miss_m));
+  }
+  return t;
+}
+
+namespace {
+
+nlohmann::json totals_json(const DodgeTotals& t) {
+  auto rate = [](int n, int of) { return of > 0 ? nlohmann::json(static_cast<double>(n) / of) : nlohmann::json(); };
+  return {{"threats", t.threats},
+          {"escaped", t.escaped},
+          {"escape_rate", rate(t.escaped, t.threats)},
+          {"non_threats", t.non_threats},
+          {"false_alarms", t.false_alarms},
+          {"false_alarm_rate", rate(t.false_alarms, t.non_threats)},
+          {"near_misses", t.near_misses},
+          {"near_miss_maneuvers", t.near_miss_maneuvers},
+          {"warning_time_s", summarize(t.warning_times_s).to_json()},
+          {"miss_error_at_decision_m", summarize(t.miss_errors_m).to_json()}};
+}
+
+nlohmann::json outcome_json(const DodgeOutcome& o) {
+  nlohmann::json j = {{"maneuvered", o.maneuvered},
+                      {"decisions", o.decisions},
+                      {"miss_with_maneuver_m", o.miss_with_maneuver_m},
+                      {"escaped", o.escaped}};
+  if (o.decision_t) j["decision_t_s"] = to_seconds(*o.decision_t);
+  if (o.warning_time_s) j["warning_time_s"] = *o.warning_time_s;
+  if (o.predicted_miss_m) j["predicted_miss_m"] = *o.predicted_miss_m;
+  if (const auto& m = o.maneuver)
+    j["maneuver"] = {{"acceleration_W", {m->acceleration_W.x(), m->acceleration_W.y(), m->acceleration_W.z()}},
+                     {"start_t_s", to_seconds(m->start_t)},
+                     {"duration_s", m->duration_s}};
+  if (!o.reason.empty()) j["reason"] = o.reason;
+  return j;
+}
+
+}  // namespace
+
+nlohmann::json to_json(const DodgeEval& e, const DodgeEvalOptions& options) {
+  nlohmann::json j = totals_json(e.totals.at("ours"));
+  // Ours among the threats the oracle escapes: the share of what the sensors allow.
+  int oracle_escaped = 0, ours_too = 0;
+  for (const DodgeThrow& row : e.throws) {
+    if (row.outcomes.empty() || !row.outcomes.at("oracle").escaped) continue;
+    ++oracle_escaped;
+    ours_too += row.outcomes.at("ours").escaped;
+  }
+  j["oracle_escaped"] = oracle_escaped;
+  j["escaped_where_oracle_escaped"] = ours_too;
+  j["baselines"] = nlohmann::json::object();
+  for (const std::string& method : kDodgeMethods)
+    if (method != "ours") j["baselines"][method] = totals_json(e.totals.at(method));
+  j["throws"] = nlohmann::json::array();
+  for (const DodgeThrow& row : e.throws) {
+    nlohmann::json t = {{"seed", row.seed},           {"parameters", row.parameters},
+                        {"true_miss_m", row.true_miss_m}, {"threat", row.threat},
+                        {"non_threat", row.non_threat},   {"near_miss", row.near_miss},
+                        {"seconds", row.seconds}};
+    if (row.true_contact_t_s) t["true_contact_t_s"] = *row.true_contact_t_s;
+    if (!row.error.empty()) t["error"] = row.error;
+    for (const auto& [method, o] : row.outcomes) t["outcomes"][method] = outcome_json(o);
+    j["throws"].push_back(t);
+  }
+  j["safety_radius_m"] = options.perception.prediction.safety_radius_m;
+  j["wall_s"] = e.wall_s;
+  j["options"] = to_json(options.perception);
+  return j;
+}
+
+DodgeEval run_dodge_eval(const DodgeEvalOptions& options) {
+  if (options.seeds.empty()) throw ConfigError("dodge-eval: no seeds");
+  if (options.jobs < 1) throw ConfigError("dodge-eval: --jobs must be >= 1");
+  if (const auto why = options.perception.validate(); !why.empty()) throw ConfigError(why);
+  const auto start = Clock::now();
+  DodgeEval eval;
+  eval.throws.resize(options.seeds.size());
+  std::mutex progress;
+  std::size_t done = 0;
+  ThreadPool pool(options.jobs);
+  pool.parallel_for(options.seeds.size(), [&](std::size_t i) {
+    const std::uint64_t seed = options.seeds[i];
+    const std::string throw_dir = options.out_dir + "/throws/" + std::to_string(seed);
+    DodgeThrow row;
+    try {
+      row = evaluate_dodge_throw(seed, options, throw_dir);
+    } catch (const std::exception& e) {
+      row.seed = seed;
+      row.error = e.what();
+    }
+    if (!options.keep) std::filesystem::remove_all(throw_dir);
+    const std::lock_guard<std::mutex> lock(progress);
+    ++done;
+    const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
+    const double eta = elapsed / static_cast<double>(done) * static_cast<double>(options.seeds.size() - done);
+    if (!row.error.empty()) {
+      spdlog::error("[{}/{}] seed {}: {}", done, options.seeds.size(), seed, row.error);
+    } else {
+      auto verdict = [&](const std::string& method) {
+        const DodgeOutcome& o = row.outcomes.at(method);
+        if (row.threat) return std::string(o.escaped ? "escaped" : "hit");
+        return std::string(o.maneuvered ? "manoeuvred" : "held");
+      };
+      spdlog::info("[{}/{}] seed {}: {} (true miss {:.2f} m); ours {}, oracle {}; {:.1f} s, ~{:.0f} s left", done,
+                   options.seeds.size(), seed,
+                   row.threat ? "threat" : (row.non_threat ? "non-threat" : "near miss"), row.true_miss_m,
+                   verdict("ours"), verdict("oracle"), row.seconds, eta);
+    }
+    eval.throws[i] = std::move(row);
+  });
+  for (const std::string& method : kDodgeMethods) eval.totals[method] = dodge_totals(eval.throws, method);
+  eval.wall_s = std::chrono::duration<double>(Clock::now() - start).count();
+  std::filesystem::create_directories(options.out_dir);
+  const std::string path = options.out_dir + "/dodge_eval.json";
+  std::ofstream out(path);
+  if (!out) throw InputError(path, "", "cannot create output file");
+  out << to_json(eval, options).dump(2) << "\n";
+  return eval;
+}
+
+}  // namespace fdv

@@ -1,0 +1,102 @@
+#pragma once
+/// `fdv dodge-eval`: one random throw per seed (sim/random_throw.h) simulated, run through the
+/// pipeline, decided, and scored kinematically against the simulator's truth, for our system and
+/// four baselines on the same throws (docs/AVOIDANCE.md, "Evaluation").
+///
+///   DodgeEvalOptions o;  o.seeds = parse_seed_list("101-300");  o.out_dir = "out/dodge";
+///   const DodgeEval e = run_dodge_eval(o);             // writes out/dodge/dodge_eval.json
+///   e.totals.at("ours").escaped;
+///
+/// Outcome: after each decision the vehicle follows its scripted (true) path plus the commanded
+/// set-points, each taking effect after the response delay (avoidance/maneuver_playback.h); the
+/// true ball's distance to the body origin is checked every millisecond of the truth. A throw is
+/// a threat when its true miss distance without a manoeuvre is below the safety radius, a
+/// non-threat above 1 m, a near miss in between.
+#include <cstdint>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "fdv/avoidance/dodge_planner.h"
+#include "fdv/eval/dataset_truth.h"
+#include "fdv/pipeline/perception.h"
+
+namespace fdv {
+
+/// The methods compared, in the order reported: ours, then the baselines.
+inline const std::vector<std::string> kDodgeMethods = {"ours", "point_estimate", "mono", "rotation", "oracle"};
+
+/// A throw between these true miss distances (no manoeuvre) is a near miss [m]: neither threat nor
+/// non-threat, reported apart.
+inline constexpr double kNonThreatMissM = 1.0;
+
+struct DodgeEvalOptions {
+  std::vector<std::uint64_t> seeds;
+  std::string out_dir;
+  int jobs = 2;       ///< throws evaluated at once (each single-threaded)
+  bool keep = false;  ///< keep DIR/throws/SEED/{dataset,run}
+  /// Ours; the baselines change one thing each: dodge_from (point_estimate, mono), the
+  /// compensation method (rotation), or the estimate itself (oracle: the true trajectory).
+  PerceptionOptions perception;
+};
+
+/// One method on one throw.
+struct DodgeOutcome {
+  bool maneuvered = false;               ///< a manoeuvre was commanded
+  std::optional<TimeNs> decision_t;      ///< the first kDodge decision
+  std::optional<DodgeManeuver> maneuver;  ///< the first manoeuvre
+  int decisions = 0;                     ///< every decision (re-plans, commits, cancels)
+  std::optional<double> predicted_miss_m;  ///< the mean's miss distance at the first kDodge
+  std::optional<double> warning_time_s;    ///< true contact − decision (threats)
+  double miss_with_maneuver_m = 0;  ///< the true closest approach with the set-points flown
+  bool escaped = false;             ///< threat and miss_with_maneuver_m >= the safety radius
+  std::string reason;               ///< no decision: why (e.g. "never detected")
+};
+
+struct DodgeThrow {
+  std::uint64_t seed = 0;
+  nlohmann::json parameters;  ///< sim::to_json(RandomThrowParameters)
+  double true_miss_m = 0;     ///< without a manoeuvre
+  std::optional<double> true_contact_t_s;
+  bool threat = false, non_threat = false, near_miss = false;
+  std::map<std::string, DodgeOutcome> outcomes;  ///< by kDodgeMethods
+  double seconds = 0;  ///< wall time of this throw
+  std::string error;   ///< a throw that could not be evaluated (then no outcomes)
+};
+
+struct DodgeTotals {
+  int threats = 0, escaped = 0, non_threats = 0, false_alarms = 0, near_misses = 0;
+  int near_miss_maneuvers = 0;
+  std::vector<double> warning_times_s;  ///< threats with a decision
+  std::vector<double> miss_errors_m;    ///< |predicted − true miss| at each first decision
+};
+
+struct DodgeEval {
+  std::vector<DodgeThrow> throws;
+  std::map<std::string, DodgeTotals> totals;
+  double wall_s = 0;
+};
+
+/// The outcome of one method's decisions (in order) on the truth: the kinematic replay.
+DodgeOutcome dodge_outcome(const DatasetTruth& truth, int ball, const std::vector<DodgeDecision>& decisions,
+                           double safety_radius_m);
+
+/// One simulated dataset with one ball: runs every method and scores them (the run of ours into
+/// `run_dir` as `fdv run` writes it, unless empty). A ball never detected gives no decision, with
+/// that reason. Throws what the dataset reader and the pipeline throw.
+DodgeThrow score_dodge_dataset(const std::string& dataset, const DodgeEvalOptions& options,
+                               const std::string& run_dir = "");
+
+/// One throw: simulates seed's random_throw into `throw_dir`/dataset (single-threaded) and scores
+/// it; the dataset is removed afterwards unless options.keep.
+DodgeThrow evaluate_dodge_throw(std::uint64_t seed, const DodgeEvalOptions& options, const std::string& throw_dir);
+
+/// Every seed, `jobs` at a time with a progress line per throw; writes DIR/dodge_eval.json.
+DodgeEval run_dodge_eval(const DodgeEvalOptions& options);
+
+DodgeTotals dodge_totals(const std::vector<DodgeThrow>& throws, const std::string& method);
+nlohmann::json to_json(const DodgeEval& e, const DodgeEvalOptions& options);
+
+}  // namespace fdv

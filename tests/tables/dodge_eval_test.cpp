@@ -1,0 +1,117 @@
+// fdv dodge-eval's scoring: the kinematic outcome of a manoeuvre against hand-made truth, and one
+// simulated throw that never enters the view (no decision, with the reason).
+#include "fdv/tables/dodge_eval.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "eval/handmade_truth.h"
+#include "fdv/sim/dataset_cache.h"
+#include "fdv/sim/scenario_config.h"
+#include "test_support.h"
+
+namespace fdv {
+namespace {
+
+// A still vehicle at the origin; a ball flying along -z at 10 m/s that passes 0.2 m to its +x side
+// at t = 0.5 s (no gravity): a threat for the 0.5 m safety sphere.
+DatasetTruth passing_ball() {
+  return test::straight_flight({0.2, 0, 5}, {0, 0, -10}, 0.1, 1000);
+}
+
+DodgeDecision dodge_at(TimeNs t, const Eigen::Vector3d& a, TimeNs start_t, double duration_s) {
+  DodgeDecision d;
+  d.t = t;
+  d.action = DodgeAction::kDodge;
+  DodgeManeuver m;
+  m.acceleration_W = a;
+  m.start_t = start_t;
+  m.duration_s = duration_s;
+  d.maneuver = m;
+  return d;
+}
+
+TEST(DodgeOutcome, NoDecisionIsTheTrueClosestApproach) {
+  const DodgeOutcome o = dodge_outcome(passing_ball(), 1, {}, 0.5);
+  EXPECT_NEAR(o.miss_with_maneuver_m, 0.2, 1e-9);
+  EXPECT_FALSE(o.escaped);
+  EXPECT_FALSE(o.maneuvered);
+}
+
+// 10 m/s² along -x from 0.15 s for 0.5 s: the vehicle is at x(t) = -5 (t - 0.15)², the ball at
+// (0.2, 0, 5 - 10 t); the closest approach, found here by a 1 µs scan of that closed form, is
+// what the 1 ms replay of the truth must give.
+TEST(DodgeOutcome, ManeuverAgainstClosedForm) {
+  // Closest approach of the closed form with the set-point along sign·x.
+  auto closed_form = [](double sign) {
+    double closest = 1e9;
+    for (int us = 0; us <= 1000000; ++us) {
+      const double t = us * 1e-6;
+      const double s = std::clamp(t - 0.15, 0.0, 0.5);
+      const double x_vehicle = sign * (5 * s * s + (t > 0.65 ? 5.0 * (t - 0.65) : 0.0));
+      closest = std::min(closest, std::hypot(0.2 - x_vehicle, 5 - 10 * t));
+    }
+    return closest;
+  };
+  const DodgeOutcome o = dodge_outcome(passing_ball(), 1, {dodge_at(100 * kNsPerMs, {-10, 0, 0}, 150 * kNsPerMs, 0.5)}, 0.5);
+  EXPECT_NEAR(o.miss_with_maneuver_m, closed_form(-1), 2e-3);  // the replay samples every ms
+  EXPECT_GT(o.miss_with_maneuver_m, 0.5);
+  EXPECT_TRUE(o.escaped);
+  EXPECT_TRUE(o.maneuvered);
+  ASSERT_TRUE(o.decision_t);
+  EXPECT_EQ(*o.decision_t, 100 * kNsPerMs);
+  // The same set-point towards the ball's side: the vehicle crosses the ball's line and ends
+  // 0.39 m from it, inside the sphere (the sign of the displacement matters).
+  const DodgeOutcome wrong = dodge_outcome(passing_ball(), 1, {dodge_at(100 * kNsPerMs, {10, 0, 0}, 150 * kNsPerMs, 0.5)}, 0.5);
+  EXPECT_NEAR(wrong.miss_with_maneuver_m, closed_form(1), 2e-3);
+  EXPECT_LT(wrong.miss_with_maneuver_m, 0.5);
+  EXPECT_FALSE(wrong.escaped);
+}
+
+// A refusal commands nothing: the outcome is that of no decision.
+TEST(DodgeOutcome, RefusalIsNotFlown) {
+  DodgeDecision refused = dodge_at(100 * kNsPerMs, {-10, 0, 0}, 150 * kNsPerMs, 0.5);
+  refused.action = DodgeAction::kRefused;
+  const DodgeOutcome o = dodge_outcome(passing_ball(), 1, {refused}, 0.5);
+  EXPECT_NEAR(o.miss_with_maneuver_m, 0.2, 1e-9);
+  EXPECT_FALSE(o.maneuvered);
+}
+
+// A ball thrown across behind a still camera (bad input of issue 26: a throw that never enters the
+// view): every method reports no manoeuvre, "never detected"; the truth alone scores the throw, a
+// non-threat 3 m away.
+TEST(DodgeEval, ThrowNeverInViewGivesNoDecisionWithTheReason) {
+  sim::ScenarioConfig c;
+  c.name = "behind";
+  c.duration_s = 0.6;
+  c.threads = 1;
+  c.vehicle.motion = sim::MotionKind::kConstant;
+  c.vehicle.start_W_m = {0.0, 0.0, 1.5};
+  c.event_camera.background_rate_hz = 0;
+  c.event_camera.hot_pixel_fraction = 0;
+  sim::set_event_resolution(c, 64, 48);
+  c.depth_camera.enabled = false;
+  sim::BallConfig ball;
+  ball.mode = "explicit";
+  ball.release_t_s = 0.1;
+  ball.origin_W_m = {-3.0, 3.0, 1.5};  // behind the vehicle (it looks along +x), crossing
+  ball.velocity_W_m_s = {0.0, -10.0, 2.0};
+  ball.hidden_before_release = true;
+  c.balls.push_back(ball);
+  const std::string dir = test::scratch_dir("dodge_eval_behind") + "/dataset";
+  sim::ensure_simulated(c, dir);
+  DodgeEvalOptions o;
+  const DodgeThrow row = score_dodge_dataset(dir, o);
+  EXPECT_TRUE(row.non_threat);
+  EXPECT_NEAR(row.true_miss_m, 3.0, 0.05);
+  ASSERT_EQ(row.outcomes.size(), kDodgeMethods.size());
+  for (const auto& [method, outcome] : row.outcomes) {
+    EXPECT_FALSE(outcome.maneuvered) << method;
+    EXPECT_EQ(outcome.reason, "never detected") << method;
+  }
+}
+
+}  // namespace
+}  // namespace fdv
