@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <iostream>
 #include <nlohmann/json.hpp>
@@ -14,6 +15,7 @@
 #include "fdv/results/reader.h"
 #include "fdv/sim/dataset_cache.h"
 #include "fdv/sim/scenario_config.h"
+#include "fdv/tables/dodge_eval.h"
 #include "fdv/tables/experiment.h"
 
 namespace fdv::cli {
@@ -94,12 +96,36 @@ void demo(const DemoArgs& args) {
     else
       std::cout << fmt::format("  predicted to pass outside the {} m safety sphere\n", safety_radius_m);
   }
+  std::optional<TimeNs> contact;
   if (!truth.radius_m.empty()) {
-    if (const auto contact = true_contact_time(truth, truth.radius_m.begin()->first, safety_radius_m))
+    contact = true_contact_time(truth, truth.radius_m.begin()->first, safety_radius_m);
+    if (contact)
       std::cout << fmt::format("  true contact with the {} m safety sphere at t = {:.3f} s\n", safety_radius_m,
                                to_seconds(*contact));
     else
       std::cout << fmt::format("  truth: the ball stays outside the {} m safety sphere\n", safety_radius_m);
+  }
+  // The dodge (docs/AVOIDANCE.md): the first decision to act, and the truth flown with it.
+  const std::vector<DodgeDecision> decisions = dodge_decisions(read_dodge(results));
+  const auto first = std::find_if(decisions.begin(), decisions.end(),
+                                  [](const DodgeDecision& d) { return d.action == DodgeAction::kDodge; });
+  if (first == decisions.end()) {
+    std::cout << "  no dodge decided\n";
+  } else {
+    const Eigen::Vector3d& a = first->maneuver->acceleration_W;
+    std::cout << fmt::format("  dodge decided at t = {:.3f} s{}: P(contact) {:.2f}, accelerate ({:.1f}, {:.1f}, {:.1f}) "
+                             "m/s² for {:.2f} s ({})\n",
+                             to_seconds(first->t),
+                             contact ? fmt::format(", {:.0f} ms before the true contact", 1e3 * to_seconds(*contact - first->t))
+                                     : std::string(),
+                             first->probability, a.x(), a.y(), a.z(), first->maneuver->duration_s,
+                             decisions.size() == 1 ? std::string("1 decision") : fmt::format("{} decisions", decisions.size()));
+  }
+  if (!truth.radius_m.empty() && first != decisions.end()) {
+    const DodgeOutcome flown = dodge_outcome(truth, truth.radius_m.begin()->first, decisions, safety_radius_m);
+    std::cout << fmt::format("  flying it, the true closest approach becomes {:.3f} m: {}\n", flown.miss_with_maneuver_m,
+                             flown.miss_with_maneuver_m >= safety_radius_m ? "outside the safety sphere"
+                                                                          : "still inside the safety sphere");
   }
   for (const auto& a : metrics["ape"])
     std::cout << fmt::format(
@@ -110,7 +136,7 @@ void demo(const DemoArgs& args) {
                                 : " (its final fit, flagged not usable: position too uncertain"
                                   " 0.5 s ahead)");
   std::cout << "  outputs: " << results
-            << " (detections, depth, trajectories, predictions, metrics)\n";
+            << " (detections, depth, trajectories, predictions, dodge, metrics)\n";
   // The plots are Python's (python/fdv/report.py), built beside the program as build/python/fdv.
   std::cout << fmt::format("  plots: PYTHONPATH=build/python /usr/bin/python3 -m fdv.report {} --truth {}\n"
                            "         (writes {}/report/report.html)\n",
