@@ -154,7 +154,7 @@ TEST(RandomThrow, HalfTheThrowsAreThreats) {
   EXPECT_NEAR(forward, n * 0.5, band(0.5));
   EXPECT_NEAR(panels, n * 0.5, band(0.5));
   EXPECT_NEAR(dim, n * 0.25, band(0.25));
-  EXPECT_NEAR(hires, n / 3.0, band(1.0 / 3));
+  EXPECT_NEAR(hires, n * 0.1, band(0.1));
   // Threat misses uniform in [0, 0.5): mean 0.25, σ of the mean 0.144 / sqrt(~200).
   EXPECT_NEAR(threat_miss_sum / threats, 0.25, 4 * 0.144 / std::sqrt(threats));
 }

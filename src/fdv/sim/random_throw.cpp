@@ -33,9 +33,12 @@ struct Resolution {
   const char* name;
 };
 /// The preset set: DVXplorer (default), DAVIS346, a 1280x720 sensor; all at the DVXplorer's
-/// field of view (set_event_resolution).
+/// field of view (set_event_resolution). Drawn with these probabilities: a 1280x720 throw costs
+/// ~6x a 640x480 one to simulate, and at 1/3 each 200 throws would not fit `fdv dodge-eval`'s
+/// 45 minutes on two cores (docs/SIMULATOR.md, "random_throw").
 constexpr Resolution kResolutions[] = {
     {640, 480, "640x480"}, {346, 260, "346x260"}, {1280, 720, "1280x720"}};
+constexpr double kResolutionProbability[] = {0.45, 0.45, 0.10};
 
 /// Everything but the ball and the panels: vehicle, camera, lighting.
 ScenarioConfig base_config(const RandomThrowParameters& p) {
@@ -193,7 +196,10 @@ RandomThrowParameters sample_random_throw(std::uint64_t seed) {
   p.lighting = dim ? "dim" : "bright";
   p.illuminance_lux = dim ? rng.uniform(8.0, 10.0) : rng.uniform(240.0, 1100.0);
   p.texture = rng.bernoulli(0.5) ? "panels" : "bare";
-  const Resolution& res = kResolutions[rng.next() % 3];
+  const double r = rng.uniform(0.0, 1.0);
+  const Resolution& res = kResolutions[r < kResolutionProbability[0] ? 0
+                                       : r < kResolutionProbability[0] + kResolutionProbability[1] ? 1
+                                                                                                 : 2];
   p.resolution = res.name;
   p.width = res.width;
   p.height = res.height;
