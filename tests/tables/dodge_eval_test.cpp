@@ -38,6 +38,11 @@ TEST(DodgeOutcome, NoDecisionIsTheTrueClosestApproach) {
   EXPECT_NEAR(o.miss_with_maneuver_m, 0.2, 1e-9);
   EXPECT_FALSE(o.escaped);
   EXPECT_FALSE(o.maneuvered);
+  // A scene that ends before the pass (the ball 0.5 m short at 0.45 s, the body truth ending
+  // then too): the ball flies on past the end, and the pass is still found.
+  DatasetTruth cut = test::straight_flight({0.2, 0, 5}, {0, 0, -10}, 0.1, 450);
+  cut.body.back().t = 450 * kNsPerMs;
+  EXPECT_NEAR(dodge_outcome(cut, 1, {}, 0.5).miss_with_maneuver_m, 0.2, 1e-9);
 }
 
 // 10 m/s² along -x from 0.15 s for 0.5 s: the vehicle is at x(t) = -5 (t - 0.15)², the ball at

@@ -24,6 +24,7 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 constexpr TimeNs kOutcomeStepNs = kNsPerMs;
+constexpr TimeNs kPastTheEndNs = 300 * kNsPerMs;
 
 /// What one pipeline run gives the evaluation: its decisions, its window ends and the first
 /// detection of the ball (the oracle starts there).
@@ -135,12 +136,32 @@ DodgeOutcome dodge_outcome(const DatasetTruth& truth, int ball, const std::vecto
   }
   out.decisions = static_cast<int>(decisions.size());
   if (truth.body.empty()) throw InputError(truth.dir, "truth", "no vehicle truth");
-  double closest = std::numeric_limits<double>::infinity();
-  for (TimeNs t = truth.body.front().t; t <= truth.body.back().t; t += kOutcomeStepNs) {
+  // A scene may end before the ball has passed (random_throw ends when the ball reaches the
+  // camera): beyond its end the ball flies on ballistically from its last sample and the body on
+  // at its last velocity, for kPastTheEndNs, so that a manoeuvre's closest approach is found.
+  const ObjectState* last = nullptr;
+  for (const ObjectState& o : truth.objects)
+    if (o.id == ball) last = &o;
+  if (!last) throw InputError(truth.dir, "truth", "no samples of ball " + std::to_string(ball));
+  const OdometrySample& body_end = truth.body.back();
+  auto ball_at = [&](TimeNs t) -> std::optional<Eigen::Vector3d> {
+    if (t > last->t) {
+      const double s = to_seconds(t - last->t);
+      return last->p_W + s * last->v_W + 0.5 * s * s * truth.gravity_W;
+    }
     const auto object = truth.object_at(ball, t);
+    return object ? std::optional(object->p_W) : std::nullopt;
+  };
+  auto body_at = [&](TimeNs t) -> Eigen::Vector3d {
+    return t > body_end.t ? Eigen::Vector3d(body_end.p_W_B + to_seconds(t - body_end.t) * body_end.v_W)
+                          : truth.body_at(t).p_W_B;
+  };
+  double closest = std::numeric_limits<double>::infinity();
+  for (TimeNs t = truth.body.front().t; t <= body_end.t + kPastTheEndNs; t += kOutcomeStepNs) {
+    const auto object = ball_at(t);
     if (!object) continue;
-    const Eigen::Vector3d vehicle = truth.body_at(t).p_W_B + commanded_offset(flown, t).position_W;
-    closest = std::min(closest, (object->p_W - vehicle).norm());
+    const Eigen::Vector3d vehicle = body_at(t) + commanded_offset(flown, t).position_W;
+    closest = std::min(closest, (*object - vehicle).norm());
   }
   out.miss_with_maneuver_m = closest;
   out.escaped = closest >= safety_radius_m;

@@ -9,7 +9,9 @@
 ///
 /// Outcome: after each decision the vehicle follows its scripted (true) path plus the commanded
 /// set-points, each taking effect after the response delay (avoidance/maneuver_playback.h); the
-/// true ball's distance to the body origin is checked every millisecond of the truth. A throw is
+/// true ball's distance to the body origin is checked every millisecond of the truth, and for
+/// 0.3 s past its end (the ball ballistic, the body at its last velocity: random_throw ends a
+/// scene when the ball reaches the camera). A throw is
 /// a threat when its true miss distance without a manoeuvre is below the safety radius, a
 /// non-threat above 1 m, a near miss in between.
 #include <cstdint>
