@@ -1,6 +1,6 @@
 // Back-end timings: trajectory estimator solve (20 observations), tracker update, depth
 // registration of a 640x480 frame into the event camera, depth segmentation on a 640x480
-// registered frame.
+// registered frame; the dodge's collision risk and manoeuvre choice per estimate.
 //   build-*/bench/backend_bench --benchmark_repetitions=10 --benchmark_report_aggregates_only=true
 // Target (issue 5): estimator update with 20 observations, median <= 0.2 ms.
 #include <benchmark/benchmark.h>
@@ -9,8 +9,10 @@
 #include <vector>
 
 #include "fdv/core/sensor_data.h"
+#include "fdv/avoidance/dodge_planner.h"
 #include "fdv/depth/depth_registration.h"
 #include "fdv/depth/depth_segmentation.h"
+#include "fdv/estimation/collision_risk.h"
 #include "fdv/estimation/trajectory_estimator.h"
 #include "fdv/sim/scenario_config.h"
 #include "fdv/tracking/tracker.h"
@@ -199,6 +201,45 @@ BENCHMARK(BM_DepthRegistration640x480)
     ->ArgsProduct({{0, 1}, {0, 1}})
     ->ArgNames({"plain", "far_quarter"})
     ->Unit(benchmark::kMillisecond);
+
+// The dodge's per-estimate cost (issue 26): the collision risk of the solved 20-observation
+// estimate against the vehicle (linear propagation, disc probability), then the planner's choice
+// among its 72 candidate directions.
+struct DodgeInputs {
+  TrajectoryEstimate estimate;
+  VehicleState vehicle;
+};
+
+DodgeInputs dodge_inputs() {
+  const Throw th = make_throw(1);
+  TrajectoryEstimator est(estimator_options(true));
+  for (const auto& e : th.events) est.add(e);
+  for (const auto& d : th.depths) est.add(d);
+  DodgeInputs in{est.solve(), {}};
+  in.vehicle.odometry.t = in.estimate.t_last;
+  in.vehicle.odometry.p_W_B = {0.7, 0.0, 1.5};
+  in.vehicle.odometry.v_W = {2.0, 0.0, 0.0};
+  in.vehicle.covariance = vehicle_state_covariance(PredictionOptions{});
+  return in;
+}
+
+void BM_CollisionRisk(benchmark::State& state) {
+  const DodgeInputs in = dodge_inputs();
+  for (auto _ : state) benchmark::DoNotOptimize(assess_collision_risk(in.estimate, in.vehicle, PredictionOptions{}).risk);
+}
+BENCHMARK(BM_CollisionRisk)->Unit(benchmark::kMicrosecond);
+
+void BM_DodgePlan(benchmark::State& state) {
+  const DodgeInputs in = dodge_inputs();
+  const RiskAssessment r = assess_collision_risk(in.estimate, in.vehicle, PredictionOptions{});
+  if (!r.risk) {
+    state.SkipWithError(r.reason.c_str());
+    return;
+  }
+  const DodgeOptions options;
+  for (auto _ : state) benchmark::DoNotOptimize(plan_dodge(*r.risk, in.vehicle, options, 0.5).maneuver.acceleration_W);
+}
+BENCHMARK(BM_DodgePlan)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 }  // namespace fdv
