@@ -299,5 +299,41 @@ TEST(CliBadInput, AMissingInputIsAClearErrorNamingThePath) {
   EXPECT_NE(r.output.find("no_such_recording.aedat4"), std::string::npos) << r.output;
 }
 
+// `fdv dodge-eval` on one throw (random_throw seed 6: 346x260, a hovering vehicle, a threat
+// passing 7 cm from the body; about 6 s): the file's keys as issue 26 lists them, the simulated
+// truth against the drawn throw, and --keep's folders.
+TEST(CliDodgeEval, OneThrowGivesTheTotalsTheBaselinesAndItsRow) {
+  const fs::path out = test::scratch_dir("cli_dodge_eval");
+  const Ran r = fdv("dodge-eval --seeds 6 --jobs 1 --keep --out " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* method : {"| ours |", "| point_estimate |", "| mono |", "| rotation |", "| oracle |"})
+    EXPECT_NE(r.output.find(method), std::string::npos) << method << "\n" << r.output;
+  const json e = read_json(out / "dodge_eval.json");
+  const char* keys[] = {"threats", "escaped", "non_threats", "false_alarms", "near_misses"};
+  for (const char* key : keys) EXPECT_TRUE(e.contains(key)) << key;
+  for (const char* baseline : {"point_estimate", "mono", "rotation", "oracle"})
+    for (const char* key : keys) EXPECT_TRUE(e.at("baselines").at(baseline).contains(key)) << baseline << " " << key;
+  ASSERT_EQ(e.at("throws").size(), 1u);
+  const json& row = e.at("throws").at(0);
+  EXPECT_EQ(row.at("seed"), 6);
+  EXPECT_EQ(row.at("parameters").at("seed"), 6);
+  // The simulated truth passes at the drawn miss distance, and the threat is the drawn one.
+  EXPECT_NEAR(row.at("true_miss_m").get<double>(), row.at("parameters").at("miss_distance_m").get<double>(), 0.01);
+  EXPECT_EQ(row.at("threat").get<bool>(), row.at("parameters").at("threat").get<bool>());
+  EXPECT_EQ(e.at("threats").get<int>() + e.at("non_threats").get<int>() + e.at("near_misses").get<int>(), 1);
+  // The oracle knows a threat for certain from the first detection: it manoeuvres.
+  if (row.at("threat").get<bool>()) {
+    EXPECT_TRUE(row.at("outcomes").at("oracle").at("maneuvered").get<bool>());
+  }
+  EXPECT_TRUE(fs::exists(out / "throws" / "6" / "dataset" / "dataset.yaml"));
+  for (const char* file : {"detections.jsonl", "dodge.jsonl", "summary.json"})
+    EXPECT_TRUE(fs::exists(out / "throws" / "6" / "run" / file)) << file;
+  // Bad arguments: a clear error, nothing written.
+  const Ran bad = fdv("dodge-eval --seeds 9-3 --out " + (out / "bad").string());
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.output.find("runs backwards"), std::string::npos) << bad.output;
+  EXPECT_FALSE(fs::exists(out / "bad" / "dodge_eval.json"));
+}
+
 }  // namespace
 }  // namespace fdv
