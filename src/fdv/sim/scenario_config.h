@@ -229,7 +229,7 @@ struct ScenarioConfig {
 };
 
 /// Names of the presets: scene1_no_object, scene2_ball, fast_forward, swing, hover_headon, dim,
-/// close_pass, two_balls (docs/SIMULATOR.md, "Scenarios").
+/// close_pass, two_balls, random_throw (docs/SIMULATOR.md, "Scenarios").
 std::vector<std::string> preset_names();
 /// A named preset, randomised by `seed` (panel layout, throw, textures, noise). Throws
 /// ConfigError for an unknown name (listing the known ones).
