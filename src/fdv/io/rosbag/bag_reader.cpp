@@ -184,10 +184,9 @@ std::vector<SelectedTopic> select_topics(const std::string& file,
 
 BagReader::BagReader(const std::string& path, const ReaderOptions& options, Dialect dialect,
                      std::string format)
-    : options_(options), dialect_(dialect) {
+    : options_(options), dialect_(dialect), decoder_(dialect) {
   info_.path = path;
   info_.format = std::move(format);
-  last_t_.fill(std::numeric_limits<TimeNs>::min());
 }
 
 void BagReader::setup(std::vector<TopicInfo> topics) {
@@ -233,10 +232,8 @@ void BagReader::read_geometry() {
     if (events != selected_.end())
       info_.notes.push_back("the event messages give no sensor size: pixels are not range-checked");
     info_.width = info_.height = 0;
-    sanitizer_.emplace(1 << 16, 1 << 16);
-  } else {
-    sanitizer_.emplace(info_.width, info_.height);
   }
+  decoder_.set_sensor_size(info_.width, info_.height);
 }
 
 bool BagReader::read(SensorChunk& chunk) {
@@ -246,95 +243,11 @@ bool BagReader::read(SensorChunk& chunk) {
          chunk.imu.size() + chunk.odometry.size() + chunk.ground_truth.size() < kMaxItemsPerChunk &&
          chunk.depth.size() < kMaxDepthFramesPerChunk) {
     if (!next_message(m)) break;
-    if (dialect_ == Dialect::kRos1)
-      dispatch<Ros1Cursor>(m, chunk);
-    else
-      dispatch<CdrCursor>(m, chunk);
+    const SelectedTopic& topic = selected_[m.selected];
+    decoder_.decode(topic.stream, topic.type, m.data, m.size, m.bag_time, chunk, report_,
+                    topic.topic + " " + position_label() + std::to_string(m.position));
   }
   return !chunk.empty();
-}
-
-bool BagReader::accept_time(StreamKind stream, TimeNs& t, TimeNs bag_time,
-                            const std::string& where) {
-  if (t == 0) {
-    t = bag_time;
-    report_.repair(std::string(to_string(stream)) + ": header stamp is zero, bag time used", where);
-  }
-  TimeNs& last = last_t_[index(stream)];
-  if (t < last) {
-    report_.drop(std::string(to_string(stream)) + ": timestamp went backwards", where);
-    return false;
-  }
-  last = t;
-  return true;
-}
-
-template <class Cursor>
-void BagReader::dispatch(const RawMessage& m, SensorChunk& chunk) {
-  const SelectedTopic& topic = selected_[m.selected];
-  const std::string where = topic.topic + " " + position_label() + std::to_string(m.position);
-  Cursor c(m.data, m.size);
-  const char* why = nullptr;
-  if (!c.ok()) {
-    report_.drop(std::string(to_string(topic.stream)) + ": message too short or not plain CDR",
-                 where);
-    return;
-  }
-  switch (topic.stream) {
-    case StreamKind::kEvents: {
-      raw_events_.clear();
-      if (topic.type == MessageType::kEventPacket) {
-        EventPacketView p;
-        why = decode_event_packet(c, p);
-        if (!why) packet_decoder_.decode(p, raw_events_, report_, where);
-      } else {
-        EventArrayHeader h;
-        why = decode_event_array(c, h, raw_events_);
-      }
-      if (!why)
-        sanitizer_->append(raw_events_.data(), raw_events_.data() + raw_events_.size(),
-                           chunk.events, report_, where);
-      break;
-    }
-    case StreamKind::kImu: {
-      ImuSample s;
-      why = decode_imu(c, s);
-      if (!why && accept_time(topic.stream, s.t, m.bag_time, where)) chunk.imu.push_back(s);
-      break;
-    }
-    case StreamKind::kDepth: {
-      DepthFrame f;
-      why = decode_depth_image(c, f);
-      if (!why && accept_time(topic.stream, f.t, m.bag_time, where))
-        chunk.depth.push_back(std::move(f));
-      break;
-    }
-    case StreamKind::kOdometry:
-    case StreamKind::kGroundTruth: {
-      OdometrySample s;
-      if (topic.type == MessageType::kOdometry) why = decode_odometry(c, s);
-      if (topic.type == MessageType::kPoseStamped) why = decode_pose_stamped(c, s);
-      if (topic.type == MessageType::kTransformStamped) why = decode_transform_stamped(c, s);
-      if (why) break;
-      if (topic.stream == StreamKind::kOdometry) {
-        if (std::abs(s.q_W_B.norm() - 1.0) > 1e-3) {
-          why = "odometry: quaternion is not unit length";
-          break;
-        }
-        s.q_W_B.normalize();
-        if (accept_time(topic.stream, s.t, m.bag_time, where)) chunk.odometry.push_back(s);
-      } else if (accept_time(topic.stream, s.t, m.bag_time, where)) {
-        ObjectState o;
-        o.t = s.t;
-        o.id = 0;
-        o.p_W = s.p_W_B;
-        o.v_W = s.v_W;  // zero for poses; the odometry's own velocity when given explicitly
-        chunk.ground_truth.push_back(o);
-      }
-      break;
-    }
-  }
-  if (why) report_.drop(why, where);
 }
 
 }  // namespace fdv::bag

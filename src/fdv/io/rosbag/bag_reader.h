@@ -9,12 +9,10 @@
 #include <vector>
 
 #include "fdv/io/recording.h"
-#include "fdv/io/rosbag/event_packet_decoder.h"
+#include "fdv/io/rosbag/message_decoder.h"
 #include "fdv/io/rosbag/ros_messages.h"
 
 namespace fdv::bag {
-
-enum class Dialect { kRos1, kCdr };
 
 /// Whether the reader decodes `type` from bags of this dialect.
 bool supported(MessageType type, Dialect dialect);
@@ -81,19 +79,12 @@ class BagReader : public RecordingReader {
   ReadReport report_;
 
  private:
-  template <class Cursor>
-  void dispatch(const RawMessage& m, SensorChunk& chunk);
   void read_geometry();
-  /// Applies the stream's time rules (zero stamp -> bag time, counted; backwards -> dropped).
-  bool accept_time(StreamKind stream, TimeNs& t, TimeNs bag_time, const std::string& where);
 
   ReaderOptions options_;
   Dialect dialect_;
   std::vector<SelectedTopic> selected_;
-  std::optional<EventSanitizer> sanitizer_;
-  EventPacketDecoder packet_decoder_;
-  std::vector<Event> raw_events_;
-  std::array<TimeNs, 5> last_t_;
+  MessageDecoder decoder_;
 };
 
 }  // namespace fdv::bag
