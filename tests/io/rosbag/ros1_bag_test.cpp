@@ -362,6 +362,59 @@ TEST_F(Ros1BagTest, PropheseeEventArrayHasTheDvsLayout) {
   EXPECT_TRUE(got.all.events[0].polarity);
 }
 
+// event_camera_msgs/EventPacket in ROS 1 bags: the ROS 2 reader's decoders, on packets encoded
+// here from the encodings' definitions (docs/FORMATS.md, "ROS 2 bags").
+void append_word(std::vector<std::uint8_t>& b, std::uint64_t w) {
+  for (int i = 0; i < 8; ++i) b.push_back(static_cast<std::uint8_t>(w >> (8 * i)));
+}
+std::uint64_t mono_word(std::uint64_t x, std::uint64_t y, bool on, std::uint32_t dt_ns) {
+  return (std::uint64_t{on} << 63) | (y << 48) | (x << 32) | dt_ns;
+}
+/// libcaer: uint32 data (x << 17 | y << 2 | polarity << 1 | valid), then int32 ts in us.
+std::uint64_t libcaer_word(std::uint32_t x, std::uint32_t y, bool on, bool valid,
+                           std::uint32_t ts_us) {
+  const std::uint32_t data = (x << 17) | (y << 2) | (on ? 2u : 0u) | (valid ? 1u : 0u);
+  return (std::uint64_t{ts_us} << 32) | data;
+}
+
+TEST_F(Ros1BagTest, EventPacketsInMonoAndLibcaer) {
+  const std::string path = dir_ + "/event_packets.bag";
+  {
+    BagWriter bag(path);
+    std::vector<std::uint8_t> m0, m1, c0;
+    append_word(m0, mono_word(10, 20, true, 1'000));  // sensor time base 5 s
+    append_word(m0, mono_word(11, 21, false, 2'000));
+    append_word(m1, mono_word(12, 22, true, 500'000));
+    bag.event_packet("/dvs/events", at_ns(100), at_ns(50), 64, 48, 5'000'000'000, "mono", m0);
+    bag.event_packet("/dvs/events", at_ns(600'000), at_ns(499'000), 64, 48, 5'000'001'000, "mono",
+                     m1);
+    append_word(c0, libcaer_word(1, 2, true, true, 10));
+    append_word(c0, libcaer_word(3, 4, true, false, 20));  // marked invalid
+    append_word(c0, libcaer_word(5, 6, false, true, 25));
+    bag.event_packet("/caer/events", at_ns(200), at_ns(200), 64, 48,
+                     static_cast<std::uint64_t>(ns(0)), "libcaer", c0);
+  }
+  ReaderOptions options;
+  options.events_topic = "/dvs/events";
+  auto mono = open_ros1_bag(path, options);
+  EXPECT_EQ(mono->info().width, 64);
+  EXPECT_EQ(mono->info().height, 48);
+  const Everything got = read_all(*mono);
+  // Sensor time time_base + dt, moved so that the first event lands on its header stamp.
+  ASSERT_EQ(got.all.events.size(), 3u);
+  EXPECT_EQ(got.all.events[0], (Event{ns(50), 10, 20, true}));
+  EXPECT_EQ(got.all.events[1], (Event{ns(1'050), 11, 21, false}));
+  EXPECT_EQ(got.all.events[2], (Event{ns(500'050), 12, 22, true}));
+
+  options.events_topic = "/caer/events";
+  auto caer = open_ros1_bag(path, options);
+  const Everything c = read_all(*caer);
+  ASSERT_EQ(c.all.events.size(), 2u);  // t = time_base + ts us, already ROS time
+  EXPECT_EQ(c.all.events[0], (Event{ns(10'000), 1, 2, true}));
+  EXPECT_EQ(c.all.events[1], (Event{ns(25'000), 5, 6, false}));
+  EXPECT_EQ(caer->report().dropped().at("libcaer: event marked invalid").count, 1u);
+}
+
 TEST_F(Ros1BagTest, TimeGoingBackwardsAndShortMessagesAreCounted) {
   const std::string path = dir_ + "/damaged.bag";
   {

@@ -31,6 +31,18 @@ struct EventArray {
   std::string type, md5;
 };
 
+// event_camera_msgs/EventPacket (ROS 1 branch of ros-event-camera/event_camera_msgs).
+struct EventPacket {
+  std_msgs::Header header;
+  std::uint32_t height = 0;
+  std::uint32_t width = 0;
+  std::uint64_t seq = 0;
+  std::uint64_t time_base = 0;
+  std::string encoding;
+  std::uint8_t is_bigendian = 0;
+  std::vector<std::uint8_t> events;
+};
+
 /// Already serialized bytes under a given type name.
 struct RawBytes {
   std::vector<std::uint8_t> bytes;
@@ -43,6 +55,12 @@ const char* kEventArrayDefinition =
     "MSG: std_msgs/Header\nuint32 seq\ntime stamp\nstring frame_id\n"
     "================================================================================\n"
     "MSG: dvs_msgs/Event\nuint16 x\nuint16 y\ntime ts\nbool polarity\n";
+
+const char* kEventPacketDefinition =
+    "Header header\nuint32 height\nuint32 width\nuint64 seq\nuint64 time_base\n"
+    "string encoding\nbool is_bigendian\nuint8[] events\n"
+    "================================================================================\n"
+    "MSG: std_msgs/Header\nuint32 seq\ntime stamp\nstring frame_id\n";
 
 }  // namespace fdv_test_msgs
 
@@ -67,6 +85,21 @@ namespace message_traits {
 FDV_RUNTIME_TRAITS(fdv_test_msgs::EventArray, fdv_test_msgs::kEventArrayDefinition)
 FDV_RUNTIME_TRAITS(fdv_test_msgs::RawBytes, "")
 #undef FDV_RUNTIME_TRAITS
+template <>
+struct MD5Sum<fdv_test_msgs::EventPacket> {
+  static const char* value() { return fdv::test::ros1::kEventPacketMd5; }
+  static const char* value(const fdv_test_msgs::EventPacket&) { return value(); }
+};
+template <>
+struct DataType<fdv_test_msgs::EventPacket> {
+  static const char* value() { return "event_camera_msgs/EventPacket"; }
+  static const char* value(const fdv_test_msgs::EventPacket&) { return value(); }
+};
+template <>
+struct Definition<fdv_test_msgs::EventPacket> {
+  static const char* value() { return fdv_test_msgs::kEventPacketDefinition; }
+  static const char* value(const fdv_test_msgs::EventPacket&) { return value(); }
+};
 }  // namespace message_traits
 
 namespace serialization {
@@ -89,6 +122,22 @@ struct Serializer<fdv_test_msgs::EventArray> {
     stream.next(m.header);
     stream.next(m.height);
     stream.next(m.width);
+    stream.next(m.events);
+  }
+  ROS_DECLARE_ALLINONE_SERIALIZER
+};
+
+template <>
+struct Serializer<fdv_test_msgs::EventPacket> {
+  template <typename Stream, typename T>
+  inline static void allInOne(Stream& stream, T m) {
+    stream.next(m.header);
+    stream.next(m.height);
+    stream.next(m.width);
+    stream.next(m.seq);
+    stream.next(m.time_base);
+    stream.next(m.encoding);
+    stream.next(m.is_bigendian);
     stream.next(m.events);
   }
   ROS_DECLARE_ALLINONE_SERIALIZER
@@ -137,6 +186,7 @@ geometry_msgs::Pose pose_msg(const Pose& p) {
 
 struct BagWriter::Impl {
   rosbag::Bag bag;
+  std::uint64_t packets = 0;
 };
 
 BagWriter::BagWriter(const std::string& path, Compression compression) : impl_(new Impl) {
@@ -169,6 +219,20 @@ void BagWriter::event_array(const std::string& topic, Stamp bag_time, Stamp h, s
   }
   m.type = type;
   m.md5 = md5;
+  impl_->bag.write(topic, to_ros(bag_time), m);
+}
+
+void BagWriter::event_packet(const std::string& topic, Stamp bag_time, Stamp h,
+                             std::uint32_t width, std::uint32_t height, std::uint64_t time_base,
+                             const std::string& encoding, const std::vector<std::uint8_t>& events) {
+  fdv_test_msgs::EventPacket m;
+  m.header = header(h);
+  m.width = width;
+  m.height = height;
+  m.seq = ++impl_->packets;
+  m.time_base = time_base;
+  m.encoding = encoding;
+  m.events = events;
   impl_->bag.write(topic, to_ros(bag_time), m);
 }
 

@@ -34,6 +34,8 @@ struct Pose {
 
 /// The published MD5 sum of dvs_msgs/EventArray (and prophesee_event_msgs/EventArray).
 inline constexpr const char* kEventArrayMd5 = "5e8beee5a6c107e504c2e78903c224b8";
+/// The MD5 sum of event_camera_msgs/EventPacket's ROS 1 definition (tests/ros checks it).
+inline constexpr const char* kEventPacketMd5 = "8a6101b351a64529ac77bd8b71074e52";
 
 class BagWriter {
  public:
@@ -44,6 +46,10 @@ class BagWriter {
                    std::uint32_t height, const std::vector<RawEvent>& events,
                    const std::string& type = "dvs_msgs/EventArray",
                    const std::string& md5 = kEventArrayMd5);
+  /// event_camera_msgs/EventPacket with `events` already encoded as `encoding` says.
+  void event_packet(const std::string& topic, Stamp bag_time, Stamp header, std::uint32_t width,
+                    std::uint32_t height, std::uint64_t time_base, const std::string& encoding,
+                    const std::vector<std::uint8_t>& events);
   void imu(const std::string& topic, Stamp bag_time, Stamp header, std::array<double, 3> gyro,
            std::array<double, 3> accel);
   void image(const std::string& topic, Stamp bag_time, Stamp header, std::uint32_t width,

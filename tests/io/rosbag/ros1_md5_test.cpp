@@ -71,6 +71,10 @@ class Md5Rule {
     def("prophesee_event_msgs/EventArray",
         "<std_msgs/Header> header\nuint32 height\nuint32 width\n<prophesee_event_msgs/Event> "
         "events");
+    // event_camera_msgs/EventPacket, ros-event-camera/event_camera_msgs msg_ros1/EventPacket.msg.
+    def("event_camera_msgs/EventPacket",
+        "<std_msgs/Header> header\nuint32 height\nuint32 width\nuint64 seq\nuint64 time_base\n"
+        "string encoding\nbool is_bigendian\nuint8[] events");
   }
   const std::string& operator[](const std::string& type) const { return md5_.at(type); }
 
@@ -99,7 +103,7 @@ TEST(Ros1Md5, TableMatchesTheRuleAndDebiansGeneratedHeaders) {
     }
     ++checked;
   }
-  EXPECT_EQ(checked, 7);
+  EXPECT_EQ(checked, 8);
   // The rule itself, on a type whose generated header Debian ships.
   EXPECT_EQ(rule["std_msgs/Header"], test::ros1::generated_md5("std_msgs/Header"));
   // dvs_msgs/EventArray as published by its generated Python module (_md5sum).

@@ -93,7 +93,6 @@ std::size_t index(StreamKind k) { return static_cast<std::size_t>(k); }
 
 bool supported(MessageType type, Dialect dialect) {
   if (type == MessageType::kUnsupported) return false;
-  // event_camera_msgs exists for ROS 1 too, but its ROS 1 form is not decoded here (no MD5).
   return dialect == Dialect::kCdr || type_info(type).ros1_md5[0] != '\0';
 }
 

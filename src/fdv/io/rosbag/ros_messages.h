@@ -23,7 +23,7 @@ enum class MessageType {
   kUnsupported,
   kDvsEventArray,        ///< dvs_msgs/EventArray (per-event stamps)
   kPropheseeEventArray,  ///< prophesee_event_msgs/EventArray (same layout as dvs_msgs)
-  kEventPacket,          ///< event_camera_msgs/EventPacket (encoded byte buffer; ROS 2 only)
+  kEventPacket,          ///< event_camera_msgs/EventPacket (encoded byte buffer)
   kImu,                  ///< sensor_msgs/Imu
   kImage,                ///< sensor_msgs/Image (depth: 16UC1 mm or 32FC1 m)
   kOdometry,             ///< nav_msgs/Odometry
