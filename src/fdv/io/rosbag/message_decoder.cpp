@@ -71,13 +71,20 @@ const char* MessageDecoder::decode_with(Cursor& c, StreamKind stream, MessageTyp
   switch (stream) {
     case StreamKind::kEvents: {
       raw_events_.clear();
+      auto size_fits = [&](std::uint32_t width, std::uint32_t height) {
+        message_size_ = {static_cast<int>(width), static_cast<int>(height)};
+        return !required_size_ || *required_size_ == message_size_;
+      };
+      constexpr const char* kWrongSize = "events: the message's sensor size is not the calibration's";
       if (type == MessageType::kEventPacket) {
         EventPacketView p;
         why = decode_event_packet(c, p);
+        if (!why && !size_fits(p.width, p.height)) why = kWrongSize;
         if (!why) packet_decoder_.decode(p, raw_events_, report, where);
       } else {
         EventArrayHeader h;
         why = decode_event_array(c, h, raw_events_);
+        if (!why && !size_fits(h.width, h.height)) why = kWrongSize;
       }
       if (!why) {
         sanitizer_.append(raw_events_.data(), raw_events_.data() + raw_events_.size(), out.events,

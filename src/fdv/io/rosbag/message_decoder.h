@@ -18,6 +18,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "fdv/io/read_report.h"
@@ -36,6 +37,11 @@ class MessageDecoder {
   Dialect dialect() const { return dialect_; }
   /// Events with a pixel outside width x height are dropped; 0 x 0 checks only the 16-bit range.
   void set_sensor_size(int width, int height);
+  /// When set, an event message that declares another sensor size is dropped whole (a live
+  /// source checked against its calibration).
+  void require_event_message_size(int width, int height) { required_size_ = {width, height}; }
+  /// The sensor size the last decoded event message declared (0 x 0 before any).
+  std::pair<int, int> event_message_size() const { return message_size_; }
 
   /// Appends what one message of `type` feeding `stream` holds to `out` (an event message: its
   /// valid events; otherwise one record). Drops and repairs go to `report` at `where`. Returns
@@ -58,6 +64,8 @@ class MessageDecoder {
   EventPacketDecoder packet_decoder_;
   std::vector<Event> raw_events_;
   std::array<TimeNs, 5> last_t_;
+  std::optional<std::pair<int, int>> required_size_;
+  std::pair<int, int> message_size_{0, 0};
 };
 
 }  // namespace fdv::bag

@@ -1,0 +1,436 @@
+// fdv_ros_node: the perception pipeline on live ROS 1 topics (README "ROS 1 node").
+//
+//   rosrun fdv_ros fdv_ros_node _calibration:=rig.yaml _config:=options.yaml
+//
+// Subscribes to events (dvs_msgs/EventArray or event_camera_msgs/EventPacket), sensor_msgs/Imu,
+// depth sensor_msgs/Image and nav_msgs/Odometry as raw bytes (topic_tools::ShapeShifter), which
+// NodeCore decodes with the bag readers' decoders, and publishes its results under ~. This file
+// is C++17 (ROS 1's generated headers are not C++20) and holds only the ROS plumbing: parameters,
+// subscriptions, JSON rows to messages, markers, diagnostics.
+#include <diagnostic_msgs/DiagnosticArray.h>
+#include <fdv_msgs/CollisionPrediction.h>
+#include <fdv_msgs/DodgeDecision.h>
+#include <fdv_msgs/TrackStates.h>
+#include <fdv_msgs/TrajectoryEstimate.h>
+#include <fdv_msgs/WindowDetections.h>
+#include <nav_msgs/Path.h>
+#include <ros/ros.h>
+#include <topic_tools/shape_shifter.h>
+#include <visualization_msgs/MarkerArray.h>
+
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "node_core.h"
+
+namespace {
+
+using fdv::ros_core::NodeConfig;
+using fdv::ros_core::NodeCore;
+using fdv::ros_core::NodeOutputs;
+using fdv::ros_core::Stream;
+using nlohmann::json;
+
+ros::Time stamp(const json& seconds) {
+  const double s = seconds.get<double>();
+  return s > 0 ? ros::Time(s) : ros::Time();
+}
+
+double number(const json& j) {  // JSON null is an infinite sigma (results/schema.h)
+  return j.is_null() ? std::numeric_limits<double>::infinity() : j.get<double>();
+}
+
+template <std::size_t N>
+void fill(boost::array<double, N>& out, const json& values) {
+  for (std::size_t i = 0; i < N; ++i) out[i] = values.at(i).get<double>();
+}
+
+geometry_msgs::Point point(const json& v) {
+  geometry_msgs::Point p;
+  p.x = v.at(0), p.y = v.at(1), p.z = v.at(2);
+  return p;
+}
+
+geometry_msgs::Vector3 vector3(const json& v) {
+  geometry_msgs::Vector3 p;
+  p.x = v.at(0), p.y = v.at(1), p.z = v.at(2);
+  return p;
+}
+
+fdv_msgs::WindowDetections window_message(const fdv::ros_core::WindowOutput& w, const std::string& frame) {
+  const json& r = w.window;
+  fdv_msgs::WindowDetections m;
+  m.header.stamp = stamp(r.at("t_end"));
+  m.header.frame_id = frame;
+  m.index = w.index;
+  m.t_start = stamp(r.at("t_start"));
+  m.t_end = stamp(r.at("t_end"));
+  m.events = r.at("events");
+  m.method = r.at("method");
+  m.method_requested = r.value("method_requested", "");
+  m.status = r.at("status");
+  for (const json& d : r.at("detections")) {
+    fdv_msgs::Detection o;
+    o.t = stamp(d.at("t"));
+    fill(o.box, d.at("box"));
+    fill(o.center, d.at("center"));
+    fill(o.box_undistorted, d.at("box_undistorted"));
+    fill(o.center_undistorted, d.at("center_undistorted"));
+    o.events = d.at("events");
+    o.score = d.at("score");
+    o.event_density = d.at("event_density");
+    o.track_aided = d.at("track_aided");
+    o.source = d.at("source");
+    o.track = d.at("track");
+    o.partial = d.at("partial");
+    o.visible_fraction = d.at("visible_fraction");
+    o.has_center_full = d.contains("center_full");
+    if (o.has_center_full) fill(o.center_full, d.at("center_full"));
+    m.detections.push_back(o);
+  }
+  m.processing_ms = w.processing_ms;
+  m.latency_ms = w.latency_ms;
+  return m;
+}
+
+fdv_msgs::TrackStates tracks_message(const fdv::ros_core::WindowOutput& w, const std::string& frame) {
+  fdv_msgs::TrackStates m;
+  m.header.stamp = stamp(w.window.at("t_end"));
+  m.header.frame_id = frame;
+  for (const json& t : w.tracks) {
+    fdv_msgs::TrackState s;
+    s.id = t.at("id");
+    s.confirmed = t.at("confirmed");
+    s.first_t = stamp(t.at("first_t"));
+    s.last_update_t = stamp(t.at("last_update_t"));
+    s.hits = t.at("hits");
+    s.misses = t.at("misses");
+    fill(s.center, t.at("center"));
+    fill(s.velocity, t.at("velocity"));
+    fill(s.center_covariance, t.at("center_covariance"));
+    fill(s.box_size, t.at("box_size"));
+    m.tracks.push_back(s);
+  }
+  return m;
+}
+
+fdv_msgs::TrajectoryEstimate estimate_message(const json& r, const std::string& frame) {
+  fdv_msgs::TrajectoryEstimate m;
+  m.header.stamp = stamp(r.at("t"));
+  m.header.frame_id = frame;
+  m.track = r.at("track");
+  m.method = r.at("method");
+  m.fit = r.at("fit");
+  m.usable = r.at("usable");
+  m.converged = r.at("converged");
+  m.t0 = stamp(r.at("t0"));
+  m.p0 = point(r.at("p0"));
+  m.v0 = vector3(r.at("v0"));
+  m.gravity = vector3(r.at("gravity"));
+  m.t_first = stamp(r.at("t_first"));
+  m.t_last = stamp(r.at("t_last"));
+  m.event_observations = r.at("event_observations");
+  m.depth_observations = r.at("depth_observations");
+  m.outliers = r.at("outliers");
+  m.cost = r.at("cost");
+  m.iterations = r.at("iterations");
+  m.message = r.at("message");
+  m.has_covariance = r.contains("covariance");
+  if (m.has_covariance) {
+    fill(m.covariance, r.at("covariance"));
+    m.position_sigma = number(r.at("position_sigma"));
+    m.horizon_sigma = number(r.at("horizon_sigma"));
+  } else {
+    m.position_sigma = m.horizon_sigma = std::numeric_limits<double>::infinity();
+  }
+  return m;
+}
+
+nav_msgs::Path path_message(const json& r, const std::string& frame) {
+  nav_msgs::Path m;
+  m.header.stamp = stamp(r.at("t"));
+  m.header.frame_id = frame;
+  for (const json& p : r.at("path")) {
+    geometry_msgs::PoseStamped pose;
+    pose.header.stamp = stamp(p.at(0));
+    pose.header.frame_id = frame;
+    pose.pose.position.x = p.at(1), pose.pose.position.y = p.at(2), pose.pose.position.z = p.at(3);
+    pose.pose.orientation.w = 1;
+    m.poses.push_back(pose);
+  }
+  return m;
+}
+
+/// The ball where it is now (a sphere) and its predicted path (a line), per track.
+visualization_msgs::MarkerArray markers_message(const nav_msgs::Path& path, int track, double lifetime_s) {
+  visualization_msgs::MarkerArray a;
+  if (path.poses.empty()) return a;
+  visualization_msgs::Marker ball;
+  ball.header = path.header;
+  ball.ns = "fdv_ball";
+  ball.id = track;
+  ball.type = visualization_msgs::Marker::SPHERE;
+  ball.action = visualization_msgs::Marker::ADD;
+  ball.pose = path.poses.front().pose;
+  ball.scale.x = ball.scale.y = ball.scale.z = 0.15;
+  ball.color.r = 1, ball.color.g = 0.4f, ball.color.a = 1;
+  ball.lifetime = ros::Duration(lifetime_s);
+  visualization_msgs::Marker line = ball;
+  line.ns = "fdv_predicted_path";
+  line.type = visualization_msgs::Marker::LINE_STRIP;
+  line.pose = geometry_msgs::Pose();
+  line.pose.orientation.w = 1;
+  line.scale.x = 0.02;
+  line.color.r = 0.2f, line.color.g = 0.6f, line.color.b = 1, line.color.a = 1;
+  for (const auto& p : path.poses) line.points.push_back(p.pose.position);
+  a.markers = {ball, line};
+  return a;
+}
+
+fdv_msgs::CollisionPrediction prediction_message(const json& r, const std::string& frame) {
+  fdv_msgs::CollisionPrediction m;
+  m.header.stamp = stamp(r.at("t"));
+  m.header.frame_id = frame;
+  m.track = r.at("track");
+  m.closest_t = stamp(r.at("closest_t"));
+  m.closest_in = r.at("closest_in_s");
+  m.miss_distance = r.at("miss_distance");
+  m.object = point(r.at("object_W"));
+  m.passage = vector3(r.at("passage_B"));
+  m.receding = r.at("receding");
+  m.enters_safety_sphere = r.contains("time_to_contact");
+  m.time_to_contact = m.enters_safety_sphere ? r.at("time_to_contact").get<double>()
+                                             : std::numeric_limits<double>::infinity();
+  return m;
+}
+
+fdv_msgs::DodgeDecision dodge_message(const json& r, const std::string& frame) {
+  fdv_msgs::DodgeDecision m;
+  m.header.stamp = stamp(r.at("t"));
+  m.header.frame_id = frame;
+  m.effective_t = stamp(r.at("effective_t"));
+  m.track = r.at("track");
+  m.action = r.at("action");
+  m.probability = r.at("probability");
+  m.enters_safety_sphere = r.contains("time_to_contact");
+  m.time_to_contact = m.enters_safety_sphere ? r.at("time_to_contact").get<double>()
+                                             : std::numeric_limits<double>::infinity();
+  m.miss_distance = r.at("miss_distance");
+  m.committed = r.at("committed");
+  m.reason = r.at("reason");
+  m.has_maneuver = r.contains("maneuver");
+  if (m.has_maneuver) {
+    const json& x = r.at("maneuver");
+    m.acceleration = vector3(x.at("acceleration_W"));
+    m.maneuver_start = stamp(x.at("start_t"));
+    m.maneuver_duration = x.at("duration");
+    m.expected_clearance = x.at("expected_clearance");
+    m.probability_after = x.at("probability_after");
+  }
+  return m;
+}
+
+/// A parameter value as the YAML scalar (or flow sequence) the options loader reads.
+std::string yaml_text(XmlRpc::XmlRpcValue& v) {
+  switch (v.getType()) {
+    case XmlRpc::XmlRpcValue::TypeBoolean:
+      return static_cast<bool>(v) ? "true" : "false";
+    case XmlRpc::XmlRpcValue::TypeInt:
+      return std::to_string(static_cast<int>(v));
+    case XmlRpc::XmlRpcValue::TypeDouble: {
+      char buffer[32];
+      std::snprintf(buffer, sizeof buffer, "%.17g", static_cast<double>(v));
+      return buffer;
+    }
+    case XmlRpc::XmlRpcValue::TypeString:
+      return "\"" + static_cast<std::string>(v) + "\"";
+    case XmlRpc::XmlRpcValue::TypeArray: {
+      std::string s = "[";
+      for (int i = 0; i < v.size(); ++i) s += (i ? ", " : "") + yaml_text(v[i]);
+      return s + "]";
+    }
+    default:
+      throw std::runtime_error("parameter of a type the options cannot take");
+  }
+}
+
+/// ~options/<section>/<key> and ~options/<key> as ("section.key", value) overrides.
+std::vector<std::pair<std::string, std::string>> option_overrides(const ros::NodeHandle& private_nh) {
+  std::vector<std::pair<std::string, std::string>> out;
+  XmlRpc::XmlRpcValue options;
+  if (!private_nh.getParam("options", options)) return out;
+  if (options.getType() != XmlRpc::XmlRpcValue::TypeStruct)
+    throw std::runtime_error("~options must be a dictionary of option keys");
+  for (auto& [key, value] : options) {
+    if (value.getType() == XmlRpc::XmlRpcValue::TypeStruct) {
+      for (auto& [inner, inner_value] : value) out.emplace_back(key + "." + inner, yaml_text(inner_value));
+    } else {
+      out.emplace_back(key, yaml_text(value));
+    }
+  }
+  return out;
+}
+
+class FdvRosNode {
+ public:
+  FdvRosNode(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh), pnh_(pnh) {
+    NodeConfig config;
+    config.options_file = pnh_.param<std::string>("config", "");
+    config.option_overrides = option_overrides(pnh_);
+    config.calibration_file = pnh_.param<std::string>("calibration", "");
+    config.width = pnh_.param("width", 0);
+    config.height = pnh_.param("height", 0);
+    config.wait_for_depth = pnh_.param("wait_for_depth", false);
+    config.max_hold_s = pnh_.param("max_hold_s", config.max_hold_s);
+    config.missing_after_s = pnh_.param("missing_after_s", config.missing_after_s);
+    config.path_horizon_s = pnh_.param("path_horizon_s", config.path_horizon_s);
+    const std::map<Stream, std::string> topics = {
+        {Stream::kEvents, pnh_.param<std::string>("events_topic", "/dvs/events")},
+        {Stream::kImu, pnh_.param<std::string>("imu_topic", "/mavros/imu/data")},
+        {Stream::kDepth, pnh_.param<std::string>("depth_topic", "/camera/depth/image_rect_raw")},
+        {Stream::kOdometry, pnh_.param<std::string>("odometry_topic", "/mavros/local_position/odom")}};
+    config.imu = !topics.at(Stream::kImu).empty();
+    config.depth = !topics.at(Stream::kDepth).empty();
+    config.odometry = !topics.at(Stream::kOdometry).empty();
+    camera_frame_ = pnh_.param<std::string>("camera_frame", "event_camera");
+    world_frame_ = pnh_.param<std::string>("world_frame", "world");
+    idle_finish_s_ = pnh_.param("idle_finish_s", 2.0);
+    const int queue = pnh_.param("queue_size", 10000);
+
+    detections_ = pnh_.advertise<fdv_msgs::WindowDetections>("detections", 100);
+    tracks_ = pnh_.advertise<fdv_msgs::TrackStates>("tracks", 100);
+    estimates_ = pnh_.advertise<fdv_msgs::TrajectoryEstimate>("estimates", 100);
+    paths_ = pnh_.advertise<nav_msgs::Path>("predicted_path", 100);
+    predictions_ = pnh_.advertise<fdv_msgs::CollisionPrediction>("collision", 100);
+    dodge_ = pnh_.advertise<fdv_msgs::DodgeDecision>("dodge", 100);
+    markers_ = pnh_.advertise<visualization_msgs::MarkerArray>("markers", 100);
+    diagnostics_ = nh_.advertise<diagnostic_msgs::DiagnosticArray>("/diagnostics", 10);
+
+    NodeOutputs outputs;
+    outputs.on_window = [this](const fdv::ros_core::WindowOutput& w) {
+      detections_.publish(window_message(w, camera_frame_));
+      tracks_.publish(tracks_message(w, camera_frame_));
+    };
+    outputs.on_estimate = [this](const json& r) {
+      estimates_.publish(estimate_message(r, world_frame_));
+      if (r.at("method") != "fusion" || !r.at("usable").get<bool>()) return;
+      const nav_msgs::Path path = path_message(r, world_frame_);
+      paths_.publish(path);
+      markers_.publish(markers_message(path, r.at("track"), 0.5));
+    };
+    outputs.on_prediction = [this](const json& r) { predictions_.publish(prediction_message(r, world_frame_)); };
+    outputs.on_dodge = [this](const json& r) { dodge_.publish(dodge_message(r, world_frame_)); };
+    outputs.on_warning = [](const std::string& key, const std::string& message) {
+      // One throttle per cause: a flood of one kind of drop does not hide another kind.
+      static std::map<std::string, ros::WallTime> last;
+      const ros::WallTime now = ros::WallTime::now();
+      auto it = last.find(key);
+      if (it != last.end() && (now - it->second).toSec() < 5.0) return;
+      last[key] = now;
+      ROS_WARN_STREAM("fdv: " << message);
+    };
+    core_ = std::make_unique<NodeCore>(config, std::move(outputs));
+
+    for (const auto& [stream, topic] : topics) {
+      if (topic.empty()) continue;
+      const Stream s = stream;
+      subscribers_.push_back(nh_.subscribe<topic_tools::ShapeShifter>(
+          topic, static_cast<std::uint32_t>(queue),
+          [this, s](const topic_tools::ShapeShifter::ConstPtr& msg) { receive(s, *msg); },
+          ros::VoidConstPtr(), ros::TransportHints().tcpNoDelay()));
+      ROS_INFO_STREAM("fdv: " << fdv::ros_core::to_string(s) << " from " << topic);
+    }
+    // Wall clock only for the plumbing: diagnostics once a second, and the end of input
+    // (nothing received for idle_finish_s: the last window is closed, as at a recording's end).
+    timer_ = nh_.createWallTimer(ros::WallDuration(1.0), [this](const ros::WallTimerEvent&) { tick(); });
+  }
+
+  void finish() {
+    if (pending_) core_->finish();
+    pending_ = false;
+    publish_diagnostics();
+  }
+
+ private:
+  void receive(Stream stream, const topic_tools::ShapeShifter& msg) {
+    buffer_.resize(msg.size());
+    ros::serialization::OStream out(buffer_.data(), static_cast<std::uint32_t>(buffer_.size()));
+    msg.write(out);
+    core_->push(stream, msg.getDataType(), buffer_.data(), buffer_.size());
+    last_message_ = ros::WallTime::now();
+    pending_ = true;
+  }
+
+  void tick() {
+    if (pending_ && (ros::WallTime::now() - last_message_).toSec() > idle_finish_s_) {
+      ROS_INFO("fdv: no input for %.1f s: end of input, last window closed", idle_finish_s_);
+      finish();
+      return;
+    }
+    publish_diagnostics();
+  }
+
+  void publish_diagnostics() {
+    const json d = core_->diagnostics();
+    diagnostic_msgs::DiagnosticArray array;
+    array.header.stamp = ros::Time::now();
+    diagnostic_msgs::DiagnosticStatus status;
+    status.name = "fdv: perception";
+    status.hardware_id = "event camera";
+    status.level = diagnostic_msgs::DiagnosticStatus::OK;
+    status.message = "running";
+    auto add = [&](const std::string& key, const json& value) {
+      diagnostic_msgs::KeyValue kv;
+      kv.key = key;
+      kv.value = value.is_string() ? value.get<std::string>() : value.dump();
+      status.values.push_back(kv);
+    };
+    for (const auto& [stream, h] : d.at("streams").items()) {
+      for (const auto& [key, value] : h.items()) add(stream + "." + key, value);
+      if (h.at("missing").get<bool>() || h.at("dropped").get<std::uint64_t>() > 0) {
+        status.level = diagnostic_msgs::DiagnosticStatus::WARN;
+        status.message = "streams missing or messages dropped (see the values)";
+      }
+    }
+    add("windows", d.at("windows"));
+    add("runs", d.at("runs"));
+    if (d.contains("latency_ms"))
+      for (const auto& [key, value] : d.at("latency_ms").items()) add("latency_ms." + key, value);
+    if (d.contains("pipeline"))
+      for (const auto& [key, value] : d.at("pipeline").items()) add("pipeline." + key, value);
+    add("dropped_by_reason", d.at("dropped_by_reason"));
+    array.status.push_back(status);
+    diagnostics_.publish(array);
+  }
+
+  ros::NodeHandle nh_, pnh_;
+  std::unique_ptr<NodeCore> core_;
+  std::vector<ros::Subscriber> subscribers_;
+  ros::Publisher detections_, tracks_, estimates_, paths_, predictions_, dodge_, markers_, diagnostics_;
+  ros::WallTimer timer_;
+  std::string camera_frame_, world_frame_;
+  double idle_finish_s_ = 2.0;
+  std::vector<std::uint8_t> buffer_;
+  ros::WallTime last_message_;
+  bool pending_ = false;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  ros::init(argc, argv, "fdv_ros_node");
+  try {
+    FdvRosNode node(ros::NodeHandle(), ros::NodeHandle("~"));
+    ros::spin();
+    node.finish();
+  } catch (const std::exception& e) {
+    ROS_FATAL_STREAM("fdv: " << e.what());
+    return 1;
+  }
+  return 0;
+}
