@@ -20,10 +20,10 @@ PACKAGES=(
   librosbag-storage-dev libroslz4-dev libbz2-dev libsensor-msgs-dev libnav-msgs-dev
   libgeometry-msgs-dev libfastcdr-dev
   # ROS 1 (cmake/fdv_ros1.cmake): the node's roscpp and message headers, gencpp for ros/msg, the
-  # .msg files our messages use, and roscore + rosbag play/record for the node's tests
+  # .msg files our messages use, roscore + rosbag play/record for the node's tests, rosrun/rospack
   libroscpp-dev libtopic-tools-dev python3-gencpp python3-genmsg ros-std-msgs ros-geometry-msgs
   libstd-msgs-dev libvisualization-msgs-dev libdiagnostic-msgs-dev librosbag-dev ros-core
-  python3-rosbag
+  python3-rosbag rosbash rospack-tools
   # the fdv Python package (python/), for Debian's /usr/bin/python3
   python3-dev pybind11-dev python3-numpy python3-matplotlib python3-pytest
 )
