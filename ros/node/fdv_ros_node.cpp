@@ -226,8 +226,10 @@ class FdvRosNode {
 
 int main(int argc, char** argv) {
   ros::init(argc, argv, "fdv_ros_node");
+  // Held for the whole of main: ROS shuts down (and stops logging) when the last handle goes.
+  ros::NodeHandle nh, private_nh("~");
   try {
-    FdvRosNode node(ros::NodeHandle(), ros::NodeHandle("~"));
+    FdvRosNode node(nh, private_nh);
     ros::spin();
     node.finish();
   } catch (const std::exception& e) {
