@@ -288,6 +288,7 @@ struct NodeCore::Impl {
 
   /// Every awaited stream has passed this time (stream time): what may be released.
   TimeNs horizon() {
+    if (first_t == kNever) return kBeforeAll;  // nothing received yet
     TimeNs h = kNever;
     for (Stream s : kStreams) {
       if (!subscribed(s) || (s == Stream::kDepth && !config.wait_for_depth)) continue;
