@@ -10,6 +10,7 @@
 #include <limits>
 #include <map>
 #include <optional>
+#include <tuple>
 
 #include "fdv/core/config_text.h"
 #include "fdv/core/error.h"
@@ -108,7 +109,10 @@ struct NodeCore::Impl {
   SensorChunk chunk;
 
   // The merge: items held per stream until every awaited stream has passed their time.
-  std::deque<Event> events;
+  /// Held events, as the messages brought them (each non-decreasing in time, as the decoder's
+  /// sanitizer leaves them); the first `events_released` of the front one have gone.
+  std::deque<std::vector<Event>> events;
+  std::size_t events_released = 0;
   std::deque<ImuSample> imu;
   std::deque<DepthFrame> depth;
   std::deque<OdometrySample> odometry;
@@ -116,18 +120,18 @@ struct NodeCore::Impl {
   TimeNs first_t = kNever;          ///< first stamp of this run
   TimeNs newest_t = kBeforeAll;     ///< newest stamp of any stream
   TimeNs released_until = kBeforeAll;
-  std::vector<Event> run;
 
   // Latency: the arrival of each event message, by the time its events reach.
   std::deque<std::pair<TimeNs, Clock::time_point>> arrivals;
   std::vector<double> latencies_ms;
   std::uint64_t windows = 0, runs = 0;
+  nlohmann::json finished_run = nlohmann::json::object();  ///< the pipeline's counters of the last run
 
   Impl(NodeConfig c, NodeOutputs o)
       : config(std::move(c)), outputs(std::move(o)), decoder(config.cdr ? bag::Dialect::kCdr : bag::Dialect::kRos1) {
     requested = load_options(config);
     if (!config.calibration_file.empty()) calibration = load_calibration(config.calibration_file);
-    start_run();
+    start_run(true);
   }
 
   void warn(const std::string& key, const std::string& message) {
@@ -148,19 +152,25 @@ struct NodeCore::Impl {
     return false;
   }
 
-  void start_run() {
+  /// The sensor size from the calibration or the configuration; 0 x 0 when the events must say.
+  std::pair<int, int> configured_size() const {
+    if (calibration) return {calibration->event_camera.width, calibration->event_camera.height};
+    return {std::max(config.width, 0), std::max(config.height, 0)};
+  }
+
+  /// Fresh state for a run. Its Perception is built now when `build` (at construction, so that a
+  /// configuration the sensors cannot serve fails at once) or else with the run's first message
+  /// (a Perception takes tens of ms to build: not at the end of the previous run).
+  void start_run(bool build) {
     perception.reset();
     decoder = bag::MessageDecoder(config.cdr ? bag::Dialect::kCdr : bag::Dialect::kRos1);
-    if (calibration) {
-      decoder.set_sensor_size(calibration->event_camera.width, calibration->event_camera.height);
-      decoder.require_event_message_size(calibration->event_camera.width, calibration->event_camera.height);
-      make_perception(calibration->event_camera.width, calibration->event_camera.height);
-    } else if (config.width > 0 && config.height > 0) {
-      decoder.set_sensor_size(config.width, config.height);
-      decoder.require_event_message_size(config.width, config.height);
-      make_perception(config.width, config.height);
+    if (const auto [width, height] = configured_size(); width > 0 && height > 0) {
+      decoder.set_sensor_size(width, height);
+      decoder.require_event_message_size(width, height);
+      if (build) make_perception(width, height);
     }
     events.clear(), imu.clear(), depth.clear(), odometry.clear(), arrivals.clear();
+    events_released = 0;
     for (StreamHealth& h : health) h.newest = kBeforeAll, h.seen = false, h.missing_reported = false;
     first_t = kNever, newest_t = kBeforeAll, released_until = kBeforeAll;
     ++runs;
@@ -239,17 +249,20 @@ struct NodeCore::Impl {
       ++h.dropped;
       return false;
     }
-    if (!perception && stream == Stream::kEvents) {
-      const auto [width, height] = decoder.event_message_size();
-      if (width <= 0 || height <= 0) {
-        ++h.dropped;
-        report.drop("events: no sensor size in the message and none configured", where);
-        warn_new_drops();
-        return false;
+    if (!perception) {
+      auto [width, height] = configured_size();
+      if (width == 0 && stream == Stream::kEvents) {
+        std::tie(width, height) = decoder.event_message_size();
+        if (width <= 0 || height <= 0) {
+          ++h.dropped;
+          report.drop("events: no sensor size in the message and none configured", where);
+          warn_new_drops();
+          return false;
+        }
+        decoder.set_sensor_size(width, height);
+        decoder.require_event_message_size(width, height);
       }
-      decoder.set_sensor_size(width, height);
-      decoder.require_event_message_size(width, height);
-      make_perception(width, height);
+      if (width > 0 && height > 0) make_perception(width, height);
     }
     hold(stream);
     release(false);
@@ -271,8 +284,9 @@ struct NodeCore::Impl {
         if (chunk.events.empty()) return;
         note_time(stream, chunk.events.back().t);
         if (chunk.events.front().t < released_until) ++health[0].late;
-        events.insert(events.end(), chunk.events.begin(), chunk.events.end());
         arrivals.emplace_back(chunk.events.back().t, Clock::now());
+        events.push_back(std::move(chunk.events));
+        chunk.events.clear();
         break;
       case Stream::kImu:
         for (const ImuSample& s : chunk.imu) note_time(stream, s.t), imu.push_back(s);
@@ -311,7 +325,7 @@ struct NodeCore::Impl {
     const TimeNs limit = all ? kNever : horizon();
     while (true) {
       // The earliest held item; ties in fdv run's merger order (events, IMU, depth, odometry).
-      const std::array<TimeNs, 4> heads = {events.empty() ? kNever : events.front().t,
+      const std::array<TimeNs, 4> heads = {events.empty() ? kNever : events.front()[events_released].t,
                                            imu.empty() ? kNever : imu.front().t,
                                            depth.empty() ? kNever : depth.front().t,
                                            odometry.empty() ? kNever : odometry.front().t};
@@ -321,13 +335,18 @@ struct NodeCore::Impl {
       switch (best) {
         case 0: {
           const TimeNs others = std::min({limit, heads[1], heads[2], heads[3]});
-          run.clear();
-          while (!events.empty() && (events.front().t <= others || run.empty())) {
-            run.push_back(events.front());
+          // The front message's events up to that time (at least one), handed over in place.
+          const std::vector<Event>& front = events.front();
+          const auto first = front.begin() + static_cast<std::ptrdiff_t>(events_released);
+          auto last = std::upper_bound(first, front.end(), others, [](TimeNs t, const Event& e) { return t < e.t; });
+          if (last == first) ++last;
+          released_until = std::max(released_until, (last - 1)->t);
+          perception->push_events(std::span<const Event>(&*first, static_cast<std::size_t>(last - first)));
+          events_released = static_cast<std::size_t>(last - front.begin());
+          if (events_released == front.size()) {
             events.pop_front();
+            events_released = 0;
           }
-          released_until = std::max(released_until, run.back().t);
-          perception->push_events(run);
           break;
         }
         case 1:
@@ -358,8 +377,23 @@ struct NodeCore::Impl {
 
   void finish() {
     release(true);
-    if (perception) perception->finish();
-    start_run();
+    if (perception) {
+      perception->finish();
+      finished_run = pipeline_json(perception->counters());
+    }
+    start_run(false);
+  }
+
+  static nlohmann::json pipeline_json(const PerceptionCounters& c) {
+    return {{"events", c.events},
+            {"windows", c.windows},
+            {"detections", c.detections},
+            {"imu_out_of_order", c.imu_out_of_order},
+            {"odometry_out_of_order", c.odometry_out_of_order},
+            {"depth_frames", c.depth_frames},
+            {"depth_frames_rejected", c.depth_rejected_registration},
+            {"estimates", c.estimates},
+            {"dodge_decisions", c.dodge_decisions}};
   }
 
   nlohmann::json diagnostics() const {
@@ -378,14 +412,7 @@ struct NodeCore::Impl {
       const Summary l = summarize(latencies_ms);
       d["latency_ms"] = {{"count", latencies_ms.size()}, {"median", l.median}, {"p99", l.p99}, {"max", l.max}};
     }
-    if (perception) {
-      const PerceptionCounters& c = perception->counters();
-      d["pipeline"] = {{"events", c.events},        {"windows", c.windows},
-                       {"detections", c.detections}, {"imu_out_of_order", c.imu_out_of_order},
-                       {"odometry_out_of_order", c.odometry_out_of_order},
-                       {"depth_frames", c.depth_frames}, {"depth_frames_rejected", c.depth_rejected_registration},
-                       {"estimates", c.estimates},  {"dodge_decisions", c.dodge_decisions}};
-    }
+    d["pipeline"] = perception ? pipeline_json(perception->counters()) : finished_run;
     return d;
   }
 };

@@ -200,6 +200,7 @@ TEST_F(NodeCoreReplay, BagOrderGivesFdvRunsResults) {
   expect_same_as_reference(rows);
   const json d = core.diagnostics();
   EXPECT_EQ(d["streams"]["events"]["dropped"], 0);
+  EXPECT_EQ(d["pipeline"]["windows"], reference_->windows.size()) << "the finished run's counters stay";
   EXPECT_EQ(d["streams"]["imu"]["messages"],
             std::count_if(messages_->begin(), messages_->end(), [](const RawMessage& m) { return m.stream == Stream::kImu; }));
 }
