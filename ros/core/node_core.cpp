@@ -124,6 +124,7 @@ struct NodeCore::Impl {
   // Latency: the arrival of each event message, by the time its events reach.
   std::deque<std::pair<TimeNs, Clock::time_point>> arrivals;
   std::vector<double> latencies_ms;
+  bool finishing = false;  ///< inside finish(): the windows it closes have no latency
   std::uint64_t windows = 0, runs = 0;
   nlohmann::json finished_run = nlohmann::json::object();  ///< the pipeline's counters of the last run
 
@@ -205,9 +206,12 @@ struct NodeCore::Impl {
     const Clock::time_point now = Clock::now();
     // The message that completed the window is the first whose events reach its end.
     while (arrivals.size() > 1 && arrivals.front().first < w.t_end) arrivals.pop_front();
-    const double latency_ms =
-        arrivals.empty() ? 0 : std::chrono::duration<double, std::milli>(now - arrivals.front().second).count();
-    latencies_ms.push_back(latency_ms);
+    // A window closed by the end of input waited for that end, not for the pipeline: no latency.
+    double latency_ms = std::numeric_limits<double>::quiet_NaN();
+    if (!finishing && !arrivals.empty()) {
+      latency_ms = std::chrono::duration<double, std::milli>(now - arrivals.front().second).count();
+      latencies_ms.push_back(latency_ms);
+    }
     if (!outputs.on_window) return;
     WindowOutput out;
     out.window = window_row(w);
@@ -376,11 +380,13 @@ struct NodeCore::Impl {
   }
 
   void finish() {
+    finishing = true;
     release(true);
     if (perception) {
       perception->finish();
       finished_run = pipeline_json(perception->counters());
     }
+    finishing = false;
     start_run(false);
   }
 

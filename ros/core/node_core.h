@@ -61,7 +61,8 @@ struct WindowOutput {
   nlohmann::json tracks;
   std::uint64_t index = 0;
   double processing_ms = 0;
-  /// From the arrival of the message holding the window's last event to this output [ms].
+  /// From the arrival of the event message that completed the window (its events reach the
+  /// window's end) to this output [ms]; NaN for a window closed by finish() (the end of input).
   double latency_ms = 0;
 };
 

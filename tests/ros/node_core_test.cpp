@@ -6,6 +6,7 @@
 #include <rosbag/view.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <map>
 #include <optional>
@@ -110,6 +111,7 @@ std::vector<RawMessage> raw_messages(const std::string& bag_path) {
 struct Rows {
   std::vector<json> windows, tracks, estimates, predictions, dodge;
   std::vector<std::string> warnings;
+  std::vector<double> latencies_ms;
 };
 
 NodeOutputs collect(Rows& rows) {
@@ -117,6 +119,7 @@ NodeOutputs collect(Rows& rows) {
   o.on_window = [&](const ros_core::WindowOutput& w) {
     rows.windows.push_back(w.window);
     rows.tracks.push_back(w.tracks);
+    rows.latencies_ms.push_back(w.latency_ms);
   };
   o.on_estimate = [&](const json& e) {
     json row = e;
@@ -201,6 +204,12 @@ TEST_F(NodeCoreReplay, BagOrderGivesFdvRunsResults) {
   const json d = core.diagnostics();
   EXPECT_EQ(d["streams"]["events"]["dropped"], 0);
   EXPECT_EQ(d["pipeline"]["windows"], reference_->windows.size()) << "the finished run's counters stay";
+  // Latency: measured for the windows the input completed; none for those finish() closed.
+  const auto measured = std::count_if(rows.latencies_ms.begin(), rows.latencies_ms.end(),
+                                      [](double ms) { return std::isfinite(ms) && ms >= 0; });
+  EXPECT_EQ(d["latency_ms"]["count"], measured);
+  EXPECT_GT(measured, 0);
+  EXPECT_TRUE(std::isnan(rows.latencies_ms.back())) << "the last window is closed by finish()";
   EXPECT_EQ(d["streams"]["imu"]["messages"],
             std::count_if(messages_->begin(), messages_->end(), [](const RawMessage& m) { return m.stream == Stream::kImu; }));
 }
