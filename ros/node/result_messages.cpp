@@ -13,6 +13,14 @@ ros::Time stamp(const json& seconds) {
   return s > 0 ? ros::Time(s) : ros::Time();
 }
 
+/// A message header: the row's time in `frame`.
+std_msgs::Header header(const json& seconds, const std::string& frame) {
+  std_msgs::Header h;
+  h.stamp = stamp(seconds);
+  h.frame_id = frame;
+  return h;
+}
+
 double number(const json& j) {  // JSON null is an infinite sigma (results/schema.h)
   return j.is_null() ? std::numeric_limits<double>::infinity() : j.get<double>();
 }
@@ -39,8 +47,7 @@ geometry_msgs::Vector3 vector3(const json& v) {
 fdv_msgs::WindowDetections window_message(const ros_core::WindowOutput& w, const std::string& frame) {
   const json& r = w.window;
   fdv_msgs::WindowDetections m;
-  m.header.stamp = stamp(r.at("t_end"));
-  m.header.frame_id = frame;
+  m.header = header(r.at("t_end"), frame);
   m.index = w.index;
   m.t_start = stamp(r.at("t_start"));
   m.t_end = stamp(r.at("t_end"));
@@ -74,8 +81,7 @@ fdv_msgs::WindowDetections window_message(const ros_core::WindowOutput& w, const
 
 fdv_msgs::TrackStates tracks_message(const ros_core::WindowOutput& w, const std::string& frame) {
   fdv_msgs::TrackStates m;
-  m.header.stamp = stamp(w.window.at("t_end"));
-  m.header.frame_id = frame;
+  m.header = header(w.window.at("t_end"), frame);
   for (const json& t : w.tracks) {
     fdv_msgs::TrackState s;
     s.id = t.at("id");
@@ -95,8 +101,7 @@ fdv_msgs::TrackStates tracks_message(const ros_core::WindowOutput& w, const std:
 
 fdv_msgs::TrajectoryEstimate estimate_message(const json& r, const std::string& frame) {
   fdv_msgs::TrajectoryEstimate m;
-  m.header.stamp = stamp(r.at("t"));
-  m.header.frame_id = frame;
+  m.header = header(r.at("t"), frame);
   m.track = r.at("track");
   m.method = r.at("method");
   m.fit = r.at("fit");
@@ -127,8 +132,7 @@ fdv_msgs::TrajectoryEstimate estimate_message(const json& r, const std::string& 
 
 nav_msgs::Path path_message(const json& r, const std::string& frame) {
   nav_msgs::Path m;
-  m.header.stamp = stamp(r.at("t"));
-  m.header.frame_id = frame;
+  m.header = header(r.at("t"), frame);
   for (const json& p : r.at("path")) {
     geometry_msgs::PoseStamped pose;
     pose.header.stamp = stamp(p.at(0));
@@ -167,8 +171,7 @@ visualization_msgs::MarkerArray markers_message(const nav_msgs::Path& path, int 
 
 fdv_msgs::CollisionPrediction prediction_message(const json& r, const std::string& frame) {
   fdv_msgs::CollisionPrediction m;
-  m.header.stamp = stamp(r.at("t"));
-  m.header.frame_id = frame;
+  m.header = header(r.at("t"), frame);
   m.track = r.at("track");
   m.closest_t = stamp(r.at("closest_t"));
   m.closest_in = r.at("closest_in_s");
@@ -184,8 +187,7 @@ fdv_msgs::CollisionPrediction prediction_message(const json& r, const std::strin
 
 fdv_msgs::DodgeDecision dodge_message(const json& r, const std::string& frame) {
   fdv_msgs::DodgeDecision m;
-  m.header.stamp = stamp(r.at("t"));
-  m.header.frame_id = frame;
+  m.header = header(r.at("t"), frame);
   m.effective_t = stamp(r.at("effective_t"));
   m.track = r.at("track");
   m.action = r.at("action");

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <optional>
 
@@ -292,6 +293,16 @@ class NodeCoreBadInput : public NodeCoreReplay {
   static std::uint64_t dropped(const NodeCore& core, const char* stream) {
     return core.diagnostics()["streams"][stream]["dropped"];
   }
+  /// The raw bytes of the one message `write` puts into a bag (ROS's own serialization).
+  static RawMessage single_message(const std::string& name, const std::function<void(ros1::BagWriter&)>& write) {
+    const std::string bag = test::scratch_dir("node_core_bad_" + name) + "/one.bag";
+    {
+      ros1::BagWriter w(bag);
+      write(w);
+      w.close();
+    }
+    return raw_messages(bag).at(0);
+  }
   static bool warned(const Rows& rows, const std::string& key) {
     return std::find(rows.warnings.begin(), rows.warnings.end(), key) != rows.warnings.end();
   }
@@ -320,13 +331,9 @@ TEST_F(NodeCoreBadInput, StampsGoingBackwards) {
 }
 
 TEST_F(NodeCoreBadInput, ADepthImageOfTheWrongType) {
-  const std::string bag = test::scratch_dir("node_core_bad") + "/depth.bag";
-  {
-    ros1::BagWriter w(bag);
+  const RawMessage m = single_message("depth_type", [](ros1::BagWriter& w) {
     w.image(kDepth, {1, 0}, {1, 0}, 4, 2, "mono8", 4, std::vector<std::uint8_t>(8, 7));
-    w.close();
-  }
-  const RawMessage m = raw_messages(bag).at(0);
+  });
   Rows rows;
   NodeCore core(config(), collect(rows));
   EXPECT_FALSE(core.push(Stream::kDepth, m.type, m.bytes.data(), m.bytes.size()));
@@ -335,13 +342,9 @@ TEST_F(NodeCoreBadInput, ADepthImageOfTheWrongType) {
 }
 
 TEST_F(NodeCoreBadInput, ADepthImageOfTheWrongSizeIsRejectedByTheRegistration) {
-  const std::string bag = test::scratch_dir("node_core_bad") + "/depth_size.bag";
-  {
-    ros1::BagWriter w(bag);
+  const RawMessage small = single_message("depth_size", [](ros1::BagWriter& w) {
     w.image(kDepth, {0, 1000}, {0, 1000}, 4, 2, "32FC1", 16, std::vector<std::uint8_t>(32, 0));
-    w.close();
-  }
-  const RawMessage small = raw_messages(bag).at(0);
+  });
   Rows rows;
   NodeCore core(config(), collect(rows));
   EXPECT_TRUE(core.push(Stream::kDepth, small.type, small.bytes.data(), small.bytes.size()));
@@ -355,13 +358,9 @@ TEST_F(NodeCoreBadInput, ADepthImageOfTheWrongSizeIsRejectedByTheRegistration) {
 }
 
 TEST_F(NodeCoreBadInput, EventsThatDoNotFitTheCalibration) {
-  const std::string bag = test::scratch_dir("node_core_bad") + "/events.bag";
-  {
-    ros1::BagWriter w(bag);
+  const RawMessage m = single_message("event_size", [](ros1::BagWriter& w) {
     w.event_array(kEvents, {1, 0}, {1, 0}, 346, 260, {{10, 10, {1, 0}, true}});
-    w.close();
-  }
-  const RawMessage m = raw_messages(bag).at(0);
+  });
   Rows rows;
   NodeCore core(config(), collect(rows));  // the calibration is 640 x 480
   EXPECT_FALSE(core.push(Stream::kEvents, m.type, m.bytes.data(), m.bytes.size()));
