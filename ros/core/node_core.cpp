@@ -273,33 +273,40 @@ struct NodeCore::Impl {
     return true;
   }
 
-  void note_time(Stream stream, TimeNs t) {
+  /// An item spanning [first, last] of `stream` arrived: the stream's progress, and lateness (the
+  /// pipeline has already been given data past `first`: the item is used, but late).
+  void note_time(Stream stream, TimeNs first, TimeNs last) {
     StreamHealth& h = health[index(stream)];
     h.seen = true;
-    h.newest = std::max(h.newest, t);
-    first_t = std::min(first_t, t);
-    newest_t = std::max(newest_t, t);
-    if (t < released_until) ++h.late;
+    h.newest = std::max(h.newest, last);
+    first_t = std::min(first_t, first);
+    newest_t = std::max(newest_t, last);
+    if (first < released_until) {
+      ++h.late;
+      warn(std::string("late ") + to_string(stream),
+           fmt::format("{} arrived {:.1f} ms behind the streams already processed: used late ({} so far; a stream "
+                       "lagging over {} s of stream time is not waited for)",
+                       to_string(stream), to_seconds(released_until - first) * 1e3, h.late, config.max_hold_s));
+    }
   }
 
   void hold(Stream stream) {
     switch (stream) {
       case Stream::kEvents:
         if (chunk.events.empty()) return;
-        note_time(stream, chunk.events.back().t);
-        if (chunk.events.front().t < released_until) ++health[0].late;
+        note_time(stream, chunk.events.front().t, chunk.events.back().t);
         arrivals.emplace_back(chunk.events.back().t, Clock::now());
         events.push_back(std::move(chunk.events));
         chunk.events.clear();
         break;
       case Stream::kImu:
-        for (const ImuSample& s : chunk.imu) note_time(stream, s.t), imu.push_back(s);
+        for (const ImuSample& s : chunk.imu) note_time(stream, s.t, s.t), imu.push_back(s);
         break;
       case Stream::kDepth:
-        for (DepthFrame& f : chunk.depth) note_time(stream, f.t), depth.push_back(std::move(f));
+        for (DepthFrame& f : chunk.depth) note_time(stream, f.t, f.t), depth.push_back(std::move(f));
         break;
       case Stream::kOdometry:
-        for (const OdometrySample& s : chunk.odometry) note_time(stream, s.t), odometry.push_back(s);
+        for (const OdometrySample& s : chunk.odometry) note_time(stream, s.t, s.t), odometry.push_back(s);
         break;
     }
   }

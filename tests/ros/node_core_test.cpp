@@ -397,6 +397,30 @@ TEST_F(NodeCoreBadInput, ATopicThatNeverArrives) {
   EXPECT_TRUE(rows.estimates.empty()) << "no odometry, no camera poses: no 3D";
 }
 
+TEST_F(NodeCoreBadInput, AStreamArrivingLate) {
+  // The IMU 200 ms behind the events, beyond max_hold_s (0.1 s): not waited for, used late.
+  std::vector<const RawMessage*> order, imu;
+  for (const RawMessage& m : *messages_) {
+    if (m.stream == Stream::kImu) {
+      imu.push_back(&m);
+      continue;
+    }
+    while (!imu.empty() && imu.front()->t + 200 * kNsPerMs <= m.t) {
+      order.push_back(imu.front());
+      imu.erase(imu.begin());
+    }
+    order.push_back(&m);
+  }
+  order.insert(order.end(), imu.begin(), imu.end());
+  Rows rows;
+  NodeCore core(config(), collect(rows));
+  for (const RawMessage* m : order) EXPECT_TRUE(core.push(m->stream, m->type, m->bytes.data(), m->bytes.size()));
+  core.finish();
+  EXPECT_GT(core.diagnostics()["streams"]["imu"]["late"].get<int>(), 100);
+  EXPECT_TRUE(warned(rows, "late imu"));
+  EXPECT_EQ(rows.windows.size(), reference_->windows.size());
+}
+
 TEST(NodeCoreConfig, AnUnknownOptionKeyIsAnErrorNamingIt) {
   NodeConfig c;
   c.option_overrides = {{"detector.min_peek", "0.3"}};
