@@ -27,6 +27,8 @@ namespace {
 using Clock = std::chrono::steady_clock;
 constexpr TimeNs kNever = std::numeric_limits<TimeNs>::max();
 constexpr TimeNs kBeforeAll = std::numeric_limits<TimeNs>::min();
+/// Latency is summarized over this many recent windows (a flight runs for hours).
+constexpr std::size_t kLatencyWindows = 2000;
 constexpr std::array<Stream, 4> kStreams = {Stream::kEvents, Stream::kImu, Stream::kDepth, Stream::kOdometry};
 
 std::size_t index(Stream s) { return static_cast<std::size_t>(s); }
@@ -102,7 +104,6 @@ struct NodeCore::Impl {
   std::optional<Calibration> calibration;
 
   std::unique_ptr<Perception> perception;
-  std::vector<std::string> policy_warnings;
   bag::MessageDecoder decoder;
   ReadReport report;
   std::map<std::string, std::uint64_t> warned_drops;  ///< reason -> count already warned about
@@ -123,7 +124,7 @@ struct NodeCore::Impl {
 
   // Latency: the arrival of each event message, by the time its events reach.
   std::deque<std::pair<TimeNs, Clock::time_point>> arrivals;
-  std::vector<double> latencies_ms;
+  std::deque<double> latencies_ms;  ///< the last kLatencyWindows windows'
   bool finishing = false;  ///< inside finish(): the windows it closes have no latency
   std::uint64_t windows = 0, runs = 0;
   nlohmann::json finished_run = nlohmann::json::object();  ///< the pipeline's counters of the last run
@@ -211,6 +212,7 @@ struct NodeCore::Impl {
     if (!finishing && !arrivals.empty()) {
       latency_ms = std::chrono::duration<double, std::milli>(now - arrivals.front().second).count();
       latencies_ms.push_back(latency_ms);
+      if (latencies_ms.size() > kLatencyWindows) latencies_ms.pop_front();
     }
     if (!outputs.on_window) return;
     WindowOutput out;
@@ -422,7 +424,8 @@ struct NodeCore::Impl {
     }
     nlohmann::json d = {{"streams", streams}, {"windows", windows}, {"runs", runs}, {"dropped_by_reason", report.to_json()}};
     if (!latencies_ms.empty()) {
-      const Summary l = summarize(latencies_ms);
+      const std::vector<double> recent(latencies_ms.begin(), latencies_ms.end());
+      const Summary l = summarize(recent);
       d["latency_ms"] = {{"count", latencies_ms.size()}, {"median", l.median}, {"p99", l.p99}, {"max", l.max}};
     }
     d["pipeline"] = perception ? pipeline_json(perception->counters()) : finished_run;

@@ -94,7 +94,7 @@ class NodeCore {
   /// new run (a replay looped, a sensor restarted) with fresh state.
   void finish();
   /// Counts per stream (messages, dropped by reason, late), the pipeline's counters, windows and
-  /// latency so far; what the node publishes on /diagnostics.
+  /// latency over the last 2000 windows; what the node publishes on /diagnostics.
   nlohmann::json diagnostics() const;
 
  private:
