@@ -7,10 +7,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <deque>
 #include <filesystem>
 #include <functional>
 #include <map>
 #include <optional>
+#include <set>
 
 #include "fdv/core/calibration.h"
 #include "fdv/io/recording.h"
@@ -107,6 +109,24 @@ std::vector<RawMessage> raw_messages(const std::string& bag_path) {
     out.push_back(std::move(r));
   }
   return out;
+}
+
+/// The messages in the order they would arrive if those of `late` streams came `by` (stream time)
+/// after the others of their time, as over separate, slower connections.
+std::vector<const RawMessage*> arrival_order(const std::vector<RawMessage>& messages, const std::set<Stream>& late,
+                                             TimeNs by) {
+  std::vector<const RawMessage*> order;
+  std::deque<const RawMessage*> held;
+  for (const RawMessage& m : messages) {
+    if (late.count(m.stream)) {
+      held.push_back(&m);
+      continue;
+    }
+    for (; !held.empty() && held.front()->t + by <= m.t; held.pop_front()) order.push_back(held.front());
+    order.push_back(&m);
+  }
+  order.insert(order.end(), held.begin(), held.end());
+  return order;
 }
 
 struct Rows {
@@ -218,20 +238,7 @@ TEST_F(NodeCoreReplay, BagOrderGivesFdvRunsResults) {
 /// Separate connections deliver streams out of step: here IMU, odometry and depth each arrive
 /// 30 ms (stream time) after the events of their time. The merge restores fdv run's order.
 TEST_F(NodeCoreReplay, StreamsArrivingOutOfStepGiveTheSameResults) {
-  std::vector<const RawMessage*> order;
-  std::vector<const RawMessage*> delayed;
-  for (const RawMessage& m : *messages_) {
-    if (m.stream != Stream::kEvents) {
-      delayed.push_back(&m);
-      continue;
-    }
-    while (!delayed.empty() && delayed.front()->t + 30 * kNsPerMs <= m.t) {
-      order.push_back(delayed.front());
-      delayed.erase(delayed.begin());
-    }
-    order.push_back(&m);
-  }
-  order.insert(order.end(), delayed.begin(), delayed.end());
+  const auto order = arrival_order(*messages_, {Stream::kImu, Stream::kDepth, Stream::kOdometry}, 30 * kNsPerMs);
   Rows rows;
   NodeCore core(config(), collect(rows));
   for (const RawMessage* m : order) core.push(m->stream, m->type, m->bytes.data(), m->bytes.size());
@@ -398,20 +405,8 @@ TEST_F(NodeCoreBadInput, ATopicThatNeverArrives) {
 }
 
 TEST_F(NodeCoreBadInput, AStreamArrivingLate) {
-  // The IMU 200 ms behind the events, beyond max_hold_s (0.1 s): not waited for, used late.
-  std::vector<const RawMessage*> order, imu;
-  for (const RawMessage& m : *messages_) {
-    if (m.stream == Stream::kImu) {
-      imu.push_back(&m);
-      continue;
-    }
-    while (!imu.empty() && imu.front()->t + 200 * kNsPerMs <= m.t) {
-      order.push_back(imu.front());
-      imu.erase(imu.begin());
-    }
-    order.push_back(&m);
-  }
-  order.insert(order.end(), imu.begin(), imu.end());
+  // The IMU 200 ms behind the other streams, beyond max_hold_s (0.1 s): not waited for, used late.
+  const auto order = arrival_order(*messages_, {Stream::kImu}, 200 * kNsPerMs);
   Rows rows;
   NodeCore core(config(), collect(rows));
   for (const RawMessage* m : order) EXPECT_TRUE(core.push(m->stream, m->type, m->bytes.data(), m->bytes.size()));
