@@ -53,13 +53,6 @@ struct RowQueue {
   }
 };
 
-/// summary.json's "counts" object (the schema's keys).
-nlohmann::json counts_json(const PerceptionCounters& c) {
-  RunSummary s;
-  s.counts = c;
-  return nlohmann::json(s).at("counts");
-}
-
 /// Where the fields of an event record are: fdv.EVENT_DTYPE (aligned, 16 bytes) or the packed
 /// 14-byte layout numpy's promotion gives it (np.concatenate of event arrays returns that).
 struct EventLayout {

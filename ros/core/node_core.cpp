@@ -393,22 +393,10 @@ struct NodeCore::Impl {
     release(true);
     if (perception) {
       perception->finish();
-      finished_run = pipeline_json(perception->counters());
+      finished_run = counts_json(perception->counters());
     }
     finishing = false;
     start_run(false);
-  }
-
-  static nlohmann::json pipeline_json(const PerceptionCounters& c) {
-    return {{"events", c.events},
-            {"windows", c.windows},
-            {"detections", c.detections},
-            {"imu_out_of_order", c.imu_out_of_order},
-            {"odometry_out_of_order", c.odometry_out_of_order},
-            {"depth_frames", c.depth_frames},
-            {"depth_frames_rejected", c.depth_rejected_registration},
-            {"estimates", c.estimates},
-            {"dodge_decisions", c.dodge_decisions}};
   }
 
   nlohmann::json diagnostics() const {
@@ -428,7 +416,7 @@ struct NodeCore::Impl {
       const Summary l = summarize(recent);
       d["latency_ms"] = {{"count", latencies_ms.size()}, {"median", l.median}, {"p99", l.p99}, {"max", l.max}};
     }
-    d["pipeline"] = perception ? pipeline_json(perception->counters()) : finished_run;
+    d["pipeline"] = perception ? counts_json(perception->counters()) : finished_run;
     return d;
   }
 };

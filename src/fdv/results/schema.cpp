@@ -55,34 +55,6 @@ std::optional<DetectionStatus> parse_status(std::string_view name) {
   return std::nullopt;
 }
 
-json counts_json(const PerceptionCounters& c) {
-  json by_status = json::object(), by_method = json::object();
-  for (const auto& [status, n] : c.windows_by_status) by_status[std::string(to_string(status))] = n;
-  for (const auto& [method, n] : c.windows_by_method) by_method[std::string(to_string(method))] = n;
-  json dropped = json::object(), flags = json::object();
-  for (const auto& [name, n] : dropped_by_reason(c)) dropped[name] = n;
-  for (const auto& [name, n] : windows_by_fallback_flag(c)) flags[name] = n;
-  return {{"events_read", c.events},
-          {"events", c.events_in_windows},
-          {"windows", c.windows},
-          {"windows_skipped_in_gaps", c.windows_skipped},
-          {"detections", c.detections},
-          {"events_dropped", c.events_dropped.total()},
-          {"events_dropped_by_reason", dropped},
-          {"windows_by_status", by_status},
-          {"windows_by_method", by_method},
-          {"windows_with_fallback_flag", flags},
-          {"imu", c.imu},
-          {"odometry", c.odometry},
-          {"depth_frames", c.depth_frames},
-          {"depth_frames_rejected", c.depth_rejected_registration},
-          {"depth_observations", c.depth_observations},
-          {"estimates", c.estimates},
-          {"dodge_decisions", c.dodge_decisions},
-          {"imu_out_of_order", c.imu_out_of_order},
-          {"odometry_out_of_order", c.odometry_out_of_order}};
-}
-
 PerceptionCounters counters_of(const json& j) {
   PerceptionCounters c;
   c.events = j.at("events_read");
@@ -117,6 +89,34 @@ PerceptionCounters counters_of(const json& j) {
 }
 
 }  // namespace
+
+json counts_json(const PerceptionCounters& c) {
+  json by_status = json::object(), by_method = json::object();
+  for (const auto& [status, n] : c.windows_by_status) by_status[std::string(to_string(status))] = n;
+  for (const auto& [method, n] : c.windows_by_method) by_method[std::string(to_string(method))] = n;
+  json dropped = json::object(), flags = json::object();
+  for (const auto& [name, n] : dropped_by_reason(c)) dropped[name] = n;
+  for (const auto& [name, n] : windows_by_fallback_flag(c)) flags[name] = n;
+  return {{"events_read", c.events},
+          {"events", c.events_in_windows},
+          {"windows", c.windows},
+          {"windows_skipped_in_gaps", c.windows_skipped},
+          {"detections", c.detections},
+          {"events_dropped", c.events_dropped.total()},
+          {"events_dropped_by_reason", dropped},
+          {"windows_by_status", by_status},
+          {"windows_by_method", by_method},
+          {"windows_with_fallback_flag", flags},
+          {"imu", c.imu},
+          {"odometry", c.odometry},
+          {"depth_frames", c.depth_frames},
+          {"depth_frames_rejected", c.depth_rejected_registration},
+          {"depth_observations", c.depth_observations},
+          {"estimates", c.estimates},
+          {"dodge_decisions", c.dodge_decisions},
+          {"imu_out_of_order", c.imu_out_of_order},
+          {"odometry_out_of_order", c.odometry_out_of_order}};
+}
 
 std::map<std::string, std::uint64_t> dropped_by_reason(const PerceptionCounters& c) {
   std::map<std::string, std::uint64_t> out;

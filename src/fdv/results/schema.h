@@ -220,6 +220,8 @@ void from_json(const nlohmann::json& j, RunSummary& s);
 /// names written (every name once a window was processed; none before).
 std::map<std::string, std::uint64_t> dropped_by_reason(const PerceptionCounters& c);
 std::map<std::string, std::uint64_t> windows_by_fallback_flag(const PerceptionCounters& c);
+/// summary.json's "counts" object (the keys listed at RunSummary); also the ROS node's diagnostics.
+nlohmann::json counts_json(const PerceptionCounters& c);
 
 // The rows of Perception's callbacks.
 WindowRow window_row(const WindowResult& w);
