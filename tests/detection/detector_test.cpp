@@ -539,6 +539,7 @@ TEST_F(DetectorTest, CountContrastCueFindsAnEvenlyFiringBlobOnALateBackground) {
   DetectorOptions off, on;
   off.count_contrast.enabled = false;
   on.count_contrast.enabled = true;
+  off.gate_focal_px = on.gate_focal_px = 0;  // the reference scan below uses box_px as given
   const auto scene = late_background_scene(cam, s, false);
   // The premise: the time-based detector does not find the ball.
   const DetectionResult paper = detect(scene, off);
@@ -617,6 +618,7 @@ TEST_F(DetectorTest, CountContrastCueSkipsNoFilledCentreAtTheEdgesOfItsBlocks) {
   // one pixel too small on either side would skip them.
   DetectorOptions o;
   o.gaussian_fit.min_peak = 1.0;  // the time-based detection is kept out of the way
+  o.gate_focal_px = 0;            // box_px as given
   ASSERT_EQ(o.count_contrast.box_px, 9);
   ASSERT_DOUBLE_EQ(o.count_contrast.surround_scale, 3.0);  // centres from x, y = 14, in blocks of 8
   ASSERT_DOUBLE_EQ(o.count_contrast.min_fill, 0.8);
@@ -681,6 +683,39 @@ TEST_F(DetectorTest, CountContrastCueWaivesTheTimeTestOnlyInsideATrackGate) {
   EXPECT_FALSE(Detector(o, cam).detect(detector_input(w)).strongest());
 }
 
+TEST(DetectorGates, EventCountGatesShrinkWithAShorterFocalLengthOnly) {
+  DetectorOptions o;
+  o.min_event_density = 1.5;
+  o.count_contrast.box_px = 9;
+  o.gate_focal_px = 500;
+  PinholeCamera cam = lens();
+  // Half the focal length: half the density; the 4.5 px box rounds to 5 (odd).
+  cam.fx = 250;
+  DetectorOptions scaled = scaled_to_camera(o, cam);
+  EXPECT_DOUBLE_EQ(scaled.min_event_density, 0.75);
+  EXPECT_EQ(scaled.count_contrast.box_px, 5);
+  // 2/9 of it: the 2 px box would be even; the next odd size is 3, also the smallest allowed.
+  cam.fx = 500.0 * 2 / 9;
+  scaled = scaled_to_camera(o, cam);
+  EXPECT_NEAR(scaled.min_event_density, 1.5 * 2 / 9, 1e-12);
+  EXPECT_EQ(scaled.count_contrast.box_px, 3);
+  cam.fx = 50;
+  EXPECT_EQ(scaled_to_camera(o, cam).count_contrast.box_px, 3);
+  // The reference focal length and longer ones keep the values as given, and so does 0 (off).
+  for (const double fx : {500.0, 1000.0}) {
+    cam.fx = fx;
+    scaled = scaled_to_camera(o, cam);
+    EXPECT_EQ(scaled.min_event_density, 1.5) << fx;
+    EXPECT_EQ(scaled.count_contrast.box_px, 9) << fx;
+  }
+  o.gate_focal_px = 0;
+  cam.fx = 250;
+  EXPECT_EQ(scaled_to_camera(o, cam).min_event_density, 1.5);
+  // The detector uses the scaled values.
+  o.gate_focal_px = 500;
+  EXPECT_DOUBLE_EQ(Detector(o, cam).options().min_event_density, 0.75);
+}
+
 TEST_F(DetectorTest, InvalidOptionsAreRejected) {
   DetectorOptions o;
   o.mean_filter_px = 4;
@@ -695,6 +730,7 @@ TEST_F(DetectorTest, InvalidOptionsAreRejected) {
       {"max_candidates", [](DetectorOptions& x) { x.gaussian_fit.max_candidates = 0; }},
       {"min_pixel_events", [](DetectorOptions& x) { x.min_pixel_events = 0; }},
       {"min_event_density", [](DetectorOptions& x) { x.min_event_density = -1; }},
+      {"gate_focal_px must be 0 (off) or in [10, 1e5], got 5", [](DetectorOptions& x) { x.gate_focal_px = 5; }},
       {"motion_cue_density_px", [](DetectorOptions& x) { x.dense_motion.density_px = 4; }},
       {"motion_cue_min_r2", [](DetectorOptions& x) { x.dense_motion.min_r2 = 1.5; }},
       {"refine_recentre_passes", [](DetectorOptions& x) { x.refine_recentre_passes = -1; }},

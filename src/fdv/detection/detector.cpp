@@ -49,7 +49,7 @@ std::string DetectorOptions::validate() const {
   const double coeffs[] = {threshold_a_s_per_rad, threshold_b_s_per_m, threshold_c, fit_delta_center_px,
                            fit_delta_size_px, fit_delta_fraction, fit_min_size_px, roi_max_aspect,
                            max_segmented_fraction, fills_view_fraction,
-                           refine_box_scale, min_event_density, prior_gate_scale, prior_min_gate_px};
+                           refine_box_scale, min_event_density, gate_focal_px, prior_gate_scale, prior_min_gate_px};
   for (double v : coeffs)
     if (!std::isfinite(v)) return "non-finite detector parameter";
   // θ = mean(N) + a‖ω‖ + b‖v‖ + c on N in [0, 1]: the motion terms raise it, c shifts it within N's range.
@@ -70,6 +70,8 @@ std::string DetectorOptions::validate() const {
   else if (!(prior_gate_scale > 0)) why << "prior_gate_scale must be positive, got " << prior_gate_scale;
   else if (!(prior_min_gate_px >= 0)) why << "prior_min_gate_px must be >= 0, got " << prior_min_gate_px;
   else if (!(min_event_density >= 0)) why << "min_event_density must be >= 0, got " << min_event_density;
+  else if (!(gate_focal_px == 0 || (gate_focal_px >= 10 && gate_focal_px <= 1e5)))
+    why << "gate_focal_px must be 0 (off) or in [10, 1e5], got " << gate_focal_px;
   else if (min_pixel_events < 1 || min_pixel_events > 1000)
     why << "min_pixel_events must be in [1, 1000], got " << min_pixel_events;
   else if (!(roi_max_aspect >= 1)) why << "roi_max_aspect must be at least 1, got " << roi_max_aspect;
@@ -89,15 +91,27 @@ std::string DetectorOptions::validate() const {
   return {};
 }
 
+DetectorOptions scaled_to_camera(const DetectorOptions& options, const PinholeCamera& camera) {
+  DetectorOptions o = options;
+  if (o.gate_focal_px == 0 || !(camera.fx > 0)) return o;
+  // Down only: at a longer focal length the same scaling traded recall for fewer false detections
+  // (docs/DETECTION.md, "Tuning").
+  const double scale = std::min(1.0, camera.fx / o.gate_focal_px);
+  o.min_event_density *= scale;
+  const int k = static_cast<int>(std::lround(o.count_contrast.box_px * scale));
+  o.count_contrast.box_px = std::clamp(k % 2 == 1 ? k : k + 1, 3, 31);
+  return o;
+}
+
 Detector::Detector(const DetectorOptions& options, const PinholeCamera& event_camera)
-    : options_(options),
+    : options_(scaled_to_camera((validate_or_throw(options), options), event_camera)),
       camera_(event_camera),
-      pre_((validate_or_throw(options), options)),
-      gaussian_fit_(options),
-      track_aided_(options),
-      dense_motion_(options),
-      count_contrast_(options),
-      refiner_(options) {
+      pre_(options_),
+      gaussian_fit_(options_),
+      track_aided_(options_),
+      dense_motion_(options_),
+      count_contrast_(options_),
+      refiner_(options_) {
   if (const auto why = event_camera.validate(); !why.empty()) throw ConfigError("detector: event camera: " + why);
   allocate(camera_.width, camera_.height);
   gates_.reserve(8);

@@ -43,6 +43,10 @@
 
 namespace fdv {
 
+/// `options` with the gates stated at DetectorOptions::gate_focal_px scaled to `camera`'s fx when
+/// it is shorter: min_event_density × fx / gate_focal_px, count_cue_box_px × the same (odd, ≥ 3).
+DetectorOptions scaled_to_camera(const DetectorOptions& options, const PinholeCamera& camera);
+
 class Detector {
  public:
   /// Throws ConfigError for invalid options or camera.
@@ -53,6 +57,7 @@ class Detector {
   const TimeImages& time_images() const { return ti_; }
   const cv::Mat& segmentation() const { return S_; }   ///< S, CV_32F
   const cv::Mat& preprocessed() const { return pre_.P(); }  ///< P = (open(mean(S)))², CV_32F (before any blanking)
+  /// The options in use: the constructor's, scaled_to_camera.
   const DetectorOptions& options() const { return options_; }
 
   /// Undistorted-grid point -> raw sensor pixel, and the box outline's raw bounding box.

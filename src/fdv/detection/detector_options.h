@@ -123,7 +123,8 @@ void describe(V& v, DenseMotionSourceOptions& o) {
 /// an independently moving object's do not.
 struct CountContrastSourceOptions {
   bool enabled = true;  ///< false = the paper. YAML `count_cue`
-  /// k [px] (odd): about the smallest eligible ball (8 px across). YAML `count_cue_box_px`
+  /// k [px] (odd): about the smallest eligible ball (8 px across), at DetectorOptions::gate_focal_px.
+  /// YAML `count_cue_box_px`
   int box_px = 9;
   double surround_scale = 3.0;  ///< the surround box's side / k [-] (> 1). YAML `count_cue_surround_scale`
   /// Accepted at this contrast or more [-] (the ball measured 3.9-6.3). YAML `count_cue_min_contrast`
@@ -141,7 +142,7 @@ struct CountContrastSourceOptions {
 template <class V>
 void describe(V& v, CountContrastSourceOptions& o) {
   v("count_cue", o.enabled, "-", "source 4, count-contrast blob (false = the paper)");
-  v("count_cue_box_px", o.box_px, "px", "k: side of the centre box (odd); about the smallest eligible ball");
+  v("count_cue_box_px", o.box_px, "px", "k: side of the centre box (odd), at gate_focal_px; about the smallest eligible ball");
   v("count_cue_surround_scale", o.surround_scale, "-", "the surround box's side / k (> 1)");
   v("count_cue_min_contrast", o.min_contrast, "-", "centre density / max(surround density, image mean)");
   v("count_cue_min_fill", o.min_fill, "-", "fraction of the centre box's pixels with I ≥ min_pixel_events");
@@ -182,6 +183,11 @@ struct DetectorOptions {
   /// A candidate box must hold at least this many compensated events per pixel: a moving object
   /// fires events all over its image, sparse late pixels of background texture do not.
   double min_event_density = 1.5;
+  /// The focal length [px] at which min_event_density and count_cue_box_px are stated (the 640x480
+  /// simulated camera they were tuned on). A camera with a shorter fx has both scaled by fx / this:
+  /// the same object's image, and the events per pixel it fires, shrink with the focal length in
+  /// pixels (docs/DETECTION.md, "Any apparent size"). 0 = the values as given, at any resolution.
+  double gate_focal_px = 536.3;
 
   /// Tracks' gates (DetectionPrior), searched by sources 2-4: prior_gate_scale × a confirmed
   /// track's predicted box, half-sides at least prior_min_gate_px.
@@ -245,7 +251,8 @@ void describe(V& v, DetectorOptions& o) {
   v("region_min_area_px", o.region_min_area_px, "px", "moving-region retrieval ignores smaller components");
   v("roi_max_aspect", o.roi_max_aspect, "-", "a box's long side / short side above this is implausible");
   v("roi_min_events", o.roi_min_events, "events", "fewer compensated events in a box is implausible");
-  v("min_event_density", o.min_event_density, "events/px", "evidence gate of a candidate box; tuned");
+  v("min_event_density", o.min_event_density, "events/px", "evidence gate of a candidate box, at gate_focal_px; tuned");
+  v("gate_focal_px", o.gate_focal_px, "px", "focal length of min_event_density and count_cue_box_px; a shorter fx scales both by fx / this (0 = as given)");
   v("prior_gate_scale", o.prior_gate_scale, "-", "a confirmed track's predicted box × this = its gate");
   v("prior_min_gate_px", o.prior_min_gate_px, "px", "smallest gate half-side");
   v("refine_box_scale", o.refine_box_scale, "-", "centre and time re-estimated from the events in the box × this (0 = off)");
