@@ -1,9 +1,12 @@
 #pragma once
-// Shared helpers for tests: where the real recordings are, and scratch folders.
+// Shared helpers for tests: where the real recordings are, scratch folders, running a command.
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <string>
 
 #include "fdv/core/error.h"
@@ -50,6 +53,33 @@ inline std::string scratch_dir(const std::string& name) {
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir.string();
+}
+
+/// What a command run through the shell left: its exit code (-1 when killed by a signal) and what
+/// it wrote to stdout and stderr.
+struct CommandRun {
+  int exit_code = -1;
+  std::string out, err;
+};
+
+/// Runs `command` with stdout and stderr captured to `log_stem`.out / .err in the tests' scratch
+/// folder (kept for a failing test's reader).
+inline CommandRun run_command(const std::string& command, const std::string& log_stem) {
+  const auto dir = std::filesystem::path(FDV_TEST_TMP_DIR) / "command_logs";
+  std::filesystem::create_directories(dir);
+  const auto out = dir / (log_stem + ".out"), err = dir / (log_stem + ".err");
+  const int status = std::system((command + " > '" + out.string() + "' 2> '" + err.string() + "'").c_str());
+  auto slurp = [](const std::filesystem::path& p) {
+    std::ifstream f(p, std::ios::binary);
+    std::stringstream s;
+    s << f.rdbuf();
+    return s.str();
+  };
+  CommandRun r;
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.out = slurp(out);
+  r.err = slurp(err);
+  return r;
 }
 
 }  // namespace fdv::test

@@ -2,9 +2,7 @@
 // exact ground truth) and on real recordings; the files they write are read back and checked
 // against the names the README and the issues give, and against the simulator's truth.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -21,21 +19,13 @@ using nlohmann::json;
 
 struct Ran {
   int exit_code = -1;
-  std::string output;  // stdout and stderr
+  std::string output;  // stdout, then stderr
 };
 
 /// Runs `fdv ARGS`, capturing its output.
 Ran fdv(const std::string& args) {
-  const fs::path log = fs::path(FDV_TEST_TMP_DIR) / "cli_test_last_output.txt";
-  fs::create_directories(log.parent_path());
-  const int status = std::system((std::string(FDV_BINARY) + " " + args + " > " + log.string() + " 2>&1").c_str());
-  Ran r;
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::ifstream f(log);
-  std::stringstream s;
-  s << f.rdbuf();
-  r.output = s.str();
-  return r;
+  const test::CommandRun r = test::run_command(std::string(FDV_BINARY) + " " + args, "cli_test_last");
+  return {r.exit_code, r.out + r.err};
 }
 
 json read_json(const fs::path& p) {

@@ -4,11 +4,8 @@
 // bag also read by ROS's Python rosbag (an independent reader).
 #include <fmt/format.h>
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
-#include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
@@ -22,32 +19,10 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-struct Ran {
-  int exit_code = -1;
-  std::string out;  // stdout
-  std::string err;  // stderr
-};
-
-Ran run(const std::string& command, const std::string& name) {
-  const fs::path dir = fs::path(FDV_TEST_TMP_DIR) / "ros_export_logs";
-  fs::create_directories(dir);
-  const fs::path out = dir / (name + ".out"), err = dir / (name + ".err");
-  const int status = std::system((command + " > " + out.string() + " 2> " + err.string()).c_str());
-  Ran r;
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  auto slurp = [](const fs::path& p) {
-    std::ifstream f(p);
-    std::stringstream s;
-    s << f.rdbuf();
-    return s.str();
-  };
-  r.out = slurp(out);
-  r.err = slurp(err);
-  return r;
-}
+using Ran = test::CommandRun;
 
 Ran fdv(const std::string& args, const std::string& name) {
-  return run(std::string(FDV_BINARY) + " " + args, name);
+  return test::run_command(std::string(FDV_BINARY) + " " + args, "ros_export_" + name);
 }
 
 SensorChunk read_all(const std::string& path) {
@@ -215,12 +190,12 @@ TEST(BagExporter, LibcaerFloorsToTheMicrosecondAndMonoKeepsTheNanoseconds) {
 TEST_F(RosExport, PythonRosbagReadsTheBag) {
   json summary;
   export_and_read("--events-as event_packet", "python", summary);
-  const Ran r = run("/usr/bin/python3 -c \"import rosbag, sys; "
+  const Ran r = test::run_command("/usr/bin/python3 -c \"import rosbag, sys; "
                     "i = rosbag.Bag(sys.argv[1]).get_type_and_topic_info(); "
                     "[print(t, v.msg_type, v.message_count) for t, v in sorted(i.topics.items())]; "
                     "[print(t, m) for t, m in sorted(i.msg_types.items())]\" " +
                         dir_ + "/python.bag",
-                    "python_rosbag");
+                    "ros_export_python_rosbag");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   std::ostringstream want;
   want << "/camera/depth/image_rect_raw sensor_msgs/Image " << expected_.depth.size() << "\n"
@@ -235,13 +210,13 @@ TEST_F(RosExport, PythonRosbagReadsTheBag) {
 
   // Its events decoded by Python rosbag from the bag's own message definitions (genpy).
   export_and_read("", "python_array", summary);
-  const Ran events = run("/usr/bin/python3 -c \"import rosbag, sys; "
+  const Ran events = test::run_command("/usr/bin/python3 -c \"import rosbag, sys; "
                          "e = [e for _, m, _ in rosbag.Bag(sys.argv[1]).read_messages('/dvs/events') "
                          "for e in m.events]; "
                          "print(len(e), sum(v.x for v in e), sum(v.y for v in e), "
                          "sum(v.polarity for v in e), sum(v.ts.to_nsec() for v in e))\" " +
                              dir_ + "/python_array.bag",
-                         "python_events");
+                         "ros_export_python_events");
   ASSERT_EQ(events.exit_code, 0) << events.err;
   std::uint64_t x = 0, y = 0, on = 0;
   TimeNs t = 0;
