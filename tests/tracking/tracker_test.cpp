@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
 
 #include "fdv/core/error.h"
@@ -126,6 +127,67 @@ TEST(Tracker, TwoCrossingTracksKeepTheirIds) {
     }
   }
   EXPECT_EQ(tracker.tracks().size(), 2u);
+}
+
+// Two balls passing each other on one row (800 px/s each way, 20 px boxes) that the detector
+// sees as one 40 px blob while they are less than 100 px apart (windows 8-12): the blob is their
+// merged image, so no track takes it and none starts on it; both coast through the 150 ms
+// without an update (more than max_gap_ns) and keep their ids after.
+TEST(Tracker, MergedImageOfCrossingTracksUpdatesNoTrack) {
+  Tracker tracker;
+  auto a = [](int k) { return 100 + 20.0 * k; };
+  auto b = [](int k) { return 500 - 20.0 * k; };
+  int id_a = -1, id_b = -1;
+  for (int k = 0; k <= 16; ++k) {
+    const TimeNs t = k * kWindow;
+    const bool blob = std::abs(a(k) - b(k)) < 100;
+    std::vector<TrackerDetection> d;
+    if (blob) d = {det(t, 0.5 * (a(k) + b(k)), 200, 40)};
+    else d = {det(t, a(k), 200), det(t, b(k), 200)};
+    const TrackerStep step = tracker.update(t, d);
+    if (k == 0) {
+      id_a = step.assignments[0].track_id;
+      id_b = step.assignments[1].track_id;
+    } else if (blob) {
+      EXPECT_EQ(step.assignments[0].outcome, Outcome::kRejected) << "window " << k;
+      EXPECT_EQ(step.assignments[0].reason, "merged image of crossing tracks");
+      EXPECT_TRUE(step.deleted.empty()) << "window " << k;
+      EXPECT_EQ(tracker.tracks().size(), 2u) << "window " << k;
+    } else {
+      EXPECT_EQ(step.assignments[0].track_id, id_a) << "window " << k;
+      EXPECT_EQ(step.assignments[1].track_id, id_b) << "window " << k;
+    }
+  }
+  // Off: the blob, 40 px from both predictions, starts a third track.
+  TrackerOptions off;
+  off.crossing_scale = 0;
+  Tracker plain(off);
+  for (int k = 0; k <= 8; ++k) {
+    const TimeNs t = k * kWindow;
+    std::vector<TrackerDetection> d;
+    if (k < 8) d = {det(t, a(k), 200), det(t, b(k), 200)};
+    else d = {det(t, 0.5 * (a(k) + b(k)), 200, 40)};
+    const TrackerStep step = plain.update(t, d);
+    if (k == 8) {
+      EXPECT_EQ(step.assignments[0].outcome, Outcome::kNewTrack);
+    }
+  }
+}
+
+// Two confirmed tracks moving alike (a duplicate pair on one object): a detection between them is
+// not a merged image, and the nearer track takes it.
+TEST(Tracker, DetectionBetweenTracksMovingAlikeIsAssigned) {
+  Tracker tracker;
+  for (int k = 0; k <= 3; ++k) {
+    const TimeNs t = k * kWindow;
+    const std::vector<TrackerDetection> d = {det(t, 100 + 20.0 * k, 200), det(t, 100 + 20.0 * k, 230)};
+    tracker.update(t, d);
+  }
+  ASSERT_EQ(tracker.tracks().size(), 2u);
+  const std::vector<TrackerDetection> between = {det(4 * kWindow, 180, 212)};
+  const TrackerStep step = tracker.update(4 * kWindow, between);
+  EXPECT_EQ(step.assignments[0].outcome, Outcome::kUpdated);
+  EXPECT_EQ(step.assignments[0].track_id, tracker.tracks()[0].id());
 }
 
 TEST(Tracker, OutOfOrderWindowAndBadDetectionsAreRejected) {

@@ -30,7 +30,12 @@ std::string TrackerOptions::validate() const {
   if (confirm_hits < 1) return "confirm_hits must be >= 1";
   if (!(box_smoothing > 0 && box_smoothing <= 1)) return "box_smoothing must be in (0, 1]";
   if (max_tracks < 1) return "max_tracks must be >= 1";
+  if (!(crossing_scale >= 0 && std::isfinite(crossing_scale))) return "crossing_scale must be >= 0";
   return {};
+}
+
+TimeNs Track::gap_limit(const TrackerOptions& o) const {
+  return (confirmed() ? o.max_gap_ns : o.tentative_max_gap_ns) + crossing_ns_;
 }
 
 TrackPrediction Track::predict(TimeNs t) const {
@@ -66,6 +71,7 @@ TrackerStep Tracker::update(TimeNs t, std::span<const TrackerDetection> detectio
       a.reason = "out of order: window time before the previous window";
     return step;
   }
+  const TimeNs now_before = started_ ? now_ : t;
   started_ = true;
   now_ = t;
 
@@ -81,13 +87,52 @@ TrackerStep Tracker::update(TimeNs t, std::span<const TrackerDetection> detectio
       usable[i] = true;
   }
 
+  // Crossing objects (TrackerOptions::crossing_scale): a detection near the predictions of two
+  // confirmed tracks passing each other, with no other detection near either, is their merged
+  // image. No track takes it, none starts on it, and the tracks coast without that time counting
+  // towards their deletion.
+  std::vector<bool> merged(detections.size(), false);
+  if (options_.crossing_scale > 0) {
+    const TimeNs window = t - now_before;
+    std::vector<TrackPrediction> at_t;
+    for (const Track& tr : tracks_) at_t.push_back(tr.predict(t));
+    const auto size = [](const Eigen::Vector2d& box) { return box.maxCoeff(); };
+    const auto near = [&](std::size_t i, std::size_t k) {
+      return tracks_[k].confirmed() && (detections[i].center_px - at_t[k].center_px).norm() <
+                                           options_.crossing_scale * 0.5 *
+                                               (size(at_t[k].box_size_px) + size(detections[i].box_size_px));
+    };
+    // Two tracks of one object (a duplicate) move alike; two objects crossing pass each other by
+    // more than their size within a window.
+    const auto passing = [&](std::size_t a, std::size_t b) {
+      return (at_t[a].velocity_px_s - at_t[b].velocity_px_s).norm() * to_seconds(window) >
+             0.5 * (size(at_t[a].box_size_px) + size(at_t[b].box_size_px));
+    };
+    std::vector<bool> coasting(tracks_.size(), false);
+    for (std::size_t i = 0; i < detections.size(); ++i) {
+      if (!usable[i]) continue;
+      for (std::size_t a = 0; a < tracks_.size() && !merged[i]; ++a)
+        for (std::size_t b = a + 1; b < tracks_.size() && !merged[i]; ++b) {
+          if (!near(i, a) || !near(i, b) || !passing(a, b)) continue;
+          bool alone = true;
+          for (std::size_t j = 0; j < detections.size(); ++j)
+            alone = alone && (j == i || !usable[j] || (!near(j, a) && !near(j, b)));
+          if (!alone) continue;
+          merged[i] = coasting[a] = coasting[b] = true;
+          step.assignments[i].reason = "merged image of crossing tracks";
+        }
+    }
+    for (std::size_t k = 0; k < tracks_.size(); ++k)
+      if (coasting[k]) tracks_[k].crossing_ns_ = std::min(tracks_[k].crossing_ns_ + window, options_.max_gap_ns);
+  }
+
   // Gate every (track, detection) pair.
   std::vector<Candidate> candidates;
   for (std::size_t k = 0; k < tracks_.size(); ++k) {
     const Track& tr = tracks_[k];
-    const TimeNs gap_limit = tr.confirmed() ? options_.max_gap_ns : options_.tentative_max_gap_ns;
+    const TimeNs gap_limit = tr.gap_limit(options_);
     for (std::size_t i = 0; i < detections.size(); ++i) {
-      if (!usable[i]) continue;
+      if (!usable[i] || merged[i]) continue;
       const TrackerDetection& d = detections[i];
       if (d.t < tr.last_update_time() || d.t - tr.last_update_time() > gap_limit) continue;
       const ImagePrediction p = tr.filter().predict(d.t);
@@ -120,6 +165,7 @@ TrackerStep Tracker::update(TimeNs t, std::span<const TrackerDetection> detectio
     tr.box_size_px_ = a * d.box_size_px + (1 - a) * tr.box_size_px_;
     ++tr.hits_;
     tr.misses_ = 0;
+    tr.crossing_ns_ = 0;
     if (!tr.confirmed() && tr.hits_ >= options_.confirm_hits) {
       tr.status_ = TrackStatus::kConfirmed;
       step.confirmed.push_back(tr.id());
@@ -135,8 +181,7 @@ TrackerStep Tracker::update(TimeNs t, std::span<const TrackerDetection> detectio
 
   // Delete tracks not updated for too long (before creating new ones, so slots free up).
   for (auto it = tracks_.begin(); it != tracks_.end();) {
-    const TimeNs limit = it->confirmed() ? options_.max_gap_ns : options_.tentative_max_gap_ns;
-    if (t - it->last_update_time() > limit) {
+    if (t - it->last_update_time() > it->gap_limit(options_)) {
       step.deleted.push_back(it->id());
       it = tracks_.erase(it);
     } else {
@@ -146,7 +191,7 @@ TrackerStep Tracker::update(TimeNs t, std::span<const TrackerDetection> detectio
 
   // Detections left over start tentative tracks.
   for (std::size_t i = 0; i < detections.size(); ++i) {
-    if (!usable[i] || detection_taken[i]) continue;
+    if (!usable[i] || detection_taken[i] || merged[i]) continue;
     if (static_cast<int>(tracks_.size()) >= options_.max_tracks) {
       step.assignments[i].reason = "track limit reached (max_tracks)";
       continue;

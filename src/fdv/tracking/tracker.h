@@ -59,6 +59,12 @@ struct TrackerOptions {
   double box_smoothing = 0.5;
   /// Most tracks held at once; detections beyond are reported as rejected.
   int max_tracks = 16;
+  /// Crossing objects: a detection whose centre lies within this times the mean of its box size
+  /// and a track's of two confirmed tracks that pass each other (their image velocities differ
+  /// by more than their mean box size per window) is their merged image. No track takes it, none
+  /// starts on it, and the tracks coast, the time (up to max_gap_ns) not counting towards their
+  /// deletion. 2 was tuned on two_balls seeds 1-4 (docs/DETECTION.md, "Several objects"). 0 = off.
+  double crossing_scale = 2;
 
   std::string validate() const;
 };
@@ -74,6 +80,8 @@ void describe(V& v, TrackerOptions& o) {
   v("confirm_hits", o.confirm_hits, "-", "updates (the first detection included) that confirm a track");
   v("box_smoothing", o.box_smoothing, "-", "weight of a new box size in the track's smoothed size");
   v("max_tracks", o.max_tracks, "-", "most tracks held at once");
+  v("crossing_scale", o.crossing_scale, "-",
+    "reach, in mean box sizes, of a detection taken as the merged image of two crossing tracks (0 = off)");
 }
 
 enum class TrackStatus { kTentative, kConfirmed };
@@ -102,6 +110,9 @@ class Track {
   const ImageKalmanFilter& filter() const { return filter_; }
   /// State at any time (through missed detections, or before the last update for late depth).
   TrackPrediction predict(TimeNs t) const;
+  /// Longest time without an update before deletion: the status's, plus the time spent crossing
+  /// another track (TrackerOptions::crossing_scale), which no detection could update.
+  TimeNs gap_limit(const TrackerOptions& o) const;
 
  private:
   friend class Tracker;
@@ -112,6 +123,7 @@ class Track {
   TimeNs first_t_ = 0;
   int hits_ = 1;
   int misses_ = 0;
+  TimeNs crossing_ns_ = 0;  ///< time spent crossing another track since the last update
   ImageKalmanFilter filter_;
   Eigen::Vector2d box_size_px_;
 };
