@@ -18,6 +18,7 @@
 #include "fdv/results/writer.h"
 #include "fdv/sim/dataset_cache.h"
 #include "fdv/sim/random_throw.h"
+#include "fdv/tables/experiment.h"
 
 namespace fdv {
 namespace {
@@ -34,33 +35,16 @@ struct MethodRun {
   std::optional<TimeNs> first_ball_detection;
 };
 
-/// Whether a detection at raw pixel `center` and time t is the ball: within two apparent radii
-/// (at least 10 px) of the true centre's projection.
-bool is_ball(const DatasetTruth& truth, int ball, TimeNs t, const Eigen::Vector2d& center) {
-  const auto object = truth.object_at(ball, t);
-  if (!object) return false;
-  const Eigen::Isometry3d T_W_E = truth.body_at(t).T_W_B() * truth.calibration.T_B_E;
-  const Eigen::Vector3d p_E = T_W_E.inverse() * object->p_W;
-  if (!(p_E.z() > 0.05)) return false;
-  const Eigen::Vector2d projected = truth.calibration.event_camera.project(p_E);
-  const double radius_px = truth.calibration.event_camera.fx * truth.radius_m.at(ball) / p_E.z();
-  return (projected - center).norm() <= std::max(10.0, 2.0 * radius_px);
-}
-
 MethodRun run_method(const DatasetTruth& truth, int ball, const PerceptionOptions& options,
                      const std::string& results_dir) {
   MethodRun run;
   std::optional<ResultsWriter> writer;
   if (!results_dir.empty()) writer.emplace(results_dir);
   PerceptionCallbacks callbacks;
+  std::vector<WindowDetections> windows;
   callbacks.on_window = [&](const WindowResult& w) {
     run.window_ends.push_back(w.t_end);
-    if (!run.first_ball_detection)
-      for (const TrackedDetection& d : w.detections)
-        if (is_ball(truth, ball, d.detection.t, d.detection.center_raw)) {
-          run.first_ball_detection = w.t_end;
-          break;
-        }
+    windows.push_back(window_detections(w));
     if (writer) writer->window(w);
   };
   callbacks.on_dodge = [&](const DodgeDecision& d) {
@@ -75,6 +59,7 @@ MethodRun run_method(const DatasetTruth& truth, int ball, const PerceptionOption
   std::vector<std::string> warnings;
   callbacks.on_warning = [&](const std::string& w) { warnings.push_back(w); };
   const PerceptionCounters counts = replay(open_recording(truth.dir), truth.calibration, options, callbacks);
+  if (const auto first = first_ball_detection(truth, windows, ball)) run.first_ball_detection = first->window_end;
   if (writer) {
     RunSummary summary;
     summary.input = truth.dir;

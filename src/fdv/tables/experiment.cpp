@@ -48,15 +48,19 @@ std::vector<double> window_relative_contrast(const DatasetTruth& truth, const cv
   return etas;
 }
 
+WindowDetections window_detections(const WindowResult& w) {
+  WindowDetections d{w.t_start, w.t_end, {}, std::string(to_string(w.status))};
+  for (const auto& [found, track_id] : w.detections)
+    d.detections.push_back({found.t, found.center_raw, track_id, found.partial,
+                            found.visible_fraction, found.center_full_raw});
+  return d;
+}
+
 ExperimentRun run_experiment(const DatasetTruth& truth, const ExperimentOptions& options) {
   ExperimentRun run;
   PerceptionCallbacks callbacks;
   callbacks.on_window = [&](const WindowResult& w) {
-    WindowDetections d{w.t_start, w.t_end, {}, std::string(to_string(w.status))};
-    for (const auto& [found, track_id] : w.detections)
-      d.detections.push_back({found.t, found.center_raw, track_id, found.partial,
-                              found.visible_fraction, found.center_full_raw});
-    run.windows.push_back(std::move(d));
+    run.windows.push_back(window_detections(w));
     run.compensation_ms.push_back(w.timings.compensation_ms);
     run.front_end_ms.push_back(w.timings.compensation_ms + w.timings.detection.total_ms);
     if (options.relative_contrast && w.detector) {

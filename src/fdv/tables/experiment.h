@@ -43,6 +43,9 @@ std::vector<double> window_relative_contrast(const DatasetTruth& truth, const cv
                                              TimeNs t_start, TimeNs t_end, CompensationMethod used,
                                              const DetectorOptions& detector);
 
+/// A window's detections as the evaluation scores them (fdv/eval/detection_metrics.h).
+WindowDetections window_detections(const WindowResult& w);
+
 struct ExperimentOptions {
   PerceptionOptions perception;
   bool relative_contrast = false;  ///< compute window_relative_contrast for every window
