@@ -146,6 +146,7 @@ void run_recording(const RunArgs& args) {
   summary.timing_ms = out.timing_ms();
   summary.warnings = warnings;
   summary.options = to_json(options);
+  summary.detector_in_use = detector_in_use(options, calib.event_camera);
   out.finish(summary);
   spdlog::info("{} windows, {} detections; results in {}", c.windows, c.detections, args.out);
 }

@@ -278,6 +278,7 @@ py::dict run(const std::string& path, std::optional<Calibration> calibration, co
       s.timing_ms = writer->timing_ms();
       s.warnings = warnings;
       s.options = to_json(policy.options);
+      s.detector_in_use = detector_in_use(policy.options, policy.calibration.event_camera);
       writer->finish(s);
     }
   }

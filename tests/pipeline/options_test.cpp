@@ -431,6 +431,30 @@ TEST(Options, JsonHasTheKeysAndValuesOfTheYaml) {
   EXPECT_TRUE(j.at("detector").is_object());
 }
 
+// summary.json's "detector_in_use": the detector section with the gates scaled to the camera
+// (fx 250 against gate_focal_px 500: half the density, the 4.5 px box rounded to 5), the rest and
+// "options" as given.
+TEST(Options, DetectorInUseHoldsTheGatesScaledToTheCamera) {
+  PerceptionOptions o;
+  o.detection.min_event_density = 1.5;
+  o.detection.count_contrast.box_px = 9;
+  o.detection.gate_focal_px = 500;
+  PinholeCamera camera;
+  camera.width = 346;
+  camera.height = 260;
+  camera.fx = camera.fy = 250;
+  camera.cx = 173;
+  camera.cy = 130;
+  const nlohmann::json in_use = detector_in_use(o, camera);
+  EXPECT_DOUBLE_EQ(in_use.at("min_event_density").get<double>(), 0.75);
+  EXPECT_EQ(in_use.at("count_cue_box_px"), 5);
+  nlohmann::json as_given = to_json(o).at("detector");
+  EXPECT_DOUBLE_EQ(as_given.at("min_event_density").get<double>(), 1.5);
+  as_given["min_event_density"] = 0.75;
+  as_given["count_cue_box_px"] = 5;
+  EXPECT_EQ(in_use, as_given);
+}
+
 /// "where | reason" of the InputError that loading `yaml` raises.
 std::string error_of(const std::string& yaml) { return test::input_error_of("cfg.yaml", [&] { load(yaml); }); }
 

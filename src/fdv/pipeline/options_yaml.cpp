@@ -6,6 +6,7 @@
 #include "fdv/core/error.h"
 #include "fdv/core/options_json.h"
 #include "fdv/core/options_yaml.h"
+#include "fdv/detection/detector.h"
 
 namespace fdv {
 namespace {
@@ -58,6 +59,12 @@ PerceptionOptions load_perception_options_file(const std::string& path) {
 std::string to_yaml(const PerceptionOptions& options) { return options_to_yaml(options) + "\n"; }
 
 nlohmann::json to_json(const PerceptionOptions& options) { return options_to_json(options); }
+
+nlohmann::json detector_in_use(const PerceptionOptions& options, const PinholeCamera& event_camera) {
+  PerceptionOptions in_use = options;
+  in_use.detection = scaled_to_camera(options.detection, event_camera);
+  return options_to_json(in_use).at("detector");
+}
 
 std::vector<std::string> options_sections() {
   std::vector<std::string> names{""};

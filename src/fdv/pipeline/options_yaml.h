@@ -41,6 +41,10 @@ PerceptionOptions load_perception_options_file(const std::string& path);
 std::string to_yaml(const PerceptionOptions& options);
 /// Every key, as one JSON object: the top-level keys, and one object per section.
 nlohmann::json to_json(const PerceptionOptions& options);
+/// The "detector" section as the Detector uses it on this event camera: its event-count gates
+/// scaled to the focal length (scaled_to_camera, fdv/detection/detector.h). summary.json's
+/// "detector_in_use"; "options" keeps the values as given, which a run reads back.
+nlohmann::json detector_in_use(const PerceptionOptions& options, const PinholeCamera& event_camera);
 
 /// The sections of the file ("compensation", "detector", ...), in the field list's order; "" is
 /// the top level (its scalar keys only).

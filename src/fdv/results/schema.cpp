@@ -364,7 +364,8 @@ void to_json(json& j, const RunSummary& s) {
        {"threads", s.threads},
        {"reader_report", s.reader_report},
        {"warnings", s.warnings},
-       {"options", s.options}};
+       {"options", s.options},
+       {"detector_in_use", s.detector_in_use}};
 }
 
 void from_json(const json& j, RunSummary& s) {
@@ -389,6 +390,7 @@ void from_json(const json& j, RunSummary& s) {
   s.reader_report = j.at("reader_report");
   s.warnings = j.at("warnings").get<std::vector<std::string>>();
   s.options = j.value("options", nlohmann::json::object());
+  s.detector_in_use = j.value("detector_in_use", nlohmann::json::object());
 }
 
 WindowRow window_row(const WindowResult& w) {

@@ -196,6 +196,9 @@ struct RunSummary {
   /// "options": the effective PerceptionOptions, one object per section with the YAML's keys
   /// (to_json in fdv/pipeline/options_yaml.h); {} when absent.
   nlohmann::json options = nlohmann::json::object();
+  /// "detector_in_use": the detector section as used on this camera (detector_in_use in
+  /// fdv/pipeline/options_yaml.h: the event-count gates scaled to its focal length); {} when absent.
+  nlohmann::json detector_in_use = nlohmann::json::object();
 };
 
 // The JSON form of each row (nlohmann's to_json / from_json, so `nlohmann::json j = row;` and

@@ -73,6 +73,7 @@ MethodRun run_method(const DatasetTruth& truth, int ball, const PerceptionOption
     summary.timing_ms = writer->timing_ms();
     summary.warnings = warnings;
     summary.options = to_json(options);
+    summary.detector_in_use = detector_in_use(options, truth.calibration.event_camera);
     writer->finish(summary);
   }
   return run;
