@@ -193,8 +193,8 @@ struct RunSummary {
   /// "timing_ms": wall-clock time per stage [ms]: count, min, median, p99, max, mean (no rmse).
   std::map<std::string, Summary> timing_ms;
   std::vector<std::string> warnings;  ///< "warnings": every warning of the run, in order
-  /// "options": the effective PerceptionOptions, one object per section with the YAML's keys
-  /// (to_json in fdv/pipeline/options_yaml.h); {} when absent.
+  /// "options": the run's PerceptionOptions as given (config file and flags), one object per
+  /// section with the YAML's keys (to_json in fdv/pipeline/options_yaml.h); {} when absent.
   nlohmann::json options = nlohmann::json::object();
   /// "detector_in_use": the detector section as used on this camera (detector_in_use in
   /// fdv/pipeline/options_yaml.h: the event-count gates scaled to its focal length); {} when absent.
