@@ -231,5 +231,69 @@ TEST(EventRefiner, SymmetricEventsGiveTheirCentroidAndMeanTime) {
   EXPECT_NEAR(r->t_mean_s, 0.0125, 1e-7);
 }
 
+// A ring of events (a uniform ball's rim, 30 px across) on sparse background, and a box on a 6 px
+// fragment of its right arc: the square grows until it holds the whole ring, and the centre is the
+// ring's. Without growth the centre stays on the arc.
+TEST(EventRefiner, ABoxOnAFragmentGrowsToHoldTheWholeObject) {
+  HandMadeWindow w;
+  for (int y = 0; y < kHeight; y += 8)
+    for (int x = 0; x < kWidth; x += 8) w.add(x, y, 1, 0.0125);
+  for (int y = 30; y <= 90; ++y)
+    for (int x = 50; x <= 110; ++x) {
+      const double r = std::hypot(x - 80, y - 60);
+      if (r >= 13 && r <= 15)
+        for (const double t : {0.005, 0.0125, 0.020}) w.add(x, y, 1, t);
+    }
+  w.view = {0, from_seconds(kWindowS), kWidth, kHeight, w.pixel, w.t_s};
+  const Box2D fragment{91, 57, 97, 63};
+
+  const DetectorOptions o;
+  EventRefiner refiner(o);
+  refiner.allocate(kWidth, kHeight);
+  const std::optional<RefinedCenter> r = refiner.refine(w.view, fragment, 0.0125);
+  ASSERT_TRUE(r);
+  EXPECT_NEAR(r->center.x(), 80.0, 1.5);
+  EXPECT_NEAR(r->center.y(), 60.0, 1.5);
+  // The square grows 12 → 18 → 27 → 40.5 px and holds the ring: 40.5 / sqrt(1.5) = 33 px.
+  EXPECT_NEAR(r->extent_px, 30.0, 30.0 * (std::sqrt(1.5) - 1));
+
+  DetectorOptions fixed;
+  fixed.refine_grow_density = 0;
+  EventRefiner fixed_refiner(fixed);
+  fixed_refiner.allocate(kWidth, kHeight);
+  const std::optional<RefinedCenter> f = fixed_refiner.refine(w.view, fragment, 0.0125);
+  ASSERT_TRUE(f);
+  EXPECT_GT(f->center.x(), 90.0);
+  EXPECT_DOUBLE_EQ(f->extent_px, 6.0);
+}
+
+// A 9x9 object at 4 events per pixel on background of 1 event per pixel everywhere: the band around
+// the square is as dense as the whole image, so the square keeps its size. Without the contrast test
+// it grows over the background.
+TEST(EventRefiner, ABoxOnTexturedBackgroundKeepsItsSize) {
+  HandMadeWindow w;
+  for (int y = 0; y < kHeight; ++y)
+    for (int x = 0; x < kWidth; ++x) w.add(x, y, 1, (x + y) % 2 == 0 ? 0.005 : 0.020);
+  w.add_square(80, 60, 9, 3, [](int, int) { return 0.0125; });
+  w.view = {0, from_seconds(kWindowS), kWidth, kHeight, w.pixel, w.t_s};
+  const Box2D box{75.5, 55.5, 84.5, 64.5};
+
+  const DetectorOptions o;
+  EventRefiner refiner(o);
+  refiner.allocate(kWidth, kHeight);
+  const std::optional<RefinedCenter> r = refiner.refine(w.view, box, 0.0125);
+  ASSERT_TRUE(r);
+  EXPECT_DOUBLE_EQ(r->extent_px, 9.0);
+  EXPECT_NEAR(r->center.x(), 80.0, 0.5);
+
+  DetectorOptions no_contrast;
+  no_contrast.refine_grow_contrast = 0;
+  EventRefiner grows(no_contrast);
+  grows.allocate(kWidth, kHeight);
+  const std::optional<RefinedCenter> g = grows.refine(w.view, box, 0.0125);
+  ASSERT_TRUE(g);
+  EXPECT_GT(g->extent_px, 9.0);
+}
+
 }  // namespace
 }  // namespace fdv

@@ -734,6 +734,8 @@ TEST_F(DetectorTest, InvalidOptionsAreRejected) {
       {"motion_cue_density_px", [](DetectorOptions& x) { x.dense_motion.density_px = 4; }},
       {"motion_cue_min_r2", [](DetectorOptions& x) { x.dense_motion.min_r2 = 1.5; }},
       {"refine_recentre_passes", [](DetectorOptions& x) { x.refine_recentre_passes = -1; }},
+      {"refine_grow_density must be in [0, 1], got 2", [](DetectorOptions& x) { x.refine_grow_density = 2; }},
+      {"refine_grow_contrast", [](DetectorOptions& x) { x.refine_grow_contrast = -1; }},
       {"motion_cue_min_pixels", [](DetectorOptions& x) { x.dense_motion.min_pixels = 2; }},
       {"refit_min_roi_px", [](DetectorOptions& x) { x.gaussian_fit.refit_min_roi_px = 0.5; }},
       {"refit_local_scale", [](DetectorOptions& x) { x.gaussian_fit.refit_local_scale = -1; }},

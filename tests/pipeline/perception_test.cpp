@@ -341,11 +341,13 @@ TEST(Perception, NoDepthFrameIsSegmentedTwiceForATrackWhenFramesArriveOutOfOrder
 // frame is a disc of the crescent's long side. Judged against the crescent, the footprint gate
 // rejected most of the ball's frames on this 320x240 throw (measured: 2 of 9 frames before the
 // ball leaves the image accepted); against the square box, most are accepted, each at the ball's
-// true depth.
+// true depth. The crescent's box is also kept from growing past the fragment (refine_grow_density),
+// which squares it too.
 TEST(Perception, TheSquareDetectionBoxLetsTheDepthSegmentationFindTheBall) {
   const SimulatedThrow& s = simulated_throw();
   PerceptionOptions square, crescent;
   crescent.detection.square_box = false;
+  crescent.detection.refine_grow_density = 0;
   const Collected a = run(0, s, square), b = run(0, s, crescent);
   const int track = ball_track(s, a);
   ASSERT_GE(track, 0);

@@ -49,7 +49,7 @@ std::string DetectorOptions::validate() const {
   const double coeffs[] = {threshold_a_s_per_rad, threshold_b_s_per_m, threshold_c, fit_delta_center_px,
                            fit_delta_size_px, fit_delta_fraction, fit_min_size_px, roi_max_aspect,
                            max_segmented_fraction, fills_view_fraction,
-                           refine_box_scale, min_event_density, gate_focal_px, prior_gate_scale, prior_min_gate_px};
+                           refine_box_scale, refine_grow_density, refine_grow_contrast, min_event_density, gate_focal_px, prior_gate_scale, prior_min_gate_px};
   for (double v : coeffs)
     if (!std::isfinite(v)) return "non-finite detector parameter";
   // θ = mean(N) + a‖ω‖ + b‖v‖ + c on N in [0, 1]: the motion terms raise it, c shifts it within N's range.
@@ -79,6 +79,9 @@ std::string DetectorOptions::validate() const {
   else if (region_min_area_px < 1) why << "region_min_area_px must be positive, got " << region_min_area_px;
   else if (!(refine_box_scale == 0 || (refine_box_scale >= 1 && refine_box_scale <= 10)))
     why << "refine_box_scale must be 0 (off) or in [1, 10], got " << refine_box_scale;
+  else if (!(refine_grow_density >= 0 && refine_grow_density <= 1))
+    why << "refine_grow_density must be in [0, 1], got " << refine_grow_density;
+  else if (!(refine_grow_contrast >= 0)) why << "refine_grow_contrast must be >= 0, got " << refine_grow_contrast;
   else if (refine_recentre_passes < 0 || refine_recentre_passes > 20)
     why << "refine_recentre_passes must be in [0, 20], got " << refine_recentre_passes;
   else if (min_window_events < 1) why << "min_window_events must be positive, got " << min_window_events;
@@ -286,8 +289,13 @@ Detection2D Detector::to_detection(const CompensatedEventsView& window, const Ca
   if (o.refine_box_scale > 0) {
     const auto t = std::chrono::steady_clock::now();
     if (const auto refined = refiner_.refine(window, box, t_mean_s)) {
+      const bool grown = refined->extent_px > std::max(box.width(), box.height());  // past a fragment
       box = box.moved_by(refined->center - center);
       center = refined->center;
+      if (grown) {
+        const double half = 0.5 * refined->extent_px;
+        box = Box2D{center.x() - half, center.y() - half, center.x() + half, center.y() + half};
+      }
       t_mean_s = refined->t_mean_s;
     }
     res.timings.refine_ms = ms_since(t);

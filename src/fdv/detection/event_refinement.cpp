@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 
 #include "fdv/core/lanes.h"
@@ -75,17 +76,17 @@ std::optional<RefinedCenter> EventRefiner::refine(const CompensatedEventsView& w
   const Eigen::Vector2d c = box.center();
   // Square: the segmented sweep can be a thin crescent across the motion, while the object
   // extends along it as well.
-  const double half = 0.5 * options_.refine_box_scale * std::max(box.width(), box.height());
-  // The clutter guard below keeps the centre within one box size of the box's: the squares of all
-  // passes lie inside `outer`, whose slice events are binned once per pixel (count, Σt).
-  const double reach = std::max(box.width(), box.height());
-  const cv::Rect outer = box_pixels({c.x() - reach - half, c.y() - reach - half, c.x() + reach + half, c.y() + reach + half},
-                                    window.width, window.height);
-  if (outer.area() == 0) return std::nullopt;
-  // The band of outer's rows, whole (bin_slice counts whole rows).
-  CV_Assert(acc_.isContinuous() && acc_.cols == window.width);
-  std::fill_n(acc_.ptr<float>(outer.y), 2 * static_cast<std::size_t>(outer.height) * window.width, 0.0f);
+  const double initial_half = 0.5 * options_.refine_box_scale * std::max(box.width(), box.height());
+  double half = initial_half;
+  // A box on a fragment of a large object (part of its crescent) gives a square that cuts the
+  // object: its events go on past the square's edge. The square then grows by kGrowth, up to an
+  // object of fills_view_fraction × the shorter side, while the band just outside it is at least
+  // refine_grow_density × as dense as the square (docs/DETECTION.md, "centre and time").
+  constexpr double kGrowth = 1.5;
+  const double max_half = 0.5 * options_.refine_box_scale * options_.fills_view_fraction *
+                          std::min(window.width, window.height);
   const std::int32_t w = window.width;
+  CV_Assert(acc_.isContinuous() && acc_.cols == window.width);
   // Time-ordered windows (the compensators keep the input's order): only the slice is scanned.
   std::size_t begin = 0, end = std::min(window.pixel.size(), window.t_s.size());
   if (window.time_sorted) {
@@ -93,44 +94,91 @@ std::optional<RefinedCenter> EventRefiner::refine(const CompensatedEventsView& w
     begin = static_cast<std::size_t>(std::lower_bound(t_begin, t_begin + static_cast<std::ptrdiff_t>(end), t_lo) - t_begin);
     end = static_cast<std::size_t>(std::upper_bound(t_begin, t_begin + static_cast<std::ptrdiff_t>(end), t_hi) - t_begin);
   }
-  bin_slice(window.pixel.data(), window.t_s.data(), begin, end, static_cast<std::uint32_t>(w),
-            static_cast<std::uint32_t>(outer.y), static_cast<std::uint32_t>(outer.height), t_lo, t_hi,
-            acc_.ptr<float>(0));
-  // Mean shift with a flat square kernel: the square starts on the box, whose centre lies ahead of
-  // the object (the box holds the latest sweep), and residual background events inside it pull the
-  // centroid towards that centre. Re-centring the square on the centroid removes the pull: the
-  // fixed point is the square centred on the object's events.
-  Eigen::Vector2d centre = c;
-  double sx = 0, sy = 0, st = 0;
-  long n = 0;
-  for (int pass = 0; pass <= options_.refine_recentre_passes; ++pass) {
-    const cv::Rect e = box_pixels({centre.x() - half, centre.y() - half, centre.x() + half, centre.y() + half},
-                                  window.width, window.height) & outer;
-    if (e.area() == 0) return std::nullopt;
-    sx = sy = st = 0;
-    n = 0;
-    for (int y = e.y; y < e.y + e.height; ++y) {
+  // The slice's mean density over the image: the band must stand out from it as an object does.
+  const double slice_events = window.time_sorted ? static_cast<double>(end - begin)
+                                                 : static_cast<double>(end) * 2 * tau / duration_s;
+  const double slice_density = slice_events / (static_cast<double>(window.width) * window.height);
+  auto square = [&](const Eigen::Vector2d& at, double half_side) {
+    return box_pixels({at.x() - half_side, at.y() - half_side, at.x() + half_side, at.y() + half_side}, window.width,
+                      window.height);
+  };
+  auto events_in = [&](const cv::Rect& r) {
+    double sum = 0;
+    for (int y = r.y; y < r.y + r.height; ++y) {
       const float* acc = acc_.ptr<float>(y);
-      long row_n = 0;
-      for (int x = e.x; x < e.x + e.width; ++x) {
-        const auto count = static_cast<long>(acc[2 * x]);  // a whole number below 2^24: exact
-        row_n += count;
-        sx += static_cast<double>(count) * x;
-        st += acc[2 * x + 1];
-      }
-      n += row_n;
-      sy += static_cast<double>(row_n) * y;
+      for (int x = r.x; x < r.x + r.width; ++x) sum += acc[2 * x];
     }
-    if (n < options_.roi_min_events) return std::nullopt;
-    const Eigen::Vector2d next = Eigen::Vector2d(sx, sy) / static_cast<double>(n);
-    const bool settled = (next - centre).norm() < 0.25;
-    centre = next;
-    // Clutter guard: the object was inside the box at the end of its sweep, so within the slice
-    // its centre is at most about one box size away; a centroid further off is background.
-    if ((centre - c).norm() > reach) return std::nullopt;
-    if (settled) break;
+    return sum;
+  };
+  std::optional<RefinedCenter> refined;
+  Eigen::Vector2d centre = c;
+  for (;;) {
+    // The clutter guard below keeps the centre within the object's size (one box size, or the
+    // grown square's) of the box's centre: the squares of all passes, and the band around the
+    // last, lie inside `outer`, whose slice events are binned once per pixel (count, Σt).
+    const double reach = std::max(box.width(), box.height()) * half / initial_half;
+    const double band_half = kGrowth * half;
+    const cv::Rect outer = square(c, reach + band_half);
+    if (outer.area() == 0) return refined;
+    // The band of outer's rows, whole (bin_slice counts whole rows).
+    std::fill_n(acc_.ptr<float>(outer.y), 2 * static_cast<std::size_t>(outer.height) * window.width, 0.0f);
+    bin_slice(window.pixel.data(), window.t_s.data(), begin, end, static_cast<std::uint32_t>(w),
+              static_cast<std::uint32_t>(outer.y), static_cast<std::uint32_t>(outer.height), t_lo, t_hi,
+              acc_.ptr<float>(0));
+    // Mean shift with a flat square kernel: the square starts on the box, whose centre lies ahead of
+    // the object (the box holds the latest sweep), and residual background events inside it pull the
+    // centroid towards that centre. Re-centring the square on the centroid removes the pull: the
+    // fixed point is the square centred on the object's events.
+    double sx = 0, sy = 0, st = 0;
+    long n = 0;
+    cv::Rect e;
+    for (int pass = 0; pass <= options_.refine_recentre_passes; ++pass) {
+      e = square(centre, half) & outer;
+      if (e.area() == 0) return refined;
+      sx = sy = st = 0;
+      n = 0;
+      for (int y = e.y; y < e.y + e.height; ++y) {
+        const float* acc = acc_.ptr<float>(y);
+        long row_n = 0;
+        for (int x = e.x; x < e.x + e.width; ++x) {
+          const auto count = static_cast<long>(acc[2 * x]);  // a whole number below 2^24: exact
+          row_n += count;
+          sx += static_cast<double>(count) * x;
+          st += acc[2 * x + 1];
+        }
+        n += row_n;
+        sy += static_cast<double>(row_n) * y;
+      }
+      if (n < options_.roi_min_events) return refined;
+      const Eigen::Vector2d next = Eigen::Vector2d(sx, sy) / static_cast<double>(n);
+      const bool settled = (next - centre).norm() < 0.25;
+      centre = next;
+      // Clutter guard: the object was inside the box at the end of its sweep, so within the slice
+      // its centre is at most about its size away; a centroid further off is background.
+      if ((centre - c).norm() > reach) return refined;
+      if (settled) break;
+    }
+    // Grown, the object's radius lies between the previous half-side (its band was dense) and this
+    // one (its band is not): the extent is their geometric mean, doubled.
+    const double longer_side = std::max(box.width(), box.height());
+    const double extent = half > initial_half ? 2 * half / std::sqrt(kGrowth) : longer_side;
+    refined = RefinedCenter{centre, st / static_cast<double>(n), extent};
+    if (!(options_.refine_grow_density > 0) || kGrowth * half > max_half) return refined;
+    // The band's four sides, each alone: the centroid lags towards the fragment, so the object's
+    // far part shows in the side facing it.
+    const cv::Rect band = square(centre, band_half) & outer;
+    const cv::Rect sides[] = {{band.x, band.y, e.x - band.x, band.height},
+                              {e.x + e.width, band.y, band.x + band.width - e.x - e.width, band.height},
+                              {e.x, band.y, e.width, e.y - band.y},
+                              {e.x, e.y + e.height, e.width, band.y + band.height - e.y - e.height}};
+    double band_density = 0;
+    for (const cv::Rect& side : sides)
+      if (side.area() > 0) band_density = std::max(band_density, events_in(side) / side.area());
+    if (band_density < options_.refine_grow_density * static_cast<double>(n) / e.area() ||
+        band_density < options_.refine_grow_contrast * slice_density)
+      return refined;
+    half = band_half;
   }
-  return RefinedCenter{centre, st / static_cast<double>(n)};
 }
 
 }  // namespace fdv

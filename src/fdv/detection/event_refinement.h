@@ -2,12 +2,14 @@
 /// The winning candidate's centre and time re-estimated from the events themselves
 /// (docs/DETECTION.md, "centre and time"): the centroid and mean time of a time-complete slice of
 /// the object around the box, by mean shift with a flat square kernel. Removes the forward bias of
-/// the segmented pattern's centroid (the pattern is the object's latest sweep).
+/// the segmented pattern's centroid (the pattern is the object's latest sweep). A box on a fragment
+/// of a larger object grows until the square holds the whole object.
 ///
 ///   EventRefiner refiner(options);      // once; allocate(width, height) before the first refine()
 ///   if (auto r = refiner.refine(view, box, t_mean_s)) { centre = r->center; t = r->t_mean_s; }
 ///
-/// Options: DetectorOptions::refine_box_scale, refine_recentre_passes, roi_min_events.
+/// Options: DetectorOptions::refine_box_scale, refine_recentre_passes, refine_grow_density,
+/// fills_view_fraction, roi_min_events.
 /// Does not allocate once allocated. Not thread-safe.
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
@@ -22,6 +24,9 @@ namespace fdv {
 struct RefinedCenter {
   Eigen::Vector2d center = Eigen::Vector2d::Zero();  ///< undistorted grid [px]
   double t_mean_s = 0;                               ///< [s since t_start]
+  /// The object's extent [px]: the box's longer side, or, when the square grew past a fragment of a
+  /// larger object, the diameter that the last two squares bracket.
+  double extent_px = 0;
 };
 
 class EventRefiner {
@@ -29,7 +34,8 @@ class EventRefiner {
   explicit EventRefiner(const DetectorOptions& options) : options_(options) {}
   void allocate(int width, int height);
   /// Centroid and mean time of the events in a time-complete slice around `box` (whose events' mean
-  /// time is t_box_s), or nothing when too few or when the centroid leaves the box's reach.
+  /// time is t_box_s), or nothing when too few or when the centroid leaves the box's reach. When
+  /// the square grew and then failed either test, the last square's result.
   std::optional<RefinedCenter> refine(const CompensatedEventsView& window, const Box2D& box, double t_box_s);
 
  private:
