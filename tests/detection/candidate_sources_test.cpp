@@ -213,18 +213,23 @@ TEST(CountContrastSource, ADenseBlobOnAnEmptySurroundIsFoundAtItsCentre) {
   EXPECT_FALSE(off_res.count_cue_ran);
 }
 
+/// One refinement with these options, from a fresh refiner.
+std::optional<RefinedCenter> refine_once(const DetectorOptions& o, const CompensatedEventsView& view, const Box2D& box,
+                                         double t_box_s) {
+  EventRefiner refiner(o);
+  refiner.allocate(kWidth, kHeight);
+  return refiner.refine(view, box, t_box_s);
+}
+
 // Events of a square object symmetric about its centre and about the window's middle time: the
 // refined centre and time are that centre and time, from a box centred off it.
 TEST(EventRefiner, SymmetricEventsGiveTheirCentroidAndMeanTime) {
-  const DetectorOptions o;
   HandMadeWindow w;
   for (int y = 47; y <= 53; ++y)
     for (int x = 37; x <= 43; ++x)
       for (const double t : {0.005, 0.0125, 0.020}) w.add(x, y, 1, t);
   w.view = {0, from_seconds(kWindowS), kWidth, kHeight, w.pixel, w.t_s};  // not time-sorted
-  EventRefiner refiner(o);
-  refiner.allocate(kWidth, kHeight);
-  const std::optional<RefinedCenter> r = refiner.refine(w.view, Box2D{38, 46, 46, 54}, 0.0125);
+  const std::optional<RefinedCenter> r = refine_once(DetectorOptions{}, w.view, Box2D{38, 46, 46, 54}, 0.0125);
   ASSERT_TRUE(r);
   EXPECT_NEAR(r->center.x(), 40.0, 1e-9);
   EXPECT_NEAR(r->center.y(), 50.0, 1e-9);
@@ -247,10 +252,7 @@ TEST(EventRefiner, ABoxOnAFragmentGrowsToHoldTheWholeObject) {
   w.view = {0, from_seconds(kWindowS), kWidth, kHeight, w.pixel, w.t_s};
   const Box2D fragment{91, 57, 97, 63};
 
-  const DetectorOptions o;
-  EventRefiner refiner(o);
-  refiner.allocate(kWidth, kHeight);
-  const std::optional<RefinedCenter> r = refiner.refine(w.view, fragment, 0.0125);
+  const std::optional<RefinedCenter> r = refine_once(DetectorOptions{}, w.view, fragment, 0.0125);
   ASSERT_TRUE(r);
   EXPECT_NEAR(r->center.x(), 80.0, 1.5);
   EXPECT_NEAR(r->center.y(), 60.0, 1.5);
@@ -259,9 +261,7 @@ TEST(EventRefiner, ABoxOnAFragmentGrowsToHoldTheWholeObject) {
 
   DetectorOptions fixed;
   fixed.refine_grow_density = 0;
-  EventRefiner fixed_refiner(fixed);
-  fixed_refiner.allocate(kWidth, kHeight);
-  const std::optional<RefinedCenter> f = fixed_refiner.refine(w.view, fragment, 0.0125);
+  const std::optional<RefinedCenter> f = refine_once(fixed, w.view, fragment, 0.0125);
   ASSERT_TRUE(f);
   EXPECT_GT(f->center.x(), 90.0);
   EXPECT_DOUBLE_EQ(f->extent_px, 6.0);
@@ -278,19 +278,14 @@ TEST(EventRefiner, ABoxOnTexturedBackgroundKeepsItsSize) {
   w.view = {0, from_seconds(kWindowS), kWidth, kHeight, w.pixel, w.t_s};
   const Box2D box{75.5, 55.5, 84.5, 64.5};
 
-  const DetectorOptions o;
-  EventRefiner refiner(o);
-  refiner.allocate(kWidth, kHeight);
-  const std::optional<RefinedCenter> r = refiner.refine(w.view, box, 0.0125);
+  const std::optional<RefinedCenter> r = refine_once(DetectorOptions{}, w.view, box, 0.0125);
   ASSERT_TRUE(r);
   EXPECT_DOUBLE_EQ(r->extent_px, 9.0);
   EXPECT_NEAR(r->center.x(), 80.0, 0.5);
 
   DetectorOptions no_contrast;
   no_contrast.refine_grow_contrast = 0;
-  EventRefiner grows(no_contrast);
-  grows.allocate(kWidth, kHeight);
-  const std::optional<RefinedCenter> g = grows.refine(w.view, box, 0.0125);
+  const std::optional<RefinedCenter> g = refine_once(no_contrast, w.view, box, 0.0125);
   ASSERT_TRUE(g);
   EXPECT_GT(g->extent_px, 9.0);
 }
