@@ -80,8 +80,9 @@ std::optional<RefinedCenter> EventRefiner::refine(const CompensatedEventsView& w
   double half = initial_half;
   // A box on a fragment of a large object (part of its crescent) gives a square that cuts the
   // object: its events go on past the square's edge. The square then grows by kGrowth, up to an
-  // object of fills_view_fraction × the shorter side, while the band just outside it is at least
-  // refine_grow_density × as dense as the square (docs/DETECTION.md, "centre and time").
+  // object of fills_view_fraction × the shorter side, while a side of the band just outside it is
+  // at least refine_grow_density × as dense as the square and refine_grow_contrast × the image's
+  // mean (docs/DETECTION.md, "A box on a fragment grows").
   constexpr double kGrowth = 1.5;
   const double max_half = 0.5 * options_.refine_box_scale * options_.fills_view_fraction *
                           std::min(window.width, window.height);
