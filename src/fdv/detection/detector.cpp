@@ -48,8 +48,8 @@ std::string DetectorOptions::validate() const {
   auto odd_positive = [](int k) { return k >= 1 && k % 2 == 1 && k <= 31; };
   const double coeffs[] = {threshold_a_s_per_rad, threshold_b_s_per_m, threshold_c, fit_delta_center_px,
                            fit_delta_size_px, fit_delta_fraction, fit_min_size_px, roi_max_aspect,
-                           max_segmented_fraction, fills_view_fraction,
-                           refine_box_scale, refine_grow_density, refine_grow_contrast, min_event_density, gate_focal_px, prior_gate_scale, prior_min_gate_px};
+                           max_segmented_fraction, fills_view_fraction, refine_box_scale, refine_grow_density,
+                           refine_grow_contrast, min_event_density, gate_focal_px, prior_gate_scale, prior_min_gate_px};
   for (double v : coeffs)
     if (!std::isfinite(v)) return "non-finite detector parameter";
   // θ = mean(N) + a‖ω‖ + b‖v‖ + c on N in [0, 1]: the motion terms raise it, c shifts it within N's range.

@@ -204,9 +204,10 @@ struct DetectorOptions {
   /// first, while the centroid moves by ≥ 0.25 px: residual background events in a region centred
   /// ahead of the object pull the centroid forwards; 0 = the region stays on the box.
   int refine_recentre_passes = 6;
-  /// The square grows (× 1.5) while the band just outside it holds at least this × its own event
-  /// density: the box was a fragment of a larger object, whose events go on past the square. The
-  /// box then becomes the grown square / refine_box_scale. 0 = the square keeps its size.
+  /// The square grows (× 1.5) while a side of the band just outside it holds at least this × its
+  /// own event density: the box was a fragment of a larger object, whose events go on past the
+  /// square. The box then becomes a square of the extent the last two squares bracket
+  /// (docs/DETECTION.md, "A box on a fragment grows"). 0 = the square keeps its size.
   double refine_grow_density = 0.4;
   /// ... and at least this × the slice's mean density over the image, so that it grows over an
   /// object, not over textured background. 0 = that test is off.
@@ -264,7 +265,7 @@ void describe(V& v, DetectorOptions& o) {
   v("prior_min_gate_px", o.prior_min_gate_px, "px", "smallest gate half-side");
   v("refine_box_scale", o.refine_box_scale, "-", "centre and time re-estimated from the events in the box × this (0 = off)");
   v("refine_recentre_passes", o.refine_recentre_passes, "-", "mean-shift re-centring passes of that region (0 = stays on the box)");
-  v("refine_grow_density", o.refine_grow_density, "-", "that region grows × 1.5 while the band around it is this × as dense (0 = off)");
+  v("refine_grow_density", o.refine_grow_density, "-", "that region grows × 1.5 while a side of the band around it is this × as dense (0 = off)");
   v("refine_grow_contrast", o.refine_grow_contrast, "-", "... and this × as dense as the whole image's events in the slice");
   v("square_box", o.square_box, "-", "report the box as a square of its longer side on the refined centre");
   v("max_objects", o.max_objects, "-", "most objects reported per window (each found one is blanked, the search goes on)");

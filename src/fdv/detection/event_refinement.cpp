@@ -76,7 +76,8 @@ std::optional<RefinedCenter> EventRefiner::refine(const CompensatedEventsView& w
   const Eigen::Vector2d c = box.center();
   // Square: the segmented sweep can be a thin crescent across the motion, while the object
   // extends along it as well.
-  const double initial_half = 0.5 * options_.refine_box_scale * std::max(box.width(), box.height());
+  const double longer_side = std::max(box.width(), box.height());
+  const double initial_half = 0.5 * options_.refine_box_scale * longer_side;
   double half = initial_half;
   // A box on a fragment of a large object (part of its crescent) gives a square that cuts the
   // object: its events go on past the square's edge. The square then grows by kGrowth, up to an
@@ -117,7 +118,7 @@ std::optional<RefinedCenter> EventRefiner::refine(const CompensatedEventsView& w
     // The clutter guard below keeps the centre within the object's size (one box size, or the
     // grown square's) of the box's centre: the squares of all passes, and the band around the
     // last, lie inside `outer`, whose slice events are binned once per pixel (count, Σt).
-    const double reach = std::max(box.width(), box.height()) * half / initial_half;
+    const double reach = longer_side * half / initial_half;
     const double band_half = kGrowth * half;
     const cv::Rect outer = square(c, reach + band_half);
     if (outer.area() == 0) return refined;
@@ -161,7 +162,6 @@ std::optional<RefinedCenter> EventRefiner::refine(const CompensatedEventsView& w
     }
     // Grown, the object's radius lies between the previous half-side (its band was dense) and this
     // one (its band is not): the extent is their geometric mean, doubled.
-    const double longer_side = std::max(box.width(), box.height());
     const double extent = half > initial_half ? 2 * half / std::sqrt(kGrowth) : longer_side;
     refined = RefinedCenter{centre, st / static_cast<double>(n), extent};
     if (!(options_.refine_grow_density > 0) || kGrowth * half > max_half) return refined;

@@ -9,7 +9,7 @@
 ///   if (auto r = refiner.refine(view, box, t_mean_s)) { centre = r->center; t = r->t_mean_s; }
 ///
 /// Options: DetectorOptions::refine_box_scale, refine_recentre_passes, refine_grow_density,
-/// fills_view_fraction, roi_min_events.
+/// refine_grow_contrast, fills_view_fraction, roi_min_events.
 /// Does not allocate once allocated. Not thread-safe.
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
