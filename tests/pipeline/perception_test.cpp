@@ -358,15 +358,18 @@ TEST(Perception, TheSquareDetectionBoxLetsTheDepthSegmentationFindTheBall) {
 
 // Estimate-aided association (PerceptionOptions::estimate_aided_association): a head-on throw whose
 // image motion bends and speeds up as the ball approaches leaves the image-plane filter's gate, and
-// without the 3D estimate vouching for them its detections start new tracks. Measured on this
-// dataset, the ball's detections after the first: track 2 x16 then track 3 x6 without, track 2 x22
-// with. Full resolution: at 320x240 no preset with seeds 1-6 splits the ball's track either way.
+// without the 3D estimate vouching for them its detections start new tracks. The tracker's part
+// noise (tracking.part_noise) widens the gate for the smaller of these detections and alone keeps
+// this ball in one track, so it is off here to see the estimate's aid. Measured on this dataset,
+// the ball's detections after the first two: track 2 x18 then track 3 x6 without, track 2 x24 with.
+// Full resolution: at 320x240 no preset with seeds 1-6 splits the ball's track either way.
 TEST(Perception, TheTrajectoryEstimateKeepsAHeadOnBallInOneTrack) {
   SimulatedThrow s;
   sim::Simulator simulator(sim::make_preset("hover_headon", 2));
   simulator.run(s.data);
   s.calib = simulator.calibration();
   PerceptionOptions aided, image_only;
+  aided.tracking.part_noise = image_only.tracking.part_noise = 0;
   image_only.estimate_aided_association = false;
   const std::vector<int> with = ball_detection_tracks(s, run(0, s, aided));
   const std::vector<int> without = ball_detection_tracks(s, run(0, s, image_only));

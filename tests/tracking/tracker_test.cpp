@@ -248,6 +248,48 @@ TEST(Tracker, ExternalGateContinuesATrackTheFilterGateRejects) {
   EXPECT_EQ(run(other_track).second.outcome, Outcome::kNewTrack);
 }
 
+// A confirmed track of a 32 px object; then a 12 px detection of part of it, (10, -10) px off the
+// track's prediction: a part's centre may lie up to (32 - 12) / 2 = 10 px off per axis. The pair's
+// noise gains (32 - 12)² / 12 px² per axis, so the gate's d² is |y|² / (P + σ² + 33.3) with P the
+// prediction's variance (isotropic here), and the update moves the track by P / (P + σ² + 33.3) of
+// the offset. Without it (part_noise 0) the gate rejects the part and a new track starts. A part
+// 40 px off, outside the object, starts a new track either way.
+TEST(Tracker, ADetectionOfPartOfTheObjectContinuesItsTrack) {
+  struct PartRun {
+    bool taken;
+    double d2, pulled_px, prior_variance_px2;
+  };
+  auto run = [](double part_noise, Eigen::Vector2d offset) {
+    TrackerOptions o;
+    o.part_noise = part_noise;
+    Tracker tracker(o);
+    for (int k = 0; k < 8; ++k)
+      tracker.update(k * kWindow, std::vector<TrackerDetection>{det(k * kWindow, 100 + 10.0 * k, 200, 32)});
+    const int id = tracker.tracks().at(0).id();
+    const TrackPrediction before = tracker.find(id)->predict(8 * kWindow);
+    const Eigen::Vector2d seen = before.center_px + offset;
+    const TrackerStep step =
+        tracker.update(8 * kWindow, std::vector<TrackerDetection>{det(8 * kWindow, seen.x(), seen.y(), 12)});
+    const TrackAssignment& a = step.assignments.at(0);
+    const double pulled = (tracker.find(id)->predict(8 * kWindow).center_px - before.center_px).norm();
+    return PartRun{a.outcome == TrackAssignment::Outcome::kUpdated && a.track_id == id, a.mahalanobis2, pulled,
+                   before.centre_covariance_px2(0, 0)};
+  };
+  const Eigen::Vector2d inside(10, -10);
+  const PartRun part = run(1.0, inside);
+  const double sigma2 = 1.5 * 1.5, part_variance = 20.0 * 20.0 / 12;
+  const double S = part.prior_variance_px2 + sigma2 + part_variance;
+  EXPECT_TRUE(part.taken);
+  EXPECT_NEAR(part.d2, inside.squaredNorm() / S, 0.05);
+  EXPECT_NEAR(part.pulled_px, part.prior_variance_px2 / S * inside.norm(), 0.05);
+  EXPECT_LT(part.pulled_px, 0.25 * inside.norm());
+
+  const PartRun whole = run(0.0, inside);
+  EXPECT_FALSE(whole.taken);
+  EXPECT_GT(inside.squaredNorm() / (whole.prior_variance_px2 + sigma2), TrackerOptions{}.gate_chi2);
+  EXPECT_FALSE(run(1.0, {40, 0}).taken);
+}
+
 // An external gate does not lift the hard radius cap (gate_max_distance_px).
 TEST(Tracker, ExternalGateKeepsTheHardRadiusCap) {
   Tracker tracker;

@@ -57,7 +57,7 @@ ImageKalmanFilter::ImageKalmanFilter(const ImageFilterOptions& options, TimeNs t
   P_.diagonal() << sp * sp, sp * sp, sv * sv, sv * sv, sa * sa, sa * sa;
 }
 
-ImagePrediction ImageKalmanFilter::predict(TimeNs t) const {
+ImagePrediction ImageKalmanFilter::predict(TimeNs t, const Eigen::Vector2d& extra_variance_px2) const {
   const double dt = to_seconds(t - t_);
   const Covariance F = transition(dt);
   ImagePrediction p;
@@ -66,12 +66,13 @@ ImagePrediction ImageKalmanFilter::predict(TimeNs t) const {
   p.P = F * P_ * F.transpose() + process_noise(dt, options_.jerk_psd_px2_s5);
   const double r = options_.measurement_sigma_px * options_.measurement_sigma_px;
   p.R = Eigen::Matrix2d::Identity() * r;
+  p.R.diagonal() += extra_variance_px2;
   return p;
 }
 
-double ImageKalmanFilter::update(TimeNs t, const Eigen::Vector2d& z_px) {
+double ImageKalmanFilter::update(TimeNs t, const Eigen::Vector2d& z_px, const Eigen::Vector2d& extra_variance_px2) {
   assert(t >= t_);
-  const ImagePrediction p = predict(t);
+  const ImagePrediction p = predict(t, extra_variance_px2);
   const Eigen::Vector2d y = z_px - p.position();
   const Eigen::Matrix2d S = p.innovation_covariance();
   const Eigen::LDLT<Eigen::Matrix2d> S_ldlt(S);

@@ -80,9 +80,13 @@ class ImageKalmanFilter {
   /// prior stds of the options. Throws ConfigError when options are invalid.
   ImageKalmanFilter(const ImageFilterOptions& options, TimeNs t, const Eigen::Vector2d& z_px);
 
-  ImagePrediction predict(TimeNs t) const;
-  /// Measurement update at t >= time(). Returns the innovation's squared Mahalanobis distance.
-  double update(TimeNs t, const Eigen::Vector2d& z_px);
+  /// `extra_variance_px2` adds to the measurement noise R, per axis, for a measurement less
+  /// precise than measurement_sigma_px (e.g. a detection of part of the object).
+  ImagePrediction predict(TimeNs t, const Eigen::Vector2d& extra_variance_px2 = Eigen::Vector2d::Zero()) const;
+  /// Measurement update at t >= time(), R grown as in predict(). Returns the innovation's squared
+  /// Mahalanobis distance.
+  double update(TimeNs t, const Eigen::Vector2d& z_px,
+                const Eigen::Vector2d& extra_variance_px2 = Eigen::Vector2d::Zero());
 
   TimeNs time() const { return t_; }
   const State& state() const { return x_; }

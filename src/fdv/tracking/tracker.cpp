@@ -31,11 +31,17 @@ std::string TrackerOptions::validate() const {
   if (!(box_smoothing > 0 && box_smoothing <= 1)) return "box_smoothing must be in (0, 1]";
   if (max_tracks < 1) return "max_tracks must be >= 1";
   if (!(crossing_scale >= 0 && std::isfinite(crossing_scale))) return "crossing_scale must be >= 0";
+  if (!(part_noise >= 0 && std::isfinite(part_noise))) return "part_noise must be >= 0";
   return {};
 }
 
 TimeNs Track::gap_limit(const TrackerOptions& o) const {
   return (confirmed() ? o.max_gap_ns : o.tentative_max_gap_ns) + crossing_ns_;
+}
+
+Eigen::Vector2d Track::part_variance_px2(const TrackerDetection& d, const TrackerOptions& o) const {
+  const Eigen::Vector2d missing = (box_size_px_ - d.box_size_px).cwiseMax(0.0);
+  return o.part_noise * missing.cwiseAbs2() / 12.0;
 }
 
 TrackPrediction Track::predict(TimeNs t) const {
@@ -135,7 +141,7 @@ TrackerStep Tracker::update(TimeNs t, std::span<const TrackerDetection> detectio
       if (!usable[i] || merged[i]) continue;
       const TrackerDetection& d = detections[i];
       if (d.t < tr.last_update_time() || d.t - tr.last_update_time() > gap_limit) continue;
-      const ImagePrediction p = tr.filter().predict(d.t);
+      const ImagePrediction p = tr.filter().predict(d.t, tr.part_variance_px2(d, options_));
       if ((d.center_px - p.position()).norm() > options_.gate_max_distance_px) continue;
       const double d2 = p.mahalanobis2(d.center_px);
       if (d2 <= options_.gate_chi2) {
@@ -160,7 +166,7 @@ TrackerStep Tracker::update(TimeNs t, std::span<const TrackerDetection> detectio
     track_taken[c.track] = detection_taken[c.detection] = true;
     Track& tr = tracks_[c.track];
     const TrackerDetection& d = detections[c.detection];
-    tr.filter_.update(d.t, d.center_px);
+    tr.filter_.update(d.t, d.center_px, tr.part_variance_px2(d, options_));
     const double a = options_.box_smoothing;
     tr.box_size_px_ = a * d.box_size_px + (1 - a) * tr.box_size_px_;
     ++tr.hits_;

@@ -14,7 +14,8 @@
 /// Association: every (track, detection) pair must pass (1) the time gate: the detection is not
 /// older than the track's last update and at most `max_gap_ns` newer; (2) the Mahalanobis gate
 /// d² = y^T S^-1 y <= gate_chi2 with S the filter's innovation covariance at the detection's time;
-/// (3) a hard radius cap |y| <= gate_max_distance_px. A pair that fails (2) may still pass on an
+/// (3) a hard radius cap |y| <= gate_max_distance_px. A detection smaller than the track's box is
+/// a part of its object, and S holds that centre's larger noise (TrackerOptions::part_noise). A pair that fails (2) may still pass on an
 /// ExternalGate given by the caller (fdv::Perception: the track's 3D estimate). Gated pairs are assigned greedily in order
 /// of increasing d² (global nearest neighbour, one detection per track and per window). A
 /// detection left over starts a new tentative track. Coordinates are raw (distorted) pixels of the
@@ -50,8 +51,9 @@ struct TrackerOptions {
   double gate_max_distance_px = 100.0;
   /// Time gate and deletion of a confirmed track [ns]: 4 event windows of 25 ms without an update.
   TimeNs max_gap_ns = 100 * kNsPerMs;
-  /// The same for a tentative track [ns]: 2 windows.
-  TimeNs tentative_max_gap_ns = 50 * kNsPerMs;
+  /// The same for a tentative track [ns]: 2.5 windows, so that it outlives one missed window
+  /// whatever its detections' mean event times jitter within their windows.
+  TimeNs tentative_max_gap_ns = 62500 * kNsPerUs;
   /// Hits (updates, counting the first detection) that confirm a track: 3 windows = 50 ms after
   /// the first detection at 25 ms windows (issue target: first 3D estimate within 60 ms).
   int confirm_hits = 3;
@@ -65,6 +67,11 @@ struct TrackerOptions {
   /// starts on it, and the tracks coast, the time (up to max_gap_ns) not counting towards their
   /// deletion. 2 was tuned on two_balls seeds 1-4 (docs/DETECTION.md, "Several objects"). 0 = off.
   double crossing_scale = 2;
+  /// A detection of part of a track's object (a fragment of its pattern, or the visible part of an
+  /// object cut by the border) has a box smaller than the track's, and its centre may lie anywhere
+  /// within the difference: the pair's measurement noise gains, per axis, this times the variance
+  /// of a uniform spread over (track box - detection box), (Δ)²/12. 0 = off.
+  double part_noise = 1;
 
   std::string validate() const;
 };
@@ -82,6 +89,8 @@ void describe(V& v, TrackerOptions& o) {
   v("max_tracks", o.max_tracks, "-", "most tracks held at once");
   v("crossing_scale", o.crossing_scale, "-",
     "reach, in mean box sizes, of a detection taken as the merged image of two crossing tracks (0 = off)");
+  v("part_noise", o.part_noise, "-",
+    "weight of the centre noise a detection smaller than its track's box gains, (track box - box)²/12 per axis (0 = off)");
 }
 
 enum class TrackStatus { kTentative, kConfirmed };
@@ -113,6 +122,9 @@ class Track {
   /// Longest time without an update before deletion: the status's, plus the time spent crossing
   /// another track (TrackerOptions::crossing_scale), which no detection could update.
   TimeNs gap_limit(const TrackerOptions& o) const;
+  /// Extra measurement variance [px²] per axis of a detection of part of this track's object
+  /// (TrackerOptions::part_noise).
+  Eigen::Vector2d part_variance_px2(const TrackerDetection& d, const TrackerOptions& o) const;
 
  private:
   friend class Tracker;
