@@ -267,6 +267,38 @@ TEST(EventRefiner, ABoxOnAFragmentGrowsToHoldTheWholeObject) {
   EXPECT_DOUBLE_EQ(f->extent_px, 6.0);
 }
 
+// The same ring whose right half makes 3 events per pixel and its left half 2, as a ball that comes
+// closer while it moves right sweeps more pixels with its leading edge: the events' centroid lies
+// (3 - 2) / 5 · 2r/π ≈ 1.8 px right of the centre (2r/π = 8.9 px, a half ring's mean offset at
+// r = 14), the fitted outline's centre on it. (At 2:1 the square stops growing before it holds the
+// left half: the band's density test compares it with the denser right half.)
+TEST(EventRefiner, AGrownSquaresCentreIsItsOutlinesNotItsEventsCentroid) {
+  HandMadeWindow w;
+  for (int y = 0; y < kHeight; y += 8)
+    for (int x = 0; x < kWidth; x += 8) w.add(x, y, 1, 0.0125);
+  for (int y = 30; y <= 90; ++y)
+    for (int x = 50; x <= 110; ++x) {
+      const double r = std::hypot(x - 80, y - 60);
+      if (r >= 13 && r <= 15)
+        for (const double t : {0.005, 0.0125, 0.020}) w.add(x, y, x > 80 ? 3 : 2, t);
+    }
+  w.view = {0, from_seconds(kWindowS), kWidth, kHeight, w.pixel, w.t_s};
+  const Box2D fragment{91, 57, 97, 63};
+
+  const std::optional<RefinedCenter> outline = refine_once(DetectorOptions{}, w.view, fragment, 0.0125);
+  ASSERT_TRUE(outline);
+  EXPECT_NEAR(outline->center.x(), 80.0, 0.3);
+  EXPECT_NEAR(outline->center.y(), 60.0, 0.3);
+
+  DetectorOptions centroid;
+  centroid.refine_fit_outline = false;
+  const std::optional<RefinedCenter> c = refine_once(centroid, w.view, fragment, 0.0125);
+  ASSERT_TRUE(c);
+  EXPECT_NEAR(c->center.x(), 81.8, 0.3);
+  EXPECT_NEAR(c->center.y(), 60.0, 0.3);
+  EXPECT_DOUBLE_EQ(c->extent_px, outline->extent_px);  // the fit moves the centre only
+}
+
 // A 9x9 object at 4 events per pixel on background of 1 event per pixel everywhere: the band around
 // the square is as dense as the whole image, so the square keeps its size. Without the contrast test
 // it grows over the background.

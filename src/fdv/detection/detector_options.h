@@ -212,6 +212,10 @@ struct DetectorOptions {
   /// ... and at least this × the slice's mean density over the image, so that it grows over an
   /// object, not over textured background. 0 = that test is off.
   double refine_grow_contrast = 8.0;
+  /// A grown square holds a large object's whole outline: its centre is then the centre of an
+  /// ellipse fitted to the outline's pixels, not the events' centroid, which the edges that sweep
+  /// the most pixels pull their way (docs/DETECTION.md, "A box on a fragment grows").
+  bool refine_fit_outline = true;
   /// Report the box as a square of its longer side on the (refined) centre: the segmented sweep
   /// is often a thin crescent across the motion, whose longer side is the object's extent across
   /// the motion; a round object is as long along it (docs/DETECTION.md, "The box").
@@ -267,6 +271,7 @@ void describe(V& v, DetectorOptions& o) {
   v("refine_recentre_passes", o.refine_recentre_passes, "-", "mean-shift re-centring passes of that region (0 = stays on the box)");
   v("refine_grow_density", o.refine_grow_density, "-", "that region grows × 1.5 while a side of the band around it is this × as dense (0 = off)");
   v("refine_grow_contrast", o.refine_grow_contrast, "-", "... and this × as dense as the whole image's events in the slice");
+  v("refine_fit_outline", o.refine_fit_outline, "-", "a grown square's centre is that of an ellipse fitted to its pixels with events");
   v("square_box", o.square_box, "-", "report the box as a square of its longer side on the refined centre");
   v("max_objects", o.max_objects, "-", "most objects reported per window (each found one is blanked, the search goes on)");
   v("fills_view_fraction", o.fills_view_fraction, "-", "a longer visible side above this × the image's shorter side: \"object fills the view\"");

@@ -4,6 +4,9 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <vector>
+
+#include <opencv2/imgproc.hpp>
 
 #include "fdv/core/lanes.h"
 #include "fdv/detection/gaussian_fit.h"
@@ -62,6 +65,29 @@ void bin_slice(const std::int32_t* __restrict pixel, const float* __restrict t_s
 }  // namespace
 
 void EventRefiner::allocate(int width, int height) { acc_.create(height, width, CV_32FC2); }
+
+// The object's edges make events in proportion to the pixels they sweep: a ball that comes closer
+// as it moves sweeps more with its leading edge (growth plus motion) than with its trailing one
+// (their difference), and its events' centroid lies ahead of its centre. Each pixel with an event
+// counts once for the ellipse (cv::fitEllipseDirect, least squares on the conic), so the outline's
+// shape, not its event rate, places the centre. Kept when it is a plausible outline of the object:
+// its centre within half the extent of the centroid's, its longer axis within [0.5, 2] × the extent.
+std::optional<Eigen::Vector2d> EventRefiner::outline_centre(const cv::Rect& square, const Eigen::Vector2d& centroid,
+                                                            double extent) const {
+  std::vector<cv::Point2f> lit;
+  for (int y = square.y; y < square.y + square.height; ++y) {
+    const float* acc = acc_.ptr<float>(y);
+    for (int x = square.x; x < square.x + square.width; ++x)
+      if (acc[2 * x] > 0) lit.emplace_back(static_cast<float>(x), static_cast<float>(y));
+  }
+  if (lit.size() < 6) return std::nullopt;  // fewer points than a conic needs, with one to spare
+  const cv::RotatedRect ellipse = cv::fitEllipseDirect(lit);
+  const Eigen::Vector2d centre(ellipse.center.x, ellipse.center.y);
+  const double axis = std::max(ellipse.size.width, ellipse.size.height);
+  if (!centre.allFinite() || (centre - centroid).norm() > 0.5 * extent || !(axis > 0.5 * extent && axis < 2 * extent))
+    return std::nullopt;
+  return centre;
+}
 
 std::optional<RefinedCenter> EventRefiner::refine(const CompensatedEventsView& window, const Box2D& box,
                                                   double t_box_s) {
@@ -164,6 +190,8 @@ std::optional<RefinedCenter> EventRefiner::refine(const CompensatedEventsView& w
     // one (its band is not): the extent is their geometric mean, doubled.
     const double extent = half > initial_half ? 2 * half / std::sqrt(kGrowth) : longer_side;
     refined = RefinedCenter{centre, st / static_cast<double>(n), extent};
+    if (half > initial_half && options_.refine_fit_outline)
+      if (const auto outline = outline_centre(e, centre, extent)) refined->center = *outline;
     if (!(options_.refine_grow_density > 0) || kGrowth * half > max_half) return refined;
     // The band's four sides, each alone: the centroid lags towards the fragment, so the object's
     // far part shows in the side facing it.

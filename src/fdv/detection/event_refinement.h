@@ -39,6 +39,11 @@ class EventRefiner {
   std::optional<RefinedCenter> refine(const CompensatedEventsView& window, const Box2D& box, double t_box_s);
 
  private:
+  /// The centre of the ellipse fitted to `square`'s pixels with an event in acc_, when it is a
+  /// plausible outline of an object of `extent` px whose events' centroid is `centroid`.
+  std::optional<Eigen::Vector2d> outline_centre(const cv::Rect& square, const Eigen::Vector2d& centroid,
+                                                double extent) const;
+
   DetectorOptions options_;
   cv::Mat acc_;  ///< the slice's events per pixel: (count, Σt), CV_32FC2
 };
