@@ -190,7 +190,11 @@ std::optional<RefinedCenter> EventRefiner::refine(const CompensatedEventsView& w
     // one (its band is not): the extent is their geometric mean, doubled.
     const double extent = half > initial_half ? 2 * half / std::sqrt(kGrowth) : longer_side;
     refined = RefinedCenter{centre, st / static_cast<double>(n), extent};
-    if (half > initial_half && options_.refine_fit_outline)
+    // Not for an object cut by the border: its centre is the visible part's, which the outline's
+    // ellipse is not.
+    const bool in_view = centre.x() - half >= 0 && centre.y() - half >= 0 && centre.x() + half <= window.width &&
+                         centre.y() + half <= window.height;
+    if (half > initial_half && options_.refine_fit_outline && in_view)
       if (const auto outline = outline_centre(e, centre, extent)) refined->center = *outline;
     if (!(options_.refine_grow_density > 0) || kGrowth * half > max_half) return refined;
     // The band's four sides, each alone: the centroid lags towards the fragment, so the object's
