@@ -221,6 +221,20 @@ std::optional<RefinedCenter> refine_once(const DetectorOptions& o, const Compens
   return refiner.refine(view, box, t_box_s);
 }
 
+/// A ring of events 13-15 px from (80, 60), at three times across the window, `right` events per
+/// pixel on its right half (x > 80) and `left` on its left, on background of one event every 8 px.
+void add_ring_on_sparse_background(HandMadeWindow& w, int right, int left) {
+  for (int y = 0; y < kHeight; y += 8)
+    for (int x = 0; x < kWidth; x += 8) w.add(x, y, 1, 0.0125);
+  for (int y = 30; y <= 90; ++y)
+    for (int x = 50; x <= 110; ++x) {
+      const double r = std::hypot(x - 80, y - 60);
+      if (r >= 13 && r <= 15)
+        for (const double t : {0.005, 0.0125, 0.020}) w.add(x, y, x > 80 ? right : left, t);
+    }
+  w.view = {0, from_seconds(kWindowS), kWidth, kHeight, w.pixel, w.t_s};
+}
+
 // Events of a square object symmetric about its centre and about the window's middle time: the
 // refined centre and time are that centre and time, from a box centred off it.
 TEST(EventRefiner, SymmetricEventsGiveTheirCentroidAndMeanTime) {
@@ -241,15 +255,7 @@ TEST(EventRefiner, SymmetricEventsGiveTheirCentroidAndMeanTime) {
 // ring's. Without growth the centre stays on the arc.
 TEST(EventRefiner, ABoxOnAFragmentGrowsToHoldTheWholeObject) {
   HandMadeWindow w;
-  for (int y = 0; y < kHeight; y += 8)
-    for (int x = 0; x < kWidth; x += 8) w.add(x, y, 1, 0.0125);
-  for (int y = 30; y <= 90; ++y)
-    for (int x = 50; x <= 110; ++x) {
-      const double r = std::hypot(x - 80, y - 60);
-      if (r >= 13 && r <= 15)
-        for (const double t : {0.005, 0.0125, 0.020}) w.add(x, y, 1, t);
-    }
-  w.view = {0, from_seconds(kWindowS), kWidth, kHeight, w.pixel, w.t_s};
+  add_ring_on_sparse_background(w, 1, 1);
   const Box2D fragment{91, 57, 97, 63};
 
   const std::optional<RefinedCenter> r = refine_once(DetectorOptions{}, w.view, fragment, 0.0125);
@@ -274,15 +280,7 @@ TEST(EventRefiner, ABoxOnAFragmentGrowsToHoldTheWholeObject) {
 // left half: the band's density test compares it with the denser right half.)
 TEST(EventRefiner, AGrownSquaresCentreIsItsOutlinesNotItsEventsCentroid) {
   HandMadeWindow w;
-  for (int y = 0; y < kHeight; y += 8)
-    for (int x = 0; x < kWidth; x += 8) w.add(x, y, 1, 0.0125);
-  for (int y = 30; y <= 90; ++y)
-    for (int x = 50; x <= 110; ++x) {
-      const double r = std::hypot(x - 80, y - 60);
-      if (r >= 13 && r <= 15)
-        for (const double t : {0.005, 0.0125, 0.020}) w.add(x, y, x > 80 ? 3 : 2, t);
-    }
-  w.view = {0, from_seconds(kWindowS), kWidth, kHeight, w.pixel, w.t_s};
+  add_ring_on_sparse_background(w, 3, 2);
   const Box2D fragment{91, 57, 97, 63};
 
   const std::optional<RefinedCenter> outline = refine_once(DetectorOptions{}, w.view, fragment, 0.0125);
