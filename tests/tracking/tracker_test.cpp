@@ -30,6 +30,9 @@ TEST(Tracker, RejectsInvalidOptions) {
   o = {};
   o.box_smoothing = 1.5;
   EXPECT_THROW(Tracker{o}, ConfigError);
+  o = {};
+  o.part_noise = -1;
+  EXPECT_THROW(Tracker{o}, ConfigError);
 }
 
 // One object: created tentative, confirmed at the 3rd hit, predicted through two missed windows,

@@ -15,11 +15,12 @@
 /// older than the track's last update and at most `max_gap_ns` newer; (2) the Mahalanobis gate
 /// d² = y^T S^-1 y <= gate_chi2 with S the filter's innovation covariance at the detection's time;
 /// (3) a hard radius cap |y| <= gate_max_distance_px. A detection smaller than the track's box is
-/// a part of its object, and S holds that centre's larger noise (TrackerOptions::part_noise). A pair that fails (2) may still pass on an
-/// ExternalGate given by the caller (fdv::Perception: the track's 3D estimate). Gated pairs are assigned greedily in order
-/// of increasing d² (global nearest neighbour, one detection per track and per window). A
-/// detection left over starts a new tentative track. Coordinates are raw (distorted) pixels of the
-/// event camera, the grid in which detections, boxes and registered depth frames live.
+/// a part of its object, and S holds that centre's larger noise (TrackerOptions::part_noise). A
+/// pair that fails (2) may still pass on an ExternalGate given by the caller (fdv::Perception: the
+/// track's 3D estimate). Gated pairs are assigned greedily in order of increasing d² (global
+/// nearest neighbour, one detection per track and per window). A detection left over starts a new
+/// tentative track. Coordinates are raw (distorted) pixels of the event camera, the grid in which
+/// detections, boxes and registered depth frames live.
 /// Not thread-safe.
 #include <Eigen/Core>
 #include <span>
