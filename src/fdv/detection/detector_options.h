@@ -214,7 +214,7 @@ struct DetectorOptions {
   double refine_grow_contrast = 8.0;
   /// A grown square holds a large object's whole outline: its centre is then the centre of an
   /// ellipse fitted to the outline's pixels, not the events' centroid, which the edges that sweep
-  /// the most pixels pull their way (docs/DETECTION.md, "A box on a fragment grows").
+  /// the most pixels pull their way (docs/DETECTION.md, "A grown square's centre is its outline's").
   bool refine_fit_outline = true;
   /// Report the box as a square of its longer side on the (refined) centre: the segmented sweep
   /// is often a thin crescent across the motion, whose longer side is the object's extent across
