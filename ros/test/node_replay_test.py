@@ -209,7 +209,11 @@ def main():
         wait_until(subscribed, "the node's and the recorder's subscriptions")
         time.sleep(1.0)  # connections made after registration
         started = time.monotonic()
-        run(["rosbag", "play", "-q", "-r", str(a.rate), bag], env=env, stdout=subprocess.DEVNULL)
+        # The player advertises its topics when it starts; without waiting for each topic's
+        # subscriber to connect, its first messages can go out before the node's connection is made.
+        # Its outgoing queue is as deep as the node's, so a busy machine delays messages, not drops them.
+        run(["rosbag", "play", "-q", "--wait-for-subscribers", "--queue=10000", "-r", str(a.rate), bag],
+            env=env, stdout=subprocess.DEVNULL)
         played_s = time.monotonic() - started
         print(f"played {events} events of {duration_s:.2f} s at rate {a.rate} ({played_s:.2f} s wall): "
               f"{events * a.rate / duration_s / 1e6:.2f} M events/s in", flush=True)
