@@ -73,6 +73,11 @@ TEST(DetectionMetrics, CountsFoundMissedAndFalseAgainstTheTruthBox) {
     EXPECT_EQ(o.ball, 1) << i;
     EXPECT_DOUBLE_EQ(o.fraction_in_view_min, 1.0);
     EXPECT_NEAR(o.span_px_min, 2 * test::kF * 0.25 / 5, 2.0);  // 2 f r / Z = 50 px
+    // The box over the window: the disc (2 f r / Z) swept by the 2 px the ball moves in it.
+    const int t0 = 10 + 10 * static_cast<int>(i);
+    EXPECT_NEAR(0.5 * (o.u_min + o.u_max), pixel_of(ball_at(t0 + 5)).x(), 0.1) << i;
+    EXPECT_NEAR(o.u_max - o.u_min, 2 * test::kF * 0.25 / 5 + test::kF * 0.02 / 5, 0.5) << i;
+    EXPECT_NEAR(0.5 * (o.v_min + o.v_max), pixel_of(ball_at(t0 + 5)).y(), 0.1) << i;
   }
   EXPECT_NEAR(m.per_window[1].center_error_px, 1.5, 1e-9);
   EXPECT_EQ(m.per_window[3].center_error_px, -1);
@@ -83,7 +88,7 @@ TEST(DetectionMetrics, CountsFoundMissedAndFalseAgainstTheTruthBox) {
   std::getline(lines, header);
   EXPECT_EQ(header,
             "t_start_s,t_end_s,eligible,found,detections,false_detections,center_error_px,ball,"
-            "fraction_in_view_min,span_px_min,size_px,fills_view");
+            "fraction_in_view_min,span_px_min,size_px,fills_view,u_min,v_min,u_max,v_max");
   std::getline(lines, row);
   std::getline(lines, row);
   const auto starts_with = [](const std::string& text, const std::string& prefix) {

@@ -94,13 +94,17 @@ void DetectionMetrics::merge(const DetectionMetrics& other) {
 
 void write_window_outcomes_csv(std::ostream& out, const std::vector<WindowOutcome>& windows) {
   out << "t_start_s,t_end_s,eligible,found,detections,false_detections,center_error_px,ball,"
-         "fraction_in_view_min,span_px_min,size_px,fills_view\n";
+         "fraction_in_view_min,span_px_min,size_px,fills_view,u_min,v_min,u_max,v_max\n";
   for (const WindowOutcome& w : windows) {
     out << fmt::format("{:.6f},{:.6f},{},{},{},{},", to_seconds(w.t_start), to_seconds(w.t_end),
                        w.eligible ? 1 : 0, w.found ? 1 : 0, w.detections, w.false_detections);
     if (w.center_error_px >= 0) out << fmt::format("{:.3f}", w.center_error_px);
-    out << fmt::format(",{},{:.3f},{:.2f},{:.2f},{}\n", w.ball, w.fraction_in_view_min,
-                       w.span_px_min, w.size_px, w.fills_view ? 1 : 0);
+    out << fmt::format(",{},{:.3f},{:.2f},{:.2f},{}", w.ball, w.fraction_in_view_min, w.span_px_min,
+                       w.size_px, w.fills_view ? 1 : 0);
+    if (w.ball >= 0)
+      out << fmt::format(",{:.1f},{:.1f},{:.1f},{:.1f}\n", w.u_min, w.v_min, w.u_max, w.v_max);
+    else
+      out << ",,,,\n";
   }
 }
 
@@ -246,6 +250,7 @@ DetectionMetrics detection_metrics(const DatasetTruth& truth,
         o.ball = id;
         o.fraction_in_view_min = b.fraction_in_view_min;
         o.span_px_min = b.span_px_min;
+        o.u_min = b.u_min, o.v_min = b.v_min, o.u_max = b.u_max, o.v_max = b.v_max;
         o.size_px = size_px[id];
       }
     }
