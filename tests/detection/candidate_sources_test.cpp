@@ -31,6 +31,7 @@ struct HandMadeWindow {
   std::vector<Box2D> gates;
   CompensatedEventsView view;
   double theta = 0;
+  double speed_m_s = 0;  ///< the camera's ‖v‖ (θ's b‖v‖ term); 0: a still camera
 
   void add(int x, int y, int events, double t) {
     for (int k = 0; k < events; ++k) {
@@ -46,8 +47,9 @@ struct HandMadeWindow {
   }
   SourceWindow build(const DetectorOptions& o) {
     view = {0, from_seconds(kWindowS), kWidth, kHeight, pixel, t_s};
+    view.speed_m_s = speed_m_s;
     build_time_images(view, ti);
-    theta = adaptive_threshold(ti.mean_normalized, 0, 0, o);
+    theta = adaptive_threshold(ti.mean_normalized, 0, speed_m_s, o);
     const SegmentResult seg = segment(ti, theta, o.min_pixel_events, S);
     pre.emplace(o);
     const cv::Mat& P = pre->run(S, seg.bounds);
@@ -211,6 +213,77 @@ TEST(CountContrastSource, ADenseBlobOnAnEmptySurroundIsFoundAtItsCentre) {
   DetectionResult off_res;
   EXPECT_FALSE(disabled.find(in, off_res));
   EXPECT_FALSE(off_res.count_cue_ran);
+}
+
+/// A 9x9 square centred on (100, 70) at the window's middle, moving at `speed_px_s` along x, whose
+/// pixels fire 10 events each, evenly over the window (a spinning ball: its mean time is the
+/// window's middle), on sparse background whose mean time is the middle too (one event every 4 px,
+/// at a quarter or three quarters of the window in turn): no time test can see it. Optionally on a
+/// static 45x45 body of `body_events` events per pixel.
+HandMadeWindow evenly_firing_square(double speed_px_s, int body_events = 0) {
+  HandMadeWindow w;
+  for (int y = 0; y < kHeight; y += 4)
+    for (int x = 0; x < kWidth; x += 4) w.add(x, y, 1, ((x + y) / 4 % 2 == 0 ? 0.25 : 0.75) * kWindowS);
+  if (body_events > 0) w.add_square(100, 70, 45, body_events, [](int, int) { return 0.5 * kWindowS; });
+  for (int k = 0; k < 10; ++k) {
+    const double t = (k + 0.5) * kWindowS / 10;
+    const int cx = static_cast<int>(std::lround(100 + speed_px_s * (t - 0.5 * kWindowS)));
+    w.add_square(cx, 70, 9, 1, [t](int, int) { return t; });
+  }
+  return w;
+}
+
+std::optional<Candidate> count_cue(const DetectorOptions& o, HandMadeWindow& w, DetectionResult& res) {
+  SourceWindow in = w.build(o);
+  CountContrastSource source(o);
+  source.allocate(kWidth, kHeight);
+  return source.find(in, res);
+}
+
+// A still camera's compensated background is sparse. The square moving 4 px in the window stands
+// out from its own-scale surround and moves, so it is found, although its mean time is the
+// image's. The same square standing still (a flickering light), on a moving camera (where the
+// time test must decide), or on a body as dense as a fifth of it (a person's part) is not.
+TEST(CountContrastSource, AnEvenlyFiringMovingBlobIsFoundOnlyWithTheCameraStill) {
+  const DetectorOptions o;
+  constexpr double kSpeed = 4 / kWindowS;  // 4 px in the window
+  {
+    HandMadeWindow w = evenly_firing_square(kSpeed);
+    DetectionResult res;
+    const std::optional<Candidate> c = count_cue(o, w, res);
+    ASSERT_TRUE(c) << "isolation " << res.count_cue_isolation << ", z " << res.count_cue_motion_z;
+    EXPECT_LT(std::abs(res.count_cue_time_offset), o.threshold_c);  // the time test alone fails
+    EXPECT_GE(res.count_cue_isolation, o.count_contrast.still_min_isolation);
+    EXPECT_GE(res.count_cue_motion_z, o.count_contrast.still_min_motion_z);
+    EXPECT_NEAR(c->center.x(), 100.0, 0.5);
+    EXPECT_NEAR(c->center.y(), 70.0, 0.5);
+    DetectorOptions off = o;
+    off.count_contrast.still_motion = 0;
+    DetectionResult off_res;
+    EXPECT_FALSE(count_cue(off, w, off_res));
+  }
+  {
+    HandMadeWindow w = evenly_firing_square(0);
+    DetectionResult res;
+    EXPECT_FALSE(count_cue(o, w, res));
+    EXPECT_GE(res.count_cue_isolation, o.count_contrast.still_min_isolation);
+    EXPECT_LT(res.count_cue_motion_z, 0.5);
+  }
+  {
+    HandMadeWindow w = evenly_firing_square(kSpeed);
+    w.speed_m_s = 6;  // b‖v‖ = 0.24 > still_motion
+    DetectionResult res;
+    EXPECT_FALSE(count_cue(o, w, res));
+    EXPECT_EQ(res.count_cue_isolation, 0.0);  // the still-camera test did not run
+  }
+  {
+    HandMadeWindow w = evenly_firing_square(kSpeed, 2);
+    DetectionResult res;
+    EXPECT_FALSE(count_cue(o, w, res));
+    EXPECT_GT(res.count_cue_contrast, o.count_contrast.min_contrast);  // dense enough for the cue
+    EXPECT_GT(res.count_cue_isolation, 1.0);
+    EXPECT_LT(res.count_cue_isolation, o.count_contrast.still_min_isolation);
+  }
 }
 
 /// One refinement with these options, from a fresh refiner.

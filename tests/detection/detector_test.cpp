@@ -299,6 +299,7 @@ TEST_F(DetectorTest, NextCandidateIsTriedWhenTheStrongestPatternFailsTheEvidence
   o.min_pixel_events = 1;     // the decoy's single-event pixels enter S (the paper's S)
   o.min_event_density = 2.0;  // the blob holds tens of events per pixel
   o.gaussian_fit.max_candidates = 1;
+  o.count_contrast.still_motion = 0;  // the camera is still: the count cue would find the blob
   const CompensatedWindow& w = compensator_->compensate({.events = ev, .t_start = s.t0, .t_end = s.t0 + s.duration});
   const DetectionResult one = Detector(o, lens()).detect(detector_input(w));
   EXPECT_FALSE(one.strongest());
@@ -354,6 +355,7 @@ TEST_F(DetectorTest, TrackPriorAdmitsAWeakerPatternOnlyInsideItsGate) {
   DetectorOptions o;
   o.gaussian_fit.min_peak = 0.99;  // nothing passes the normal gate
   o.track_aided.min_peak = 0.3;
+  o.count_contrast.still_motion = 0;  // the camera is still: the count cue would find the blob
   Detector detector(o, lens());
   EXPECT_FALSE(detector.detect(detector_input(w)).strongest());
   const PinholeCamera cam = lens();
@@ -649,7 +651,8 @@ TEST_F(DetectorTest, CountContrastCueSkipsNoFilledCentreAtTheEdgesOfItsBlocks) {
 TEST_F(DetectorTest, CountContrastCueWaivesTheTimeTestOnlyInsideATrackGate) {
   // An evenly firing ball on an evenly firing background: its mean time is the image's, so over
   // the image the time test rejects it; inside a confirmed track's gate (count_cue_in_gates) the
-  // track is the evidence that it moves.
+  // track is the evidence that it moves. The camera is still, so the still-camera test, off until
+  // the end, finds it over the image too.
   test::BlobScene s;
   s.radius_px = 8;
   s.velocity_px_s = {60, 40};
@@ -669,6 +672,7 @@ TEST_F(DetectorTest, CountContrastCueWaivesTheTimeTestOnlyInsideATrackGate) {
   o.dense_motion.enabled = false;
   o.count_contrast.enabled = true;
   o.count_contrast.in_gates = false;
+  o.count_contrast.still_motion = 0;
   const DetectionResult image_only = Detector(o, cam).detect(detector_input(w), std::span(&on_ball, 1));
   EXPECT_FALSE(image_only.strongest()) << to_string(image_only.strongest()->source);
   EXPECT_GE(image_only.count_cue_contrast, o.count_contrast.min_contrast);
@@ -681,6 +685,13 @@ TEST_F(DetectorTest, CountContrastCueWaivesTheTimeTestOnlyInsideATrackGate) {
   EXPECT_LT((gated.strongest()->center_undistorted - s.blob_at(gated.strongest()->t)).norm(), 2.0);
   // Without a gate: nothing.
   EXPECT_FALSE(Detector(o, cam).detect(detector_input(w)).strongest());
+  // With the still-camera test: the ball stands out from its surround and moves 1.8 px.
+  o.count_contrast.still_motion = DetectorOptions{}.count_contrast.still_motion;
+  const DetectionResult still = Detector(o, cam).detect(detector_input(w));
+  ASSERT_TRUE(still.strongest()) << "isolation " << still.count_cue_isolation << ", z " << still.count_cue_motion_z;
+  EXPECT_EQ(still.strongest()->source, DetectionSource::kCountContrast);
+  EXPECT_FALSE(still.strongest()->track_aided);
+  EXPECT_LT((still.strongest()->center_undistorted - s.blob_at(still.strongest()->t)).norm(), 2.0);
 }
 
 TEST(DetectorGates, EventCountGatesShrinkWithAShorterFocalLengthOnly) {
@@ -743,6 +754,9 @@ TEST_F(DetectorTest, InvalidOptionsAreRejected) {
       {"count_cue_surround_scale", [](DetectorOptions& x) { x.count_contrast.surround_scale = 1; }},
       {"count_cue_min_contrast", [](DetectorOptions& x) { x.count_contrast.min_contrast = 0.5; }},
       {"count_cue_min_fill", [](DetectorOptions& x) { x.count_contrast.min_fill = 1.2; }},
+      {"count_cue_still_motion", [](DetectorOptions& x) { x.count_contrast.still_motion = -0.1; }},
+      {"count_cue_still_isolation", [](DetectorOptions& x) { x.count_contrast.still_min_isolation = 0.5; }},
+      {"count_cue_still_motion_z", [](DetectorOptions& x) { x.count_contrast.still_min_motion_z = NAN; }},
   };
   for (const auto& [name, make_bad] : cases) {
     DetectorOptions bad;

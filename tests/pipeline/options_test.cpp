@@ -346,6 +346,9 @@ detector:
   count_cue_min_contrast: 4
   count_cue_min_fill: 0.7
   count_cue_in_gates: false
+  count_cue_still_motion: 0.02
+  count_cue_still_isolation: 6
+  count_cue_still_motion_z: 3
 )").detection;
   EXPECT_DOUBLE_EQ(d.threshold_a_s_per_rad, 0.03);
   EXPECT_DOUBLE_EQ(d.threshold_b_s_per_m, 0.05);
@@ -368,6 +371,9 @@ detector:
   EXPECT_DOUBLE_EQ(d.count_contrast.min_contrast, 4.0);
   EXPECT_DOUBLE_EQ(d.count_contrast.min_fill, 0.7);
   EXPECT_FALSE(d.count_contrast.in_gates);
+  EXPECT_DOUBLE_EQ(d.count_contrast.still_motion, 0.02);
+  EXPECT_DOUBLE_EQ(d.count_contrast.still_min_isolation, 6.0);
+  EXPECT_DOUBLE_EQ(d.count_contrast.still_min_motion_z, 3.0);
   EXPECT_EQ(d.mean_filter_px, DetectorOptions{}.mean_filter_px);  // absent: default kept
 }
 

@@ -361,7 +361,7 @@ TEST(Perception, TheSquareDetectionBoxLetsTheDepthSegmentationFindTheBall) {
 // without the 3D estimate vouching for them its detections start new tracks. The tracker's part
 // noise (tracking.part_noise) widens the gate for the smaller of these detections and alone keeps
 // this ball in one track, so it is off here to see the estimate's aid. Measured on this dataset,
-// the ball's detections after the first two: track 2 x18 then track 3 x6 without, track 2 x24 with.
+// the ball's detections: track 1 x22 then track 2 x6 without, track 1 x28 with.
 // Full resolution: at 320x240 no preset with seeds 1-6 splits the ball's track either way.
 TEST(Perception, TheTrajectoryEstimateKeepsAHeadOnBallInOneTrack) {
   SimulatedThrow s;
@@ -383,7 +383,7 @@ TEST(Perception, TheTrajectoryEstimateKeepsAHeadOnBallInOneTrack) {
   auto tracks = [](const std::vector<int>& ids) { return std::set<int>(ids.begin(), ids.end()).size(); };
   SCOPED_TRACE("with " + ::testing::PrintToString(with) + ", without " + ::testing::PrintToString(without));
   ASSERT_GE(without.size(), 15u);
-  EXPECT_GE(tracks(without), 3u);  // the scenario splits the ball's track without the aid
+  EXPECT_GE(tracks(without), 2u);  // the scenario splits the ball's track without the aid
   EXPECT_LT(tracks(with), tracks(without));
   EXPECT_GE(longest(with), longest(without) + 4);
 }

@@ -18,8 +18,46 @@ std::string CountContrastSourceOptions::validate() const {
     why << "count_cue_surround_scale must be in (1, 10], got " << surround_scale;
   else if (!(min_contrast >= 1)) why << "count_cue_min_contrast must be at least 1, got " << min_contrast;
   else if (!(min_fill >= 0 && min_fill <= 1)) why << "count_cue_min_fill must be in [0, 1], got " << min_fill;
+  else if (!(still_motion >= 0 && std::isfinite(still_motion)))
+    why << "count_cue_still_motion must be finite and at least 0, got " << still_motion;
+  else if (!(still_min_isolation >= 1 && std::isfinite(still_min_isolation)))
+    why << "count_cue_still_isolation must be finite and at least 1, got " << still_min_isolation;
+  else if (!(still_min_motion_z >= 0 && std::isfinite(still_min_motion_z)))
+    why << "count_cue_still_motion_z must be finite and at least 0, got " << still_min_motion_z;
   return why.str();
 }
+
+namespace {
+
+/// The Wald statistic of an object's motion within the window: the events in `box` give the least
+/// squares slopes of their pixel's x and of its y on their time, b = cov(x, t) / var(t), each with
+/// its standard error √(residual variance / (n var(t))); z = √((b_x / se_x)² + (b_y / se_y)²).
+/// A still pattern, whatever its time profile, has slopes near 0; a moving one, its image velocity.
+double motion_z(const CompensatedEventsView& events, const cv::Rect& box) {
+  const int width = events.width;
+  double n = 0, st = 0, stt = 0, sx = 0, sxx = 0, sxt = 0, sy = 0, syy = 0, syt = 0;
+  for (std::size_t i = 0; i < events.pixel.size(); ++i) {
+    const int x = events.pixel[i] % width, y = events.pixel[i] / width;
+    if (!box.contains(cv::Point(x, y))) continue;
+    const double t = events.t_s[i];
+    n += 1;
+    st += t, stt += t * t;
+    sx += x, sxx += static_cast<double>(x) * x, sxt += x * t;
+    sy += y, syy += static_cast<double>(y) * y, syt += y * t;
+  }
+  if (n < 3) return 0;
+  const double var_t = stt / n - (st / n) * (st / n);
+  if (!(var_t > 0)) return 0;
+  auto slope_over_error = [&](double s, double ss, double s_t) {
+    const double cov = s_t / n - (s / n) * (st / n);
+    const double residual = std::max(ss / n - (s / n) * (s / n) - cov * cov / var_t, 0.0);
+    const double b = cov / var_t;
+    return residual > 0 ? b / std::sqrt(residual / (n * var_t)) : (b == 0 ? 0.0 : 1e9);
+  };
+  return std::hypot(slope_over_error(sx, sxx, sxt), slope_over_error(sy, syy, syt));
+}
+
+}  // namespace
 
 void CountTables::allocate(int width, int height) {
   saturated8_.create(height, width, CV_8U);
@@ -191,9 +229,29 @@ std::optional<Candidate> CountContrastSource::find_in(const SourceWindow& in, co
   cand.t_mean_s = cv::sum(ti.sum_time_s(box))[0] / cand.events;
   const double image_t_mean_s = cv::sum(ti.sum_time_s)[0] / ti.events;
   res.count_cue_time_offset = (cand.t_mean_s - image_t_mean_s) / (ti.t_max_s - ti.t_min_s);
-  if (time_test && !(std::abs(res.count_cue_time_offset) >= in.theta - ti.mean_normalized)) return std::nullopt;
+  if (time_test && !(std::abs(res.count_cue_time_offset) >= in.theta - ti.mean_normalized) &&
+      !still_camera_object(in, cand, box, image_density, res))
+    return std::nullopt;
   cand.score = 1.0 - 1.0 / best;  // the fraction of the centre's events above the background level
   return cand;
+}
+
+bool CountContrastSource::still_camera_object(const SourceWindow& in, const Candidate& cand, const cv::Rect& box,
+                                              double image_density, DetectionResult& res) const {
+  const DetectorOptions& o = options_;
+  const CountContrastSourceOptions& cc = o.count_contrast;
+  const double camera_motion =
+      o.threshold_a_s_per_rad * in.events.omega_rad_s + o.threshold_b_s_per_m * in.events.speed_m_s;
+  if (!(cc.still_motion > 0 && camera_motion <= cc.still_motion)) return false;
+  const cv::Mat& count = in.ti.count;
+  const cv::Rect surround =
+      cv::Rect(box.x - box.width, box.y - box.height, 3 * box.width, 3 * box.height) & cv::Rect(0, 0, count.cols, count.rows);
+  const double surround_pixels = static_cast<double>(surround.area() - box.area());
+  const double surround_density = surround_pixels > 0 ? (cv::sum(count(surround))[0] - cand.events) / surround_pixels : 0;
+  res.count_cue_isolation = cand.event_density / std::max(surround_density, image_density);
+  if (!(res.count_cue_isolation >= cc.still_min_isolation)) return false;
+  res.count_cue_motion_z = motion_z(in.events, box);
+  return res.count_cue_motion_z >= cc.still_min_motion_z;
 }
 
 }  // namespace fdv

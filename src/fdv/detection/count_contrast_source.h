@@ -3,7 +3,8 @@
 /// box of the count image I with the highest count contrast against its surround
 /// (CountContrastSourceOptions), its box from Algorithm 1 on I above the background level. First
 /// inside the tracks' gates without the time test (in_gates), then over the whole image with it: the
-/// blob's mean event time must stand out from all events' by θ's margin.
+/// blob's mean event time must stand out from all events' by θ's margin, or, with the camera nearly
+/// still, the blob must stand out from its own-scale surround and move within the window.
 ///
 ///   CountContrastSource source(options);   // once; allocate(width, height) before the first find()
 ///   std::optional<Candidate> c = source.find(in, res);   // res.count_cue_* say how close
@@ -46,6 +47,13 @@ class CountContrastSource final : public CandidateSource {
   /// stand out from all events' by θ's margin. Sets res.count_cue_*.
   std::optional<Candidate> find_in(const SourceWindow& in, const cv::Rect& search, bool time_test,
                                    DetectionResult& res);
+  /// The still-camera test (CountContrastSourceOptions::still_motion): with the camera nearly still
+  /// its compensated background is sparse, so a blob that stands out from its own-scale surround and
+  /// moves within the window is an object even when its events fire evenly over the window (a
+  /// spinning ball coming head-on), which the time test cannot see. Sets res.count_cue_isolation
+  /// and count_cue_motion_z.
+  bool still_camera_object(const SourceWindow& in, const Candidate& cand, const cv::Rect& box,
+                           double image_density, DetectionResult& res) const;
   DetectorOptions options_;
   CountTables tables_;
   std::vector<int> live_blocks_;  ///< the scan's blocks in one band that it cannot skip

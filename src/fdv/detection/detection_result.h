@@ -64,6 +64,9 @@ struct DetectionResult {
   int count_cue_filled_centres = 0;
   /// (the blob's mean event time − all events') / (max T − min T), when its box passed the event gates.
   double count_cue_time_offset = 0;
+  /// The still-camera test, when it ran (the time test failed with the camera nearly still): the
+  /// blob's isolation and, if that passed, the Wald z of its motion (0: not reached).
+  double count_cue_isolation = 0, count_cue_motion_z = 0;
   DetectionTimings timings;
   /// The first object found, or nullptr.
   const Detection2D* strongest() const { return detections.empty() ? nullptr : &detections.front(); }

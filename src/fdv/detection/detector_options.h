@@ -136,6 +136,18 @@ struct CountContrastSourceOptions {
   /// Search confirmed tracks' gates first, without the time test: there the track is the evidence
   /// that the blob moves. YAML `count_cue_in_gates`
   bool in_gates = true;
+  /// The still-camera test, which a blob may pass instead of the time test (docs/DETECTION.md,
+  /// "Count-contrast cue"): it applies while θ's motion term a‖ω‖ + b‖v‖ is at most this [-]
+  /// (hovering ≈ 0.002-0.02, fast flight ≈ 0.2-0.3); 0 = off. YAML `count_cue_still_motion`
+  double still_motion = 0.05;
+  /// ... the blob's events per pixel over those of its own-scale surround (its box grown by its own
+  /// sides on every side), or the image's mean if larger, at least this [-]: a part of a larger
+  /// moving body (a person) does not stand out from the rest of it. YAML `count_cue_still_isolation`
+  double still_min_isolation = 8.0;
+  /// ... and its events' pixel must move with their time: the Wald statistic of the two slopes
+  /// (x and y regressed on t) at least this [-]; a flickering light does not move.
+  /// YAML `count_cue_still_motion_z`
+  double still_min_motion_z = 2.0;
   std::string validate() const;
 };
 
@@ -147,6 +159,9 @@ void describe(V& v, CountContrastSourceOptions& o) {
   v("count_cue_min_contrast", o.min_contrast, "-", "centre density / max(surround density, image mean)");
   v("count_cue_min_fill", o.min_fill, "-", "fraction of the centre box's pixels with I ≥ min_pixel_events");
   v("count_cue_in_gates", o.in_gates, "-", "search confirmed tracks' gates first, without the time test");
+  v("count_cue_still_motion", o.still_motion, "-", "the still-camera test replaces the time test while a‖ω‖ + b‖v‖ ≤ this (0 = off); tuned");
+  v("count_cue_still_isolation", o.still_min_isolation, "-", "... the blob's density / its own-scale surround's (or the image mean's) ≥ this; tuned");
+  v("count_cue_still_motion_z", o.still_min_motion_z, "-", "... and the Wald z of its events' position-on-time slopes ≥ this; tuned");
 }
 
 struct DetectorOptions {
