@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
@@ -52,7 +53,8 @@ double motion_z(const CompensatedEventsView& events, const cv::Rect& box) {
     const double cov = s_t / n - (s / n) * (st / n);
     const double residual = std::max(ss / n - (s / n) * (s / n) - cov * cov / var_t, 0.0);
     const double b = cov / var_t;
-    return residual > 0 ? b / std::sqrt(residual / (n * var_t)) : (b == 0 ? 0.0 : 1e9);
+    if (residual > 0) return b / std::sqrt(residual / (n * var_t));
+    return b == 0 ? 0.0 : std::numeric_limits<double>::infinity();  // exact motion
   };
   return std::hypot(slope_over_error(sx, sxx, sxt), slope_over_error(sy, syy, syt));
 }
