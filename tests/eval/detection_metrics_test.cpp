@@ -75,14 +75,16 @@ TEST(DetectionMetrics, CountsFoundMissedAndFalseAgainstTheTruthBox) {
     EXPECT_NEAR(o.span_px_min, 2 * test::kF * 0.25 / 5, 2.0);  // 2 f r / Z = 50 px
     // The box over the window: the disc (2 f r / Z) swept by the 2 px the ball moves in it.
     const int t0 = 10 + 10 * static_cast<int>(i);
-    EXPECT_NEAR(0.5 * (o.u_min + o.u_max), pixel_of(ball_at(t0 + 5)).x(), 0.1) << i;
-    EXPECT_NEAR(o.u_max - o.u_min, 2 * test::kF * 0.25 / 5 + test::kF * 0.02 / 5, 0.5) << i;
-    EXPECT_NEAR(0.5 * (o.v_min + o.v_max), pixel_of(ball_at(t0 + 5)).y(), 0.1) << i;
+    EXPECT_NEAR(0.5 * (o.box.u_min + o.box.u_max), pixel_of(ball_at(t0 + 5)).x(), 0.1) << i;
+    EXPECT_NEAR(o.box.u_max - o.box.u_min, 2 * test::kF * 0.25 / 5 + test::kF * 0.02 / 5, 0.5) << i;
+    EXPECT_NEAR(0.5 * (o.box.v_min + o.box.v_max), pixel_of(ball_at(t0 + 5)).y(), 0.1) << i;
   }
   EXPECT_NEAR(m.per_window[1].center_error_px, 1.5, 1e-9);
   EXPECT_EQ(m.per_window[3].center_error_px, -1);
   std::ostringstream csv;
-  write_window_outcomes_csv(csv, m.per_window);
+  std::vector<WindowOutcome> rows = m.per_window;
+  rows.push_back({});  // a window without a ball: its box's columns are empty
+  write_window_outcomes_csv(csv, rows);
   std::istringstream lines(csv.str());
   std::string header, row;
   std::getline(lines, header);
@@ -98,6 +100,8 @@ TEST(DetectionMetrics, CountsFoundMissedAndFalseAgainstTheTruthBox) {
   std::getline(lines, row);
   std::getline(lines, row);
   EXPECT_TRUE(starts_with(row, "0.040000,0.050000,1,0,0,0,,1,1.000,")) << row;
+  std::getline(lines, row);
+  EXPECT_EQ(row, "0.000000,0.000000,0,0,0,0,,-1,0.000,0.00,0.00,0,,,,");
 }
 
 TEST(DetectionMetrics, AHeldBallIsNotEligibleAndADetectionOnItIsNotFalse) {

@@ -102,7 +102,7 @@ void write_window_outcomes_csv(std::ostream& out, const std::vector<WindowOutcom
     out << fmt::format(",{},{:.3f},{:.2f},{:.2f},{}", w.ball, w.fraction_in_view_min, w.span_px_min,
                        w.size_px, w.fills_view ? 1 : 0);
     if (w.ball >= 0)
-      out << fmt::format(",{:.1f},{:.1f},{:.1f},{:.1f}\n", w.u_min, w.v_min, w.u_max, w.v_max);
+      out << fmt::format(",{:.1f},{:.1f},{:.1f},{:.1f}\n", w.box.u_min, w.box.v_min, w.box.u_max, w.box.v_max);
     else
       out << ",,,,\n";
   }
@@ -250,7 +250,7 @@ DetectionMetrics detection_metrics(const DatasetTruth& truth,
         o.ball = id;
         o.fraction_in_view_min = b.fraction_in_view_min;
         o.span_px_min = b.span_px_min;
-        o.u_min = b.u_min, o.v_min = b.v_min, o.u_max = b.u_max, o.v_max = b.v_max;
+        o.box = b;
         o.size_px = size_px[id];
       }
     }

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "fdv/eval/dataset_truth.h"
+#include "fdv/eval/ground_truth_box.h"
 
 namespace fdv {
 
@@ -98,7 +99,7 @@ struct WindowOutcome {
   int ball = -1;
   double fraction_in_view_min = 0, span_px_min = 0;
   /// That ball's true box over the window (raw pixels, clipped to the image), to place a miss.
-  double u_min = 0, v_min = 0, u_max = 0, v_max = 0;
+  GroundTruthBox box = {};
   double size_px = 0;       ///< that ball's apparent size at the window's middle (issue 25)
   bool fills_view = false;  ///< some ball in flight fills the view (issue 25)
 };
