@@ -251,6 +251,39 @@ TEST(Tracker, ExternalGateContinuesATrackTheFilterGateRejects) {
   EXPECT_EQ(run(other_track).second.outcome, Outcome::kNewTrack);
 }
 
+// A confirmed track of a ball at 800 px/s; in window 5 clutter 76 px ahead of it starts a new
+// track, whose one hit and wide velocity prior (1500 px/s) give it S ≈ 1420 px² per axis in
+// window 6. The ball's detection there, 7 px off its track's prediction, is 55 px from the new
+// track: a smaller d² for the new track (2.1) than for its own (4.2, S ≈ 12 px² per axis), but
+// far less likely under it (ln|S| 14.5 against 5.0). The ball keeps its track.
+TEST(Tracker, ASharpTrackKeepsItsDetectionFromAVagueNewOne) {
+  Tracker tracker;
+  auto ball = [](int k) { return Eigen::Vector2d(100 + 20.0 * k, 200); };
+  int ball_id = -1;
+  for (int k = 0; k <= 5; ++k) {
+    std::vector<TrackerDetection> d{det(k * kWindow, ball(k).x(), ball(k).y())};
+    if (k == 5) d.push_back(det(k * kWindow, ball(6).x() + 50, 230));
+    const TrackerStep step = tracker.update(k * kWindow, d);
+    if (k == 0) {
+      ball_id = step.assignments[0].track_id;
+    } else if (k == 5) {
+      ASSERT_EQ(step.assignments[1].outcome, Outcome::kNewTrack);
+    }
+  }
+  ASSERT_TRUE(tracker.find(ball_id)->confirmed());
+  const int clutter_id = ball_id + 1;
+  ASSERT_NE(tracker.find(clutter_id), nullptr);
+  const TimeNs t = 6 * kWindow;
+  const TrackerDetection seen = det(t, ball(6).x(), ball(6).y() + 7);
+  const ImagePrediction own = tracker.find(ball_id)->filter().predict(t);
+  const ImagePrediction vague = tracker.find(clutter_id)->filter().predict(t);
+  ASSERT_LT(vague.mahalanobis2(seen.center_px), own.mahalanobis2(seen.center_px));  // d² alone: the new track
+  ASSERT_LE(own.mahalanobis2(seen.center_px), TrackerOptions{}.gate_chi2);
+  const TrackerStep step = tracker.update(t, std::vector<TrackerDetection>{seen});
+  EXPECT_EQ(step.assignments[0].outcome, Outcome::kUpdated);
+  EXPECT_EQ(step.assignments[0].track_id, ball_id);
+}
+
 // A confirmed track of a 32 px object; then a 12 px detection of part of it, (10, -10) px off the
 // track's prediction: a part's centre may lie up to (32 - 12) / 2 = 10 px off per axis. The pair's
 // noise gains (32 - 12)² / 12 px² per axis, so the gate's d² is |y|² / (P + σ² + 33.3) with P the

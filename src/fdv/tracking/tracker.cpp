@@ -1,5 +1,6 @@
 #include "fdv/tracking/tracker.h"
 
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 
@@ -13,6 +14,7 @@ namespace {
 bool finite(const Eigen::Vector2d& v) { return std::isfinite(v.x()) && std::isfinite(v.y()); }
 
 struct Candidate {
+  double cost;  ///< d² + ln|S|: the pair's Gaussian negative log-likelihood, × 2 and less a constant
   double d2;
   std::size_t track;
   std::size_t detection;
@@ -144,20 +146,24 @@ TrackerStep Tracker::update(TimeNs t, std::span<const TrackerDetection> detectio
       const ImagePrediction p = tr.filter().predict(d.t, tr.part_variance_px2(d, options_));
       if ((d.center_px - p.position()).norm() > options_.gate_max_distance_px) continue;
       const double d2 = p.mahalanobis2(d.center_px);
+      const double log_det_s = std::log(p.innovation_covariance().determinant());
       if (d2 <= options_.gate_chi2) {
-        candidates.push_back({d2, k, i});
+        candidates.push_back({d2 + log_det_s, d2, k, i});
         continue;
       }
+      // The estimate's covariance is in normalised coordinates: the track's own S stands in for it.
       for (const ExternalGate& g : external)
         if (g.track_id == tr.id() && g.detection == i && g.mahalanobis2 <= options_.gate_chi2) {
-          candidates.push_back({g.mahalanobis2, k, i, true});
+          candidates.push_back({g.mahalanobis2 + log_det_s, g.mahalanobis2, k, i, true});
           break;
         }
     }
   }
-  // Global nearest neighbour, greedy: smallest d² first; ties go to the older (confirmed) track.
+  // Global nearest neighbour, greedy, most likely pair first; ties go to the older track. By the
+  // likelihood, not d² alone: a new track's wide velocity prior gives it a large S, so a detection
+  // far from it has a small d² and would be taken from the sharp track it belongs to.
   std::sort(candidates.begin(), candidates.end(), [this](const Candidate& a, const Candidate& b) {
-    if (a.d2 != b.d2) return a.d2 < b.d2;
+    if (a.cost != b.cost) return a.cost < b.cost;
     return tracks_[a.track].id() < tracks_[b.track].id();
   });
   std::vector<bool> track_taken(tracks_.size(), false), detection_taken(detections.size(), false);
