@@ -48,6 +48,9 @@ nlohmann::json evaluate(const std::string& results, const std::string& dataset) 
     std::ofstream csv(results + "/detection_windows.csv");
     write_window_outcomes_csv(csv, detection.per_window);
     if (!csv) throw InputError(results + "/detection_windows.csv", "", "cannot write");
+    std::ofstream pairs(results + "/detection_pairs.csv");
+    write_pair_outcomes_csv(pairs, detection.per_pair);
+    if (!pairs) throw InputError(results + "/detection_pairs.csv", "", "cannot write");
   }
   metrics["relative_contrast"] =
       relative_contrast_of(truth, summary.method);

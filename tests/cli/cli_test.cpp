@@ -164,6 +164,27 @@ TEST_F(Cli, RunWritesEveryOutputWithItsDocumentedFieldsAndEvalScoresItAgainstThe
     }
   EXPECT_TRUE(fusion_ape);
   EXPECT_FALSE(metrics.at("prediction_error").empty());
+  // detection_pairs.csv lists the (window, ball) pairs the any-size recall counts.
+  std::ifstream pairs(out / "detection_pairs.csv");
+  std::string line;
+  ASSERT_TRUE(std::getline(pairs, line));
+  EXPECT_EQ(line,
+            "t_start_s,t_end_s,ball,size_px,fraction_in_view_min,partial,fills_view,found,center_error_px,"
+            "track,u_min,v_min,u_max,v_max");
+  int eligible = 0, found = 0;
+  while (std::getline(pairs, line)) {
+    std::vector<std::string> cells;
+    std::stringstream row(line);
+    for (std::string cell; std::getline(row, cell, ',');) cells.push_back(cell);
+    ASSERT_EQ(cells.size(), 14u) << line;
+    if (cells[6] == "1") continue;  // fills the view: listed, not scored
+    ++eligible;
+    found += cells[7] == "1";
+  }
+  const json& any_size = metrics.at("detection").at("any_size");
+  EXPECT_EQ(eligible, any_size.at("eligible_windows").get<int>());
+  EXPECT_EQ(found, any_size.at("detected").get<int>());
+  EXPECT_GT(found, 0);
 }
 
 TEST_F(Cli, TheRequestedMethodIsReportedWhetherItComesFromTheConfigFileOrTheCommandLine) {

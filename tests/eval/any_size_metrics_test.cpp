@@ -3,7 +3,9 @@
 // "fills the view" windows, and two balls scored apart with their identity switches.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
+#include <sstream>
 #include <nlohmann/json.hpp>
 
 #include "eval/handmade_truth.h"
@@ -76,6 +78,9 @@ TEST(AnySizeMetrics, FillsTheViewWindowsAreCountedNotScored) {
   EXPECT_EQ(m.any_size.eligible, 0u);  // neither a hit ...
   EXPECT_EQ(m.false_detections, 0u);   // ... nor a false detection
   EXPECT_TRUE(m.per_window[1].fills_view);
+  ASSERT_EQ(m.per_pair.size(), 3u);  // listed, not scored: found says a detection lay on it
+  EXPECT_TRUE(m.per_pair[1].fills_view && m.per_pair[1].found);
+  EXPECT_EQ(m.per_pair[1].center_error_px, -1);
   EXPECT_EQ(m.to_json()["fills_view"]["reported"], 1);
 }
 
@@ -164,6 +169,37 @@ TEST(AnySizeMetrics, TwoBallsAreScoredApartWithTheirIdentitySwitches) {
   EXPECT_EQ(objects[1]["eligible_windows"], 6);
   EXPECT_NEAR(objects[1]["recall"].get<double>(), 5.0 / 6, 1e-12);
   EXPECT_EQ(objects[1]["id_switches"], 2);
+
+  // Pair by pair, as detection_pairs.csv lists them: in window order, then ball; ball 2 is missed
+  // in window 50, and each found pair names its track.
+  ASSERT_EQ(m.per_pair.size(), 12u);
+  const std::vector<std::array<int, 3>> expected{{1, 1, 1}, {2, 1, 2},  {1, 1, 1}, {2, 1, 2},
+                                                 {1, 1, 2}, {2, 1, 1},  {1, 1, 2}, {2, 1, 1},
+                                                 {1, 1, -1}, {2, 0, -1}, {1, 1, 2}, {2, 1, 2}};
+  for (std::size_t i = 0; i < expected.size(); ++i) {
+    const PairOutcome& p = m.per_pair[i];
+    EXPECT_EQ((std::array<int, 3>{p.ball, p.found, p.track}), expected[i]) << i;
+    EXPECT_EQ(p.t_start, ms(10 + 10 * static_cast<int>(i / 2))) << i;
+    EXPECT_FALSE(p.partial || p.fills_view) << i;
+    // The detections lie on the true centres (both balls wholly in view): error 0.
+    if (p.found) {
+      EXPECT_NEAR(p.center_error_px, 0, 1e-6) << i;
+    }
+  }
+  EXPECT_EQ(m.per_pair[9].center_error_px, -1);
+  std::ostringstream csv;
+  write_pair_outcomes_csv(csv, {m.per_pair[8], m.per_pair[9]});
+  std::istringstream lines(csv.str());
+  std::string header, row;
+  std::getline(lines, header);
+  EXPECT_EQ(header,
+            "t_start_s,t_end_s,ball,size_px,fraction_in_view_min,partial,fills_view,found,center_error_px,"
+            "track,u_min,v_min,u_max,v_max");
+  std::getline(lines, row);
+  EXPECT_EQ(row.substr(0, 20), "0.050000,0.060000,1,") << row;
+  EXPECT_NE(row.find(",1.000,0,0,1,0.000,-1,"), std::string::npos) << row;
+  std::getline(lines, row);
+  EXPECT_NE(row.find(",1.000,0,0,0,,-1,"), std::string::npos) << row;
 
   // Pooled over two runs: the switches add up, the most in one run stays.
   DetectionMetrics pooled = m;

@@ -80,6 +80,7 @@ void DetectionMetrics::merge(const DetectionMetrics& other) {
   center_errors_px.insert(center_errors_px.end(), other.center_errors_px.begin(),
                           other.center_errors_px.end());
   per_window.insert(per_window.end(), other.per_window.begin(), other.per_window.end());
+  per_pair.insert(per_pair.end(), other.per_pair.begin(), other.per_pair.end());
   any_size.merge(other.any_size);
   for (std::size_t i = 0; i < size_bins.size(); ++i) size_bins[i].merge(other.size_bins[i]);
   partial.merge(other.partial);
@@ -105,6 +106,19 @@ void write_window_outcomes_csv(std::ostream& out, const std::vector<WindowOutcom
       out << fmt::format(",{:.1f},{:.1f},{:.1f},{:.1f}\n", w.box.u_min, w.box.v_min, w.box.u_max, w.box.v_max);
     else
       out << ",,,,\n";
+  }
+}
+
+void write_pair_outcomes_csv(std::ostream& out, const std::vector<PairOutcome>& pairs) {
+  out << "t_start_s,t_end_s,ball,size_px,fraction_in_view_min,partial,fills_view,found,center_error_px,track,"
+         "u_min,v_min,u_max,v_max\n";
+  for (const PairOutcome& p : pairs) {
+    out << fmt::format("{:.6f},{:.6f},{},{:.2f},{:.3f},{},{},{},", to_seconds(p.t_start), to_seconds(p.t_end),
+                       p.ball, p.size_px, p.fraction_in_view_min, p.partial ? 1 : 0, p.fills_view ? 1 : 0,
+                       p.found ? 1 : 0);
+    if (p.center_error_px >= 0) out << fmt::format("{:.3f}", p.center_error_px);
+    out << fmt::format(",{},{:.1f},{:.1f},{:.1f},{:.1f}\n", p.track, p.box.u_min, p.box.v_min, p.box.u_max,
+                       p.box.v_max);
   }
 }
 
@@ -289,8 +303,20 @@ DetectionMetrics detection_metrics(const DatasetTruth& truth,
           ++switches[id];
         last_track[id] = d->track;
       }
-      if (any_size[id] != Eligibility::kEligible) continue;
+      if (any_size[id] == Eligibility::kNone) continue;
       const bool partial = b.fraction_in_view_min < 1;
+      PairOutcome& pair = m.per_pair.emplace_back();
+      pair.t_start = w.t_start;
+      pair.t_end = w.t_end;
+      pair.ball = id;
+      pair.size_px = size_px[id];
+      pair.fraction_in_view_min = b.fraction_in_view_min;
+      pair.partial = partial;
+      pair.fills_view = any_size[id] == Eligibility::kFillsView;
+      pair.found = d != nullptr;
+      pair.track = d ? d->track : -1;
+      pair.box = b;
+      if (pair.fills_view) continue;
       std::vector<RecallCounts*> counts{&m.any_size, &m.size_bins[size_bin_of(size_px[id])],
                                         &m.objects[id].counts};
       if (partial) counts.push_back(&m.partial);
@@ -298,10 +324,12 @@ DetectionMetrics detection_metrics(const DatasetTruth& truth,
       if (!d) continue;
       const VisibleSilhouette at_detection = visible_silhouette(
           truth.objects, id, truth.radius_m.at(id), truth.body, truth.calibration, d->t);
+      if (at_detection.visible)  // else the detection's time lies beyond the truth
+        pair.center_error_px = (at_detection.visible_center_px - d->center_raw).norm();
       for (RecallCounts* c : counts) {
         ++c->found;
-        if (!at_detection.visible) continue;  // the detection's time lies beyond the truth
-        c->center_errors_px.push_back((at_detection.visible_center_px - d->center_raw).norm());
+        if (pair.center_error_px < 0) continue;
+        c->center_errors_px.push_back(pair.center_error_px);
         c->sizes_px.push_back(size_px[id]);
       }
       if (!partial) continue;

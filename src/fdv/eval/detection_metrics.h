@@ -104,6 +104,20 @@ struct WindowOutcome {
   bool fills_view = false;  ///< some ball in flight fills the view (issue 25)
 };
 
+/// One (window, ball) pair of issue 25's metrics (the rows of `fdv eval`'s detection_pairs.csv):
+/// every ball that is eligible or fills the view in the window, so that a ball's misses can be
+/// placed when several are in flight.
+struct PairOutcome {
+  TimeNs t_start = 0, t_end = 0;
+  int ball = -1;
+  double size_px = 0;  ///< apparent size at the window's middle
+  double fraction_in_view_min = 0;
+  bool partial = false, fills_view = false, found = false;
+  double center_error_px = -1;  ///< against the visible part's centre; -1 none (or not found)
+  int track = -1;               ///< the track of the ball's detection (-1: none or untracked)
+  GroundTruthBox box = {};      ///< the ball's true box over the window (raw pixels, clipped)
+};
+
 /// Two definitions side by side.
 ///
 /// Table I's (issue 4), per window: window w is *eligible* when some ball is in flight at its
@@ -131,6 +145,7 @@ struct DetectionMetrics {
   std::size_t windows = 0, eligible = 0, found = 0, false_detections = 0;
   std::vector<double> center_errors_px;
   std::vector<WindowOutcome> per_window;  ///< in window order (runs appended by merge)
+  std::vector<PairOutcome> per_pair;      ///< in window order, then ball id
 
   // Issue 25.
   RecallCounts any_size;                                ///< every eligible (window, ball)
@@ -166,6 +181,11 @@ std::size_t size_bin_of(double size_px);
 /// CSV of the per-window outcomes, header first: t_start_s, t_end_s, eligible, found, detections,
 /// false_detections, center_error_px (empty: none), ball, fraction_in_view_min, span_px_min.
 void write_window_outcomes_csv(std::ostream& out, const std::vector<WindowOutcome>& windows);
+
+/// CSV of the (window, ball) pairs, header first: t_start_s, t_end_s, ball, size_px,
+/// fraction_in_view_min, partial, fills_view, found, center_error_px (empty: none), track,
+/// u_min, v_min, u_max, v_max.
+void write_pair_outcomes_csv(std::ostream& out, const std::vector<PairOutcome>& pairs);
 
 /// Throws ConfigError for invalid options.
 DetectionMetrics detection_metrics(const DatasetTruth& truth,
