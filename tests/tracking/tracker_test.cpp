@@ -289,13 +289,14 @@ TEST(Tracker, ASharpTrackKeepsItsDetectionFromAVagueNewOne) {
 // noise gains (32 - 12)² / 12 px² per axis, so the gate's d² is |y|² / (P + σ² + 33.3) with P the
 // prediction's variance (isotropic here), and the update moves the track by P / (P + σ² + 33.3) of
 // the offset. Without it (part_noise 0) the gate rejects the part and a new track starts. A part
-// 40 px off, outside the object, starts a new track either way.
+// 40 px off, outside the object, starts a new track either way. A detection as much larger than
+// the object is treated alike.
 TEST(Tracker, ADetectionOfPartOfTheObjectContinuesItsTrack) {
   struct PartRun {
     bool taken;
     double d2, pulled_px, prior_variance_px2;
   };
-  auto run = [](double part_noise, Eigen::Vector2d offset) {
+  auto run = [](double part_noise, Eigen::Vector2d offset, double size = 12) {
     TrackerOptions o;
     o.part_noise = part_noise;
     Tracker tracker(o);
@@ -305,7 +306,7 @@ TEST(Tracker, ADetectionOfPartOfTheObjectContinuesItsTrack) {
     const TrackPrediction before = tracker.find(id)->predict(8 * kWindow);
     const Eigen::Vector2d seen = before.center_px + offset;
     const TrackerStep step =
-        tracker.update(8 * kWindow, std::vector<TrackerDetection>{det(8 * kWindow, seen.x(), seen.y(), 12)});
+        tracker.update(8 * kWindow, std::vector<TrackerDetection>{det(8 * kWindow, seen.x(), seen.y(), size)});
     const TrackAssignment& a = step.assignments.at(0);
     const double pulled = (tracker.find(id)->predict(8 * kWindow).center_px - before.center_px).norm();
     return PartRun{a.outcome == TrackAssignment::Outcome::kUpdated && a.track_id == id, a.mahalanobis2, pulled,
@@ -324,6 +325,14 @@ TEST(Tracker, ADetectionOfPartOfTheObjectContinuesItsTrack) {
   EXPECT_FALSE(whole.taken);
   EXPECT_GT(inside.squaredNorm() / (whole.prior_variance_px2 + sigma2), TrackerOptions{}.gate_chi2);
   EXPECT_FALSE(run(1.0, {40, 0}).taken);
+
+  // A 52 px detection, more than the object (its image merged with a neighbour's): the object's
+  // centre may lie as far off in it, (52 - 32)² / 12 px² per axis, so the same gate and pull.
+  const PartRun merged = run(1.0, inside, 52);
+  EXPECT_TRUE(merged.taken);
+  EXPECT_NEAR(merged.d2, part.d2, 1e-9);
+  EXPECT_NEAR(merged.pulled_px, part.pulled_px, 1e-9);
+  EXPECT_FALSE(run(0.0, inside, 52).taken);
 }
 
 // An external gate does not lift the hard radius cap (gate_max_distance_px).

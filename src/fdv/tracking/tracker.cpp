@@ -42,8 +42,8 @@ TimeNs Track::gap_limit(const TrackerOptions& o) const {
 }
 
 Eigen::Vector2d Track::part_variance_px2(const TrackerDetection& d, const TrackerOptions& o) const {
-  const Eigen::Vector2d missing = (box_size_px_ - d.box_size_px).cwiseMax(0.0);
-  return o.part_noise * missing.cwiseAbs2() / 12.0;
+  const Eigen::Vector2d mismatch = box_size_px_ - d.box_size_px;
+  return o.part_noise * mismatch.cwiseAbs2() / 12.0;
 }
 
 TrackPrediction Track::predict(TimeNs t) const {

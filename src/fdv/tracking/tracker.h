@@ -14,10 +14,10 @@
 /// Association: every (track, detection) pair must pass (1) the time gate: the detection is not
 /// older than the track's last update and at most `max_gap_ns` newer; (2) the Mahalanobis gate
 /// d² = y^T S^-1 y <= gate_chi2 with S the filter's innovation covariance at the detection's time;
-/// (3) a hard radius cap |y| <= gate_max_distance_px. A detection smaller than the track's box is
-/// a part of its object, and S holds that centre's larger noise (TrackerOptions::part_noise). A
-/// pair that fails (2) may still pass on an ExternalGate given by the caller (fdv::Perception: the
-/// track's 3D estimate). Gated pairs are assigned greedily in order of increasing d² + ln|S|, the
+/// (3) a hard radius cap |y| <= gate_max_distance_px. A detection smaller or larger than the
+/// track's box holds part of its object or more than it, and S holds that centre's larger noise
+/// (TrackerOptions::part_noise). A pair that fails (2) may still pass on an ExternalGate given by
+/// the caller (fdv::Perception: the track's 3D estimate). Gated pairs are assigned greedily in order of increasing d² + ln|S|, the
 /// pair's negative log-likelihood (global nearest neighbour, one detection per track and per
 /// window), so a vague new track does not win a detection from a sharp one. A detection left
 /// over starts a new tentative track. Coordinates are raw (distorted) pixels of the event camera,
@@ -70,9 +70,10 @@ struct TrackerOptions {
   /// deletion. 2 was tuned on two_balls seeds 1-4 (docs/DETECTION.md, "Several objects"). 0 = off.
   double crossing_scale = 2;
   /// A detection of part of a track's object (a fragment of its pattern, or the visible part of an
-  /// object cut by the border) has a box smaller than the track's, and its centre may lie anywhere
-  /// within the difference: the pair's measurement noise gains, per axis, this times the variance
-  /// of a uniform spread over (track box - detection box), (Δ)²/12. 0 = off.
+  /// object cut by the border) has a box smaller than the track's, and one of more than the object
+  /// (its image merged with a neighbour's, or with clutter) a larger one; either way the object's
+  /// centre may lie anywhere within the difference: the pair's measurement noise gains, per axis,
+  /// this times the variance of a uniform spread over |track box - detection box|, Δ²/12. 0 = off.
   double part_noise = 1;
 
   std::string validate() const;
@@ -92,7 +93,7 @@ void describe(V& v, TrackerOptions& o) {
   v("crossing_scale", o.crossing_scale, "-",
     "reach, in mean box sizes, of a detection taken as the merged image of two crossing tracks (0 = off)");
   v("part_noise", o.part_noise, "-",
-    "weight of the centre noise a detection smaller than its track's box gains, (track box - box)²/12 per axis (0 = off)");
+    "weight of the centre noise a detection whose box differs from its track's gains, (track box - box)²/12 per axis (0 = off)");
 }
 
 enum class TrackStatus { kTentative, kConfirmed };
@@ -124,8 +125,8 @@ class Track {
   /// Longest time without an update before deletion: the status's, plus the time spent crossing
   /// another track (TrackerOptions::crossing_scale), which no detection could update.
   TimeNs gap_limit(const TrackerOptions& o) const;
-  /// Extra measurement variance [px²] per axis of a detection of part of this track's object
-  /// (TrackerOptions::part_noise).
+  /// Extra measurement variance [px²] per axis of a detection of part of this track's object, or
+  /// of more than it (TrackerOptions::part_noise).
   Eigen::Vector2d part_variance_px2(const TrackerDetection& d, const TrackerOptions& o) const;
 
  private:
