@@ -22,7 +22,8 @@ PinholeCamera pinhole() { return {640, 480, 400.0, 401.0, 318.0, 243.0, {0, 0, 0
 
 class MultiObjectTest : public ::testing::Test {
  protected:
-  DetectionResult detect(std::vector<Event> ev, const DetectorOptions& o = {}, const PinholeCamera& camera = lens()) {
+  DetectionResult detect(std::vector<Event> ev, const DetectorOptions& o = {}, const PinholeCamera& camera = lens(),
+                         std::span<const DetectionPrior> priors = {}) {
     Calibration c;
     c.event_camera = camera;
     CompensationOptions co;
@@ -30,7 +31,7 @@ class MultiObjectTest : public ::testing::Test {
     const auto compensator = make_compensator(c, co);
     std::sort(ev.begin(), ev.end(), [](const Event& a, const Event& b) { return a.t < b.t; });
     const CompensatedWindow& w = compensator->compensate({.events = ev, .t_start = 0, .t_end = 25 * kNsPerMs});
-    return Detector(o, camera).detect(detector_input(w));
+    return Detector(o, camera).detect(detector_input(w), priors);
   }
 };
 
@@ -74,6 +75,37 @@ TEST_F(MultiObjectTest, TwoObjectsInOneWindowAreBothFound) {
   DetectorOptions one;
   one.max_objects = 1;
   EXPECT_EQ(detect(joined(test::make_scene(lens(), a), blob_only(b)), one).detections.size(), 1u);
+}
+
+TEST_F(MultiObjectTest, ATrackedObjectNextToAFoundOneIsFoundToo) {
+  // A 40 px blob and, 45 px from it, a 12 px one: the second lies in the region blanked around the
+  // first (its box grown by its own side), as a fragment or the sweep of the first would. With a
+  // confirmed track predicting the second there (its gate clear of the first's box), it is found.
+  test::BlobScene a, b;
+  a.start_uv = {300, 245};
+  a.velocity_px_s = {0, -400};
+  a.radius_px = 20;
+  a.blob_rate_ev_s = 3'000'000;
+  b.start_uv = {345, 235};
+  b.velocity_px_s = {0, 400};
+  b.radius_px = 6;
+  b.edge_segments = 0;
+  b.noise_rate_ev_s = 0;
+  b.seed = 2;
+  const std::vector<Event> ev = joined(test::make_scene(pinhole(), a), test::make_scene(pinhole(), b));
+  const DetectionResult alone = detect(ev, {}, pinhole());
+  ASSERT_EQ(alone.detections.size(), 1u);
+  EXPECT_LT((alone.detections[0].center_undistorted - a.blob_at(alone.detections[0].t)).norm(), 2.0);
+
+  const DetectionPrior track{.center_raw = b.blob_at(12'500'000), .box_size_px = {12, 12}};
+  const DetectionResult tracked = detect(ev, {}, pinhole(), std::span(&track, 1));
+  ASSERT_EQ(tracked.detections.size(), 2u);
+  for (const test::BlobScene* s : {&a, &b}) {
+    const Detection2D* d = nearest(tracked, *s);
+    ASSERT_TRUE(d);
+    EXPECT_LT((d->center_undistorted - s->blob_at(d->t)).norm(), 2.0);
+  }
+  EXPECT_NE(nearest(tracked, a), nearest(tracked, b));
 }
 
 TEST_F(MultiObjectTest, OneFastObjectIsOneDetection) {

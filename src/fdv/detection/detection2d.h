@@ -17,6 +17,7 @@ struct Box2D {
   Eigen::Vector2d center() const { return {0.5 * (x0 + x1), 0.5 * (y0 + y1)}; }
   bool contains(const Eigen::Vector2d& p) const { return p.x() >= x0 && p.x() <= x1 && p.y() >= y0 && p.y() <= y1; }
   Box2D moved_by(const Eigen::Vector2d& d) const { return {x0 + d.x(), y0 + d.y(), x1 + d.x(), y1 + d.y()}; }
+  bool intersects(const Box2D& b) const { return x0 <= b.x1 && b.x0 <= x1 && y0 <= b.y1 && b.y0 <= y1; }
 };
 
 enum class DetectionSource {

@@ -11,6 +11,13 @@ namespace fdv {
 using detection_internal::ms_since;
 namespace {
 
+/// A remaining track gate that no found object's box overlaps: another object is predicted there,
+/// so neither the blanking nor the duplicate test around a nearby found object covers it.
+bool free_gate(const Box2D& gate, std::span<const Detection2D> found) {
+  return std::none_of(found.begin(), found.end(),
+                      [&](const Detection2D& d) { return gate.intersects(d.box_undistorted); });
+}
+
 void validate_or_throw(const DetectorOptions& o) {
   if (const auto why = o.validate(); !why.empty()) throw ConfigError("detector: " + why);
 }
@@ -246,12 +253,18 @@ DetectionResult Detector::detect(const CompensatedEventsView& window, std::span<
       rest_bounds_ = support;
       image = &rest_;
     }
-    zero_rect(rest_, box_pixels(blanked_region(d->box_undistorted), w, h));
-    image_max = first_maximum(rest_, support);
-    // A track whose gate holds this object has its detection: the later passes skip its gate.
-    std::erase_if(gates_, [&](const Box2D& gate) { return gate.contains(d->center_undistorted); });
     if (res.detections.empty()) res.detections.reserve(o.max_objects);  // the result's one allocation
     res.detections.push_back(*d);
+    // A track whose gate holds this object has its detection: the later passes skip its gate.
+    std::erase_if(gates_, [&](const Box2D& gate) { return gate.contains(d->center_undistorted); });
+    const cv::Rect blanked = box_pixels(blanked_region(d->box_undistorted), w, h);
+    zero_rect(rest_, blanked);
+    for (const Box2D& gate : gates_)
+      if (free_gate(gate, res.detections)) {
+        const cv::Rect spared = box_pixels(gate, w, h) & blanked & support;
+        if (spared.area() > 0) P(spared).copyTo(rest_(spared));
+      }
+    image_max = first_maximum(rest_, support);
   }
   if (!res.detections.empty()) return finish(DetectionStatus::kDetected);
   return finish(fills_view ? DetectionStatus::kFillsView : why_not);
@@ -276,6 +289,9 @@ Box2D Detector::blanked_region(const Box2D& box) const {
 }
 
 bool Detector::already_found(std::span<const Detection2D> found, const Eigen::Vector2d& center) const {
+  if (std::any_of(gates_.begin(), gates_.end(),
+                  [&](const Box2D& gate) { return gate.contains(center) && free_gate(gate, found); }))
+    return false;
   return std::any_of(found.begin(), found.end(),
                      [&](const Detection2D& d) { return blanked_region(d.box_undistorted).contains(center); });
 }
