@@ -56,6 +56,17 @@ const Detection2D* nearest(const DetectionResult& r, const test::BlobScene& s) {
   return best;
 }
 
+/// Two detections, each within 2 px of its own blob: the two blobs, not one blob twice.
+void expect_both_found(const DetectionResult& r, const test::BlobScene& a, const test::BlobScene& b) {
+  ASSERT_EQ(r.detections.size(), 2u);
+  for (const test::BlobScene* s : {&a, &b}) {
+    const Detection2D* d = nearest(r, *s);
+    ASSERT_TRUE(d);
+    EXPECT_LT((d->center_undistorted - s->blob_at(d->t)).norm(), 2.0);
+  }
+  EXPECT_NE(nearest(r, a), nearest(r, b));
+}
+
 TEST_F(MultiObjectTest, TwoObjectsInOneWindowAreBothFound) {
   test::BlobScene a, b;
   b.start_uv = {450, 320};
@@ -63,14 +74,7 @@ TEST_F(MultiObjectTest, TwoObjectsInOneWindowAreBothFound) {
   b.seed = 2;
   const DetectionResult r = detect(joined(test::make_scene(lens(), a), blob_only(b)));
   ASSERT_EQ(r.status, DetectionStatus::kDetected);
-  ASSERT_EQ(r.detections.size(), 2u);
-  for (const test::BlobScene* s : {&a, &b}) {
-    const Detection2D* d = nearest(r, *s);
-    ASSERT_TRUE(d);
-    EXPECT_LT((d->center_undistorted - s->blob_at(d->t)).norm(), 2.0);
-  }
-  // Each object once: the two detections are the two blobs, not one blob twice.
-  EXPECT_NE(nearest(r, a), nearest(r, b));
+  expect_both_found(r, a, b);
 
   DetectorOptions one;
   one.max_objects = 1;
@@ -99,13 +103,7 @@ TEST_F(MultiObjectTest, ATrackedObjectNextToAFoundOneIsFoundToo) {
 
   const DetectionPrior track{.center_raw = b.blob_at(12'500'000), .box_size_px = {12, 12}};
   const DetectionResult tracked = detect(ev, {}, pinhole(), std::span(&track, 1));
-  ASSERT_EQ(tracked.detections.size(), 2u);
-  for (const test::BlobScene* s : {&a, &b}) {
-    const Detection2D* d = nearest(tracked, *s);
-    ASSERT_TRUE(d);
-    EXPECT_LT((d->center_undistorted - s->blob_at(d->t)).norm(), 2.0);
-  }
-  EXPECT_NE(nearest(tracked, a), nearest(tracked, b));
+  expect_both_found(tracked, a, b);
 }
 
 TEST_F(MultiObjectTest, OneFastObjectIsOneDetection) {
