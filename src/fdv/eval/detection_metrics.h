@@ -179,7 +179,8 @@ std::string size_bin_label(std::size_t bin);
 std::size_t size_bin_of(double size_px);
 
 /// CSV of the per-window outcomes, header first: t_start_s, t_end_s, eligible, found, detections,
-/// false_detections, center_error_px (empty: none), ball, fraction_in_view_min, span_px_min.
+/// false_detections, center_error_px (empty: none), ball, fraction_in_view_min, span_px_min,
+/// size_px, fills_view, u_min, v_min, u_max, v_max (the box's four empty without a ball).
 void write_window_outcomes_csv(std::ostream& out, const std::vector<WindowOutcome>& windows);
 
 /// CSV of the (window, ball) pairs, header first: t_start_s, t_end_s, ball, size_px,
