@@ -28,6 +28,14 @@ std::string GaussianFitSourceOptions::validate() const {
   return why.str();
 }
 
+bool spans_separate_tracks(const Box2D& box, std::span<const Box2D> gates) {
+  for (std::size_t i = 0; i < gates.size(); ++i)
+    for (std::size_t j = i + 1; j < gates.size(); ++j)
+      if (box.contains(gates[i].center()) && box.contains(gates[j].center()) && !gates[i].intersects(gates[j]))
+        return true;
+  return false;
+}
+
 std::optional<Candidate> evaluate_pattern(const DetectorOptions& o, SourceWindow& in, const cv::Mat& P, cv::Point seed,
                                           double min_peak, DetectionResult& res, Box2D& blank) {
   using Clock = std::chrono::steady_clock;
@@ -120,8 +128,7 @@ std::optional<Candidate> evaluate_pattern(const DetectorOptions& o, SourceWindow
     c.source = DetectionSource::kRegionRetrieval;
   }
   blank = c.box;
-  if (passes_gates(c)) return c;
-  if (passes_gates(c)) return c;
+  if (!spans_separate_tracks(c.box, in.gates) && passes_gates(c)) return c;
   if (!(g.refit_min_roi_px > 0)) return std::nullopt;
 
   // Smaller initial ROIs from the same seed (docs/DETECTION.md, "Smaller initial ROIs").
@@ -170,7 +177,7 @@ std::optional<Candidate> evaluate_pattern(const DetectorOptions& o, SourceWindow
     const GaussianFit f = iterative_gaussian_fit(P, c0, l, o);
     res.timings.fit_ms += ms_since(t);
     if (!f.converged || f.size.x() > fit_max_w || f.size.y() > fit_max_h ||
-        f.size.maxCoeff() > o.roi_max_aspect * f.size.minCoeff())
+        f.size.maxCoeff() > o.roi_max_aspect * f.size.minCoeff() || spans_separate_tracks(f.roi(), in.gates))
       continue;
     Candidate k;
     k.box = f.roi();

@@ -9,11 +9,17 @@
 /// evaluate_pattern() is one pattern's evaluation, which the track-aided source reuses inside the
 /// tracks' gates. Options: DetectorOptions::gaussian_fit and the shared fields.
 #include <optional>
+#include <span>
 
 #include "fdv/detection/candidate_source.h"
 #include "fdv/detection/detector_options.h"
 
 namespace fdv {
+
+/// True when `box` holds the predicted centres of two confirmed tracks whose gates do not overlap:
+/// a fit or region that merged two objects the tracks keep apart (docs/DETECTION.md, "Several
+/// objects"). Such a box is not a candidate; the smaller initial ROIs are tried instead.
+bool spans_separate_tracks(const Box2D& box, std::span<const Box2D> gates);
 
 /// Algorithm 1 from `seed` on `P` with the half-image initial ROI, else moving-region retrieval;
 /// then the evidence gates (roi_min_events, `min_peak` on the box's peak of P, min_event_density),
