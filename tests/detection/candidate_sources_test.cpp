@@ -29,6 +29,7 @@ struct HandMadeWindow {
   std::optional<Preprocessor> pre;
   RegionScratch scratch;
   std::vector<Box2D> gates;
+  std::vector<Box2D> tentative_gates;
   CompensatedEventsView view;
   double theta = 0;
   double speed_m_s = 0;  ///< the camera's ‖v‖ (θ's b‖v‖ term); 0: a still camera
@@ -63,6 +64,7 @@ struct HandMadeWindow {
             .theta = theta,
             .window_s = kWindowS,
             .gates = gates,
+            .tentative_gates = tentative_gates,
             .region_scratch = scratch};
   }
 };
@@ -139,6 +141,16 @@ TEST(TrackAidedSource, FindsTheBlobOnlyInsideAGateThatHoldsIt) {
   EXPECT_TRUE(res.track_aided);
   EXPECT_NEAR(c->center.x(), 60.0, 1e-3);
   EXPECT_NEAR(c->center.y(), 50.0, 1e-3);
+
+  // A tentative track's gate is searched the same way.
+  w.tentative_gates = {w.gates.back()};
+  w.gates.pop_back();
+  SourceWindow tentative_in = w.build(o);
+  DetectionResult tentative_res;
+  const std::optional<Candidate> t = source.find(tentative_in, tentative_res);
+  ASSERT_TRUE(t);
+  EXPECT_TRUE(tentative_res.track_aided);
+  EXPECT_EQ(t->center, c->center);
 }
 
 // An 11x11 blob whose mean time rises along x by g per pixel: T is exactly a plane, so its R² is 1
@@ -164,6 +176,14 @@ TEST(DenseMotionSource, ATimePlaneBlobIsFoundAtItsCentroid) {
   EXPECT_NEAR(c->center.x(), 80.0, 1e-9);
   EXPECT_NEAR(c->center.y(), 60.0, 1e-9);
   EXPECT_NEAR(c->t_mean_s, 0.0125, 1e-6);
+  // In a tentative track's gate too.
+  HandMadeWindow tentative = w;
+  std::swap(tentative.gates, tentative.tentative_gates);
+  SourceWindow tentative_in = tentative.build(o);
+  DetectionResult tentative_res;
+  const std::optional<Candidate> t = source.find(tentative_in, tentative_res);
+  ASSERT_TRUE(t);
+  EXPECT_EQ(t->center, c->center);
 
   // The same blob with times alternating as a checkerboard has no linear trend (Σ x·(−1)^x = 0 over
   // a symmetric row): R² ≈ 0, as a static blob's.
@@ -275,6 +295,18 @@ TEST(CountContrastSource, AnEvenlyFiringMovingBlobIsFoundOnlyWithTheCameraStill)
     DetectionResult res;
     EXPECT_FALSE(count_cue(o, w, res));
     EXPECT_EQ(res.count_cue_isolation, 0.0);  // the still-camera test did not run
+    // Inside a confirmed track's gate there is no time test; a tentative track's gate is not searched.
+    const Box2D gate{85, 55, 115, 85};
+    w.tentative_gates = {gate};
+    DetectionResult tentative_res;
+    EXPECT_FALSE(count_cue(o, w, tentative_res));
+    w.tentative_gates.clear();
+    w.gates = {gate};
+    DetectionResult gated_res;
+    const std::optional<Candidate> c = count_cue(o, w, gated_res);
+    ASSERT_TRUE(c);
+    EXPECT_TRUE(gated_res.track_aided);
+    EXPECT_NEAR(c->center.x(), 100.0, 0.5);
   }
   {
     HandMadeWindow w = evenly_firing_square(kSpeed, 2);

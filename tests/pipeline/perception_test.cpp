@@ -113,6 +113,33 @@ Collected run(TimeNs lag_ns, const SimulatedThrow& s = simulated_throw(), const 
   return out;
 }
 
+TEST(Perception, ATentativeTrackLendsItsGateOnlyWhileHitInItsLastTwoWindows) {
+  Tracker tracker;  // confirm_hits 3
+  const PerceptionOptions on;
+  PerceptionOptions off;
+  off.tentative_track_priors = false;
+  auto window = [&](int k, bool hit) {
+    const TimeNs t = k * 25 * kNsPerMs;
+    const TrackerDetection d{.t = t, .center_px = {100.0 + 10 * k, 80}, .box_size_px = {12, 12}};
+    tracker.update(t, hit ? std::span(&d, 1) : std::span<const TrackerDetection>{});
+    EXPECT_EQ(tracker.tracks().size(), 1u) << "window " << k;
+    return tracker.tracks().front();
+  };
+  const Track first = window(1, true);  // one hit: no velocity yet
+  EXPECT_FALSE(lends_detector_gate(first, on));
+  const Track second = window(2, true);
+  ASSERT_FALSE(second.confirmed());
+  EXPECT_TRUE(lends_detector_gate(second, on));
+  EXPECT_FALSE(lends_detector_gate(second, off));
+  const Track missed = window(3, false);
+  ASSERT_FALSE(missed.confirmed());
+  EXPECT_FALSE(lends_detector_gate(missed, on));
+  const Track third = window(4, true);  // the third hit confirms it
+  ASSERT_TRUE(third.confirmed());
+  EXPECT_TRUE(lends_detector_gate(third, on));
+  EXPECT_TRUE(lends_detector_gate(third, off));
+}
+
 TEST(Perception, AFarFutureEventTimeSkipsTheGapInsteadOfMakingBillionsOfWindows) {
   // A corrupt time a year ahead: 1 261 440 000 windows of 25 ms lie before it. The windower emits
   // 400 empty ones (EventWindowerOptions::max_empty_windows), skips the rest, and says so.

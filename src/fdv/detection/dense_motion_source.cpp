@@ -29,13 +29,15 @@ void DenseMotionSource::allocate(int width, int height) {
 
 std::optional<Candidate> DenseMotionSource::find(SourceWindow& in, DetectionResult& res) {
   if (!options_.dense_motion.enabled || !(in.window_s > 0)) return std::nullopt;
-  for (const Box2D& gate : in.gates) {
-    const auto t = std::chrono::steady_clock::now();
-    std::optional<Candidate> found = find_in(in, box_pixels(gate, in.events.width, in.events.height), res);
-    res.timings.motion_cue_ms += ms_since(t);
-    if (found && gate.contains(found->center)) {
-      res.track_aided = true;
-      return found;
+  for (const std::span<const Box2D> gates : {in.gates, in.tentative_gates}) {
+    for (const Box2D& gate : gates) {
+      const auto t = std::chrono::steady_clock::now();
+      std::optional<Candidate> found = find_in(in, box_pixels(gate, in.events.width, in.events.height), res);
+      res.timings.motion_cue_ms += ms_since(t);
+      if (found && gate.contains(found->center)) {
+        res.track_aided = true;
+        return found;
+      }
     }
   }
   return std::nullopt;

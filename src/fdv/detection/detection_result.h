@@ -78,6 +78,9 @@ struct DetectionResult {
 struct DetectionPrior {
   Eigen::Vector2d center_raw = Eigen::Vector2d::Zero();
   Eigen::Vector2d box_size_px = Eigen::Vector2d::Zero();
+  /// False for a tentative track's prior: its gate is searched by sources 2-3 only, not by the
+  /// count-contrast cue, which drops its time test inside a gate (docs/DETECTION.md).
+  bool confirmed = true;
 };
 
 }  // namespace fdv

@@ -125,6 +125,7 @@ Detector::Detector(const DetectorOptions& options, const PinholeCamera& event_ca
   if (const auto why = event_camera.validate(); !why.empty()) throw ConfigError("detector: event camera: " + why);
   allocate(camera_.width, camera_.height);
   gates_.reserve(8);
+  tentative_gates_.reserve(8);
 }
 
 void Detector::allocate(int width, int height) {
@@ -209,8 +210,9 @@ DetectionResult Detector::detect(const CompensatedEventsView& window, std::span<
   const cv::Mat& P = pre_.run(S_, seg.bounds, window.threads);
   res.timings.preprocess_ms = ms_since(t);
   gates_.clear();
+  tentative_gates_.clear();
   for (const DetectionPrior& prior : priors)
-    if (const auto gate = prior_gate(prior)) gates_.push_back(*gate);
+    if (const auto gate = prior_gate(prior)) (prior.confirmed ? gates_ : tentative_gates_).push_back(*gate);
   const cv::Rect support = pre_.nonzero_bounds();
   const cv::Mat* image = &P;  // P, then P with the objects found so far blanked
   MaxLocation image_max = pre_.first_max();
@@ -228,6 +230,7 @@ DetectionResult Detector::detect(const CompensatedEventsView& window, std::span<
                     .theta = res.theta,
                     .window_s = to_seconds(window.t_end - window.t_start),
                     .gates = gates_,
+                    .tentative_gates = tentative_gates_,
                     .region_scratch = region_,
                     .first_object = pass == 0,
                     .why_not = res.segmented_pixels == 0 ? DetectionStatus::kNothingSegmented
@@ -256,7 +259,9 @@ DetectionResult Detector::detect(const CompensatedEventsView& window, std::span<
     if (res.detections.empty()) res.detections.reserve(o.max_objects);  // the result's one allocation
     res.detections.push_back(*d);
     // A track whose gate holds this object has its detection: the later passes skip its gate.
-    std::erase_if(gates_, [&](const Box2D& gate) { return gate.contains(d->center_undistorted); });
+    auto holds_it = [&](const Box2D& gate) { return gate.contains(d->center_undistorted); };
+    std::erase_if(gates_, holds_it);
+    std::erase_if(tentative_gates_, holds_it);
     const cv::Rect blanked = box_pixels(blanked_region(d->box_undistorted), w, h);
     zero_rect(rest_, blanked);
     for (const Box2D& gate : gates_)

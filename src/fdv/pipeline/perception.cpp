@@ -289,14 +289,19 @@ const CompensatedWindow& Perception::compensate(const PendingWindow& w) {
   return compensator_->compensate(in);
 }
 
-// Feedback, tracks -> detector: where the confirmed tracks expect their objects at time t (the
-// window's middle), for the detector's track-aided look (docs/DETECTION.md).
+bool lends_detector_gate(const Track& track, const PerceptionOptions& options) {
+  return track.confirmed() || (options.tentative_track_priors && track.hits() >= 2 && track.misses() == 0);
+}
+
+// Feedback, tracks -> detector: where the confirmed tracks, and the tentative ones hit in each of
+// their last two windows, expect their objects at time t (the window's middle), for the detector's
+// track-aided look (docs/DETECTION.md).
 void Perception::detector_priors_from_tracks(TimeNs t) {
   priors_.clear();
   for (const Track& track : tracker_.tracks()) {
-    if (!track.confirmed()) continue;
+    if (!lends_detector_gate(track, options_)) continue;
     const TrackPrediction p = track.predict(t);
-    priors_.push_back({p.center_px, p.box_size_px});
+    priors_.push_back({p.center_px, p.box_size_px, track.confirmed()});
   }
 }
 
