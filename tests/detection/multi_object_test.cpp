@@ -48,6 +48,29 @@ std::vector<Event> joined(std::vector<Event> a, const std::vector<Event>& b) {
   return a;
 }
 
+/// Blob `a` (radius, event rate) on the scene's background, and a 6 px blob `b` without background,
+/// in one window on the pinhole camera.
+struct TwoBlobs {
+  test::BlobScene a, b;
+  std::vector<Event> events;
+};
+TwoBlobs two_blobs(const Eigen::Vector2d& a_at, const Eigen::Vector2d& a_velocity, double a_radius_px, double a_rate,
+                   const Eigen::Vector2d& b_at, const Eigen::Vector2d& b_velocity) {
+  TwoBlobs s;
+  s.a.start_uv = a_at;
+  s.a.velocity_px_s = a_velocity;
+  s.a.radius_px = a_radius_px;
+  s.a.blob_rate_ev_s = a_rate;
+  s.b.start_uv = b_at;
+  s.b.velocity_px_s = b_velocity;
+  s.b.radius_px = 6;
+  s.b.edge_segments = 0;
+  s.b.noise_rate_ev_s = 0;
+  s.b.seed = 2;
+  s.events = joined(test::make_scene(pinhole(), s.a), test::make_scene(pinhole(), s.b));
+  return s;
+}
+
 /// The detection whose centre is nearest the blob's true centre at the detection's time.
 const Detection2D* nearest(const DetectionResult& r, const test::BlobScene& s) {
   const Detection2D* best = nullptr;
@@ -86,18 +109,9 @@ TEST_F(MultiObjectTest, ATrackedObjectNextToAFoundOneIsFoundToo) {
   // A 40 px blob and, 45 px from it, a 12 px one: the second lies in the region blanked around the
   // first (its box grown by its own side), as a fragment or the sweep of the first would. With a
   // confirmed track predicting the second there (its gate clear of the first's box), it is found.
-  test::BlobScene a, b;
-  a.start_uv = {300, 245};
-  a.velocity_px_s = {0, -400};
-  a.radius_px = 20;
-  a.blob_rate_ev_s = 3'000'000;
-  b.start_uv = {345, 235};
-  b.velocity_px_s = {0, 400};
-  b.radius_px = 6;
-  b.edge_segments = 0;
-  b.noise_rate_ev_s = 0;
-  b.seed = 2;
-  const std::vector<Event> ev = joined(test::make_scene(pinhole(), a), test::make_scene(pinhole(), b));
+  const TwoBlobs s = two_blobs({300, 245}, {0, -400}, 20, 3'000'000, {345, 235}, {0, 400});
+  const test::BlobScene &a = s.a, &b = s.b;
+  const std::vector<Event>& ev = s.events;
   const DetectionResult alone = detect(ev, {}, pinhole());
   ASSERT_EQ(alone.detections.size(), 1u);
   EXPECT_LT((alone.detections[0].center_undistorted - a.blob_at(alone.detections[0].t)).norm(), 2.0);
@@ -112,17 +126,9 @@ TEST_F(MultiObjectTest, TwoTrackedObjectsThatOneFitMergesAreFoundApart) {
   // ROI the fit converges on a box holding both, and the second is never found. Two confirmed
   // tracks whose gates do not overlap predict two objects there: the merged box is refused, the
   // smaller initial ROIs converge on each blob.
-  test::BlobScene a, b;
-  a.start_uv = {260, 245};
-  a.velocity_px_s = {400, 0};
-  a.radius_px = 14;
-  a.blob_rate_ev_s = 1'500'000;
-  b.start_uv = {330, 245};
-  b.velocity_px_s = {-400, 0};
-  b.edge_segments = 0;
-  b.noise_rate_ev_s = 0;
-  b.seed = 2;
-  const std::vector<Event> ev = joined(test::make_scene(pinhole(), a), test::make_scene(pinhole(), b));
+  const TwoBlobs s = two_blobs({260, 245}, {400, 0}, 14, 1'500'000, {330, 245}, {-400, 0});
+  const test::BlobScene &a = s.a, &b = s.b;
+  const std::vector<Event>& ev = s.events;
   const DetectionResult alone = detect(ev, {}, pinhole());
   ASSERT_EQ(alone.detections.size(), 1u);
   const Box2D merged = alone.detections[0].box_undistorted;
