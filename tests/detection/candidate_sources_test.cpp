@@ -159,8 +159,12 @@ TEST(TrackAidedSource, FindsTheBlobOnlyInsideAGateThatHoldsIt) {
 TEST(DenseMotionSource, ATimePlaneBlobIsFoundAtItsCentroid) {
   const DetectorOptions o;
   constexpr double kSlopeS = 0.0005;  // [s/px]
-  HandMadeWindow w;
-  w.add_square(80, 60, 11, 3, [&](int x, int) { return 0.0125 + kSlopeS * (x - 80); });
+  auto rising_blob = [&] {
+    HandMadeWindow b;
+    b.add_square(80, 60, 11, 3, [&](int x, int) { return 0.0125 + kSlopeS * (x - 80); });
+    return b;
+  };
+  HandMadeWindow w = rising_blob();
   w.gates = {Box2D{60, 40, 100, 80}};
   SourceWindow in = w.build(o);
   DenseMotionSource source(o);
@@ -177,8 +181,8 @@ TEST(DenseMotionSource, ATimePlaneBlobIsFoundAtItsCentroid) {
   EXPECT_NEAR(c->center.y(), 60.0, 1e-9);
   EXPECT_NEAR(c->t_mean_s, 0.0125, 1e-6);
   // In a tentative track's gate too.
-  HandMadeWindow tentative = w;
-  std::swap(tentative.gates, tentative.tentative_gates);
+  HandMadeWindow tentative = rising_blob();
+  tentative.tentative_gates = w.gates;
   SourceWindow tentative_in = tentative.build(o);
   DetectionResult tentative_res;
   const std::optional<Candidate> t = source.find(tentative_in, tentative_res);
