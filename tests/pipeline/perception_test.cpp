@@ -113,7 +113,7 @@ Collected run(TimeNs lag_ns, const SimulatedThrow& s = simulated_throw(), const 
   return out;
 }
 
-TEST(Perception, ATentativeTrackLendsItsGateOnlyWhileHitInItsLastTwoWindows) {
+TEST(Perception, ATentativeTrackLendsItsGateOnlyWhenDetectedInTheLastWindow) {
   Tracker tracker;  // confirm_hits 3
   const PerceptionOptions on;
   PerceptionOptions off;
@@ -125,15 +125,16 @@ TEST(Perception, ATentativeTrackLendsItsGateOnlyWhileHitInItsLastTwoWindows) {
     EXPECT_EQ(tracker.tracks().size(), 1u) << "window " << k;
     return tracker.tracks().front();
   };
-  const Track first = window(1, true);  // one hit: no velocity yet
-  EXPECT_FALSE(lends_detector_gate(first, on));
-  const Track second = window(2, true);
-  ASSERT_FALSE(second.confirmed());
-  EXPECT_TRUE(lends_detector_gate(second, on));
-  EXPECT_FALSE(lends_detector_gate(second, off));
-  const Track missed = window(3, false);
+  const Track first = window(1, true);
+  ASSERT_FALSE(first.confirmed());
+  EXPECT_TRUE(lends_detector_gate(first, on));
+  EXPECT_FALSE(lends_detector_gate(first, off));
+  const Track missed = window(2, false);
   ASSERT_FALSE(missed.confirmed());
   EXPECT_FALSE(lends_detector_gate(missed, on));
+  const Track second = window(3, true);
+  ASSERT_FALSE(second.confirmed());
+  EXPECT_TRUE(lends_detector_gate(second, on));
   const Track third = window(4, true);  // the third hit confirms it
   ASSERT_TRUE(third.confirmed());
   EXPECT_TRUE(lends_detector_gate(third, on));

@@ -3,10 +3,10 @@
 /// threshold θ, segmentation S, pre-processing P, then the candidate sources in a fixed order until
 /// one finds a candidate that passes its gates, then the centre and time from the events.
 ///   1. GaussianFitSource: Algorithm 1 + moving-region retrieval on P's strongest patterns (the paper);
-///   2. TrackAidedSource: the same inside tracks' gates, at a lower evidence threshold;
-///   3. DenseMotionSource: a dense patch of I whose mean time rises as a plane, in the gates;
-///   4. CountContrastSource: a compact blob of I much denser than its surround, confirmed tracks'
-///      gates then image.
+///   2. TrackAidedSource: the same inside confirmed tracks' gates, at a lower evidence threshold;
+///   3. DenseMotionSource: a dense patch of I whose mean time rises as a plane, in the gates of
+///      confirmed tracks and of tentative ones detected in the last window;
+///   4. CountContrastSource: a compact blob of I much denser than its surround, gates then image.
 /// Each has its own unit, options sub-struct (DetectorOptions) and buffers (candidate_source.h).
 ///
 ///   Detector detector(options, calibration.event_camera);
@@ -95,7 +95,7 @@ class Detector {
   cv::Rect rest_bounds_;
   RegionScratch region_;      ///< retrieval's scratch, shared by the two pattern sources
   std::vector<Box2D> gates_;            ///< this window's confirmed tracks' gates
-  std::vector<Box2D> tentative_gates_;  ///< and its tentative tracks' (sources 2-3 only)
+  std::vector<Box2D> tentative_gates_;  ///< and its tentative tracks' (dense-motion cue only)
   // The candidate sources, tried in this order (sources()).
   GaussianFitSource gaussian_fit_;
   TrackAidedSource track_aided_;

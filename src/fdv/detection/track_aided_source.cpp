@@ -16,20 +16,18 @@ std::string TrackAidedSourceOptions::validate() const {
 
 std::optional<Candidate> TrackAidedSource::find(SourceWindow& in, DetectionResult& res) {
   const double min_peak = options_.track_aided.min_peak;
-  for (const std::span<const Box2D> gates : {in.gates, in.tentative_gates}) {
-    for (const Box2D& gate : gates) {
-      const cv::Rect g = box_pixels(gate, in.events.width, in.events.height);
-      if (g.area() == 0) continue;
-      const MaxLocation peak = first_maximum(in.P, g);
-      const double p_max = peak.value;
-      if (!(p_max > 0) || p_max < min_peak * min_peak) continue;
-      ++res.candidates;
-      Box2D blank;
-      std::optional<Candidate> found = evaluate_pattern(options_, in, in.P, peak.at, min_peak, res, blank);
-      if (found && gate.contains(found->center)) {
-        res.track_aided = true;
-        return found;
-      }
+  for (const Box2D& gate : in.gates) {
+    const cv::Rect g = box_pixels(gate, in.events.width, in.events.height);
+    if (g.area() == 0) continue;
+    const MaxLocation peak = first_maximum(in.P, g);
+    const double p_max = peak.value;
+    if (!(p_max > 0) || p_max < min_peak * min_peak) continue;
+    ++res.candidates;
+    Box2D blank;
+    std::optional<Candidate> found = evaluate_pattern(options_, in, in.P, peak.at, min_peak, res, blank);
+    if (found && gate.contains(found->center)) {
+      res.track_aided = true;
+      return found;
     }
   }
   return std::nullopt;

@@ -290,11 +290,11 @@ const CompensatedWindow& Perception::compensate(const PendingWindow& w) {
 }
 
 bool lends_detector_gate(const Track& track, const PerceptionOptions& options) {
-  return track.confirmed() || (options.tentative_track_priors && track.hits() >= 2 && track.misses() == 0);
+  return track.confirmed() || (options.tentative_track_priors && track.misses() == 0);
 }
 
-// Feedback, tracks -> detector: where the confirmed tracks, and the tentative ones hit in each of
-// their last two windows, expect their objects at time t (the window's middle), for the detector's
+// Feedback, tracks -> detector: where the confirmed tracks, and the tentative ones detected in the
+// last window, expect their objects at time t (the window's middle), for the detector's
 // track-aided look (docs/DETECTION.md).
 void Perception::detector_priors_from_tracks(TimeNs t) {
   priors_.clear();

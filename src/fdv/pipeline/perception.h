@@ -90,9 +90,8 @@ struct PerceptionOptions {
   /// covariance propagated) even when the image-plane filter's gate rejects it, so that the track
   /// and its 3D history go on instead of a new track starting from nothing (Tracker, ExternalGate).
   bool estimate_aided_association = true;
-  /// A tentative track hit in each of its last two windows (two detections or more, no miss since)
-  /// also lends the detector its gate, for the track-aided and dense-motion sources only (not the
-  /// count-contrast cue): the windows before confirmation are where a fast ball is most often
+  /// A tentative track detected in the last window also lends the detector its gate, for the
+  /// dense-motion cue only: the windows before confirmation are where a fast ball is most often
   /// missed (docs/DETECTION.md, "Gates of tentative tracks").
   bool tentative_track_priors = true;
   /// When a track is confirmed, the depth frames segmented since its first detection (while it
@@ -121,8 +120,8 @@ struct PerceptionOptions {
 };
 
 /// Whether `track` lends the detector its gate (a DetectionPrior) in the next window: when
-/// confirmed, or, with PerceptionOptions::tentative_track_priors, when tentative with two hits or
-/// more and none missed since (DetectionPrior::confirmed false: sources 2-3 only).
+/// confirmed, or, with PerceptionOptions::tentative_track_priors, when tentative and detected in the
+/// last window (DetectionPrior::confirmed false: the dense-motion cue only).
 bool lends_detector_gate(const Track& track, const PerceptionOptions& options);
 
 /// The field list (fdv/core/field_list.h): the top-level keys of `fdv run --config` and one
@@ -140,7 +139,7 @@ void describe(V& v, PerceptionOptions& o) {
   v("estimate_aided_association", o.estimate_aided_association, "-",
     "a usable fusion estimate keeps a detection it predicts that the image gate rejects");
   v("tentative_track_priors", o.tentative_track_priors, "-",
-    "a tentative track hit in its last two windows lends its gate to the detector's sources 2-3");
+    "a tentative track detected in the last window lends its gate to the detector's dense-motion cue");
   v("depth_since_first_detection", o.depth_since_first_detection, "-",
     "on confirmation, segment the depth frames since the track's first detection");
   v.ms("max_lateness_ms", o.max_lateness_ns, "how long a completed window may wait for IMU and odometry");
