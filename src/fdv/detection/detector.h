@@ -72,8 +72,9 @@ class Detector {
   /// reported box, and both seen by the camera at the detection's time, in raw pixels too.
   Detection2D to_detection(const CompensatedEventsView& window, const Candidate& found, DetectionResult& res);
   /// What a found object's box blanks of P for the next pass, and whether a candidate centre lies
-  /// in an object found before (the sources that read I rather than P can find it again). Both
-  /// spare a confirmed track's gate that no found box overlaps: another object is predicted there.
+  /// in an object found before (the sources that read I rather than P can find it again). detect()
+  /// restores P, and already_found() answers no, inside a confirmed track's gate that no found box
+  /// overlaps: another object is predicted there.
   Box2D blanked_region(const Box2D& box) const;
   /// A later object's pass adds its candidates and stage times to the window's result.
   static void add_later_pass(const DetectionResult& later, DetectionResult& res);

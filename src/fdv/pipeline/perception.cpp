@@ -294,8 +294,8 @@ bool lends_detector_gate(const Track& track, const PerceptionOptions& options) {
 }
 
 // Feedback, tracks -> detector: where the confirmed tracks, and the tentative ones detected in the
-// last window, expect their objects at time t (the window's middle), for the detector's
-// track-aided look (docs/DETECTION.md).
+// last window, expect their objects at time t (the window's middle), for the detector's gate
+// sources (docs/DETECTION.md).
 void Perception::detector_priors_from_tracks(TimeNs t) {
   priors_.clear();
   for (const Track& track : tracker_.tracks()) {

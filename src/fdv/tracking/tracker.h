@@ -17,10 +17,10 @@
 /// (3) a hard radius cap |y| <= gate_max_distance_px. A detection smaller or larger than the
 /// track's box holds part of its object or more than it, and S holds that centre's larger noise
 /// (TrackerOptions::part_noise). A pair that fails (2) may still pass on an ExternalGate given by
-/// the caller (fdv::Perception: the track's 3D estimate). Gated pairs are assigned greedily in order of increasing d² + ln|S|, the
-/// pair's negative log-likelihood (global nearest neighbour, one detection per track and per
-/// window), so a vague new track does not win a detection from a sharp one. A detection left
-/// over starts a new tentative track. Coordinates are raw (distorted) pixels of the event camera,
+/// the caller (fdv::Perception: the track's 3D estimate). Gated pairs are assigned greedily in
+/// order of increasing d² + ln|S|, the pair's negative log-likelihood (global nearest neighbour,
+/// one detection per track and per window), so a vague new track does not win a detection from a
+/// sharp one. A detection left over starts a new tentative track. Coordinates are raw (distorted) pixels of the event camera,
 /// the grid in which detections, boxes and registered depth frames live.
 /// Not thread-safe.
 #include <Eigen/Core>
