@@ -320,6 +320,92 @@ TEST(CountContrastSource, AnEvenlyFiringMovingBlobIsFoundOnlyWithTheCameraStill)
   }
 }
 
+// The least m with centres · P(Binomial(n, p) ≥ m) ≤ chance, checked against scipy.stats.binom.sf:
+// 25 pixels at p = 0.013 over a DAVIS346 frame need 8 (7 give 2.7e-3 expected boxes); at p = 0.04, 11.
+TEST(CountContrastSource, TheSparseFillIsTheFewestActivePixelsScatteredEventsSeldomReach) {
+  EXPECT_EQ(fewest_unlikely_active(25, 0.013, 346 * 260, 1e-3), 8);
+  EXPECT_EQ(fewest_unlikely_active(25, 0.04, 346 * 260, 1e-3), 11);
+  EXPECT_EQ(fewest_unlikely_active(81, 0.015, kWidth * kHeight, 1e-3), 11);
+  EXPECT_EQ(fewest_unlikely_active(9, 0.5, 1000, 1e-3), 10);  // no count is unlikely enough
+  EXPECT_EQ(fewest_unlikely_active(25, 0.0, 100, 1e-3), 1);
+}
+
+/// A still camera's quiet window: single events on 1 pixel in 64 (a sensor's noise), and an 11x11
+/// square at (cx, 70) at the window's middle, moving `speed_px_s` along x, of which a tenth of the
+/// pixels fire in each tenth of the window (a far spinning ball: at most a few events per pixel, so
+/// no centre box fills at min_pixel_events).
+void add_sparse_square(HandMadeWindow& w, int cx, double speed_px_s) {
+  for (int k = 0; k < 10; ++k) {
+    const double t = (k + 0.5) * kWindowS / 10;
+    const int x0 = static_cast<int>(std::lround(cx + speed_px_s * (t - 0.5 * kWindowS)));
+    for (int y = 65; y <= 75; ++y)
+      for (int x = x0 - 5; x <= x0 + 5; ++x)
+        if ((x + 3 * y + 7 * k) % 10 == 0) w.add(x, y, 1, t);
+  }
+}
+HandMadeWindow quiet_window() {
+  HandMadeWindow w;
+  for (int i = 0; i < kWidth * kHeight / 64; ++i)
+    w.add((i * 37) % kWidth, (i * 61 / 7) % kHeight, 1, (i % 10 + 0.5) * kWindowS / 10);
+  return w;
+}
+
+// The sparse search: with the camera still and nothing dense, a lone blob whose boxes hold more fired
+// pixels than scattered noise would reach is found; not when the search is off, when a second such
+// blob makes the background more than noise, when the camera moves, or when it does not move
+// within the window (a flickering light) over the image. In a tentative track's gate the motion is
+// not asked.
+TEST(CountContrastSource, ALoneSparseMovingBlobIsFoundWithTheCameraStill) {
+  const DetectorOptions o;
+  constexpr double kSpeed = 4 / kWindowS;
+  {
+    HandMadeWindow w = quiet_window();
+    add_sparse_square(w, 100, kSpeed);
+    DetectionResult res;
+    const std::optional<Candidate> c = count_cue(o, w, res);
+    ASSERT_TRUE(c) << "contrast " << res.count_cue_contrast << ", fill " << res.count_cue_fill << ", isolation "
+                   << res.count_cue_isolation << ", z " << res.count_cue_motion_z;
+    EXPECT_GT(res.count_cue_sparse_min_active, 0);                       // the sparse search found it
+    EXPECT_LT(c->event_density, o.min_event_density);                    // below the dense gate
+    EXPECT_GE(res.count_cue_motion_z, o.count_contrast.still_min_motion_z);
+    EXPECT_NEAR(c->center.x(), 100.0, 1.0);
+    EXPECT_NEAR(c->center.y(), 70.0, 1.0);
+    EXPECT_FALSE(res.track_aided);
+    DetectorOptions off = o;
+    off.count_contrast.sparse_chance = 0;
+    DetectionResult off_res;
+    EXPECT_FALSE(count_cue(off, w, off_res));
+    EXPECT_EQ(off_res.count_cue_sparse_min_active, 0);
+
+    w.speed_m_s = 6;  // b‖v‖ = 0.24 > still_motion
+    DetectionResult moving_res;
+    EXPECT_FALSE(count_cue(o, w, moving_res));
+    EXPECT_EQ(moving_res.count_cue_sparse_min_active, 0);
+  }
+  {
+    HandMadeWindow w = quiet_window();
+    add_sparse_square(w, 100, kSpeed);
+    add_sparse_square(w, 40, kSpeed);
+    DetectionResult res;
+    EXPECT_FALSE(count_cue(o, w, res));
+    EXPECT_GT(res.count_cue_sparse_min_active, 0);
+  }
+  {
+    HandMadeWindow w = quiet_window();
+    add_sparse_square(w, 100, 0);
+    DetectionResult res;
+    EXPECT_FALSE(count_cue(o, w, res));
+    EXPECT_GE(res.count_cue_isolation, o.count_contrast.still_min_isolation);
+    EXPECT_LT(res.count_cue_motion_z, o.count_contrast.still_min_motion_z);
+    w.tentative_gates = {Box2D{85, 55, 115, 85}};
+    DetectionResult gated_res;
+    const std::optional<Candidate> c = count_cue(o, w, gated_res);
+    ASSERT_TRUE(c);
+    EXPECT_TRUE(gated_res.track_aided);
+    EXPECT_NEAR(c->center.x(), 100.0, 1.0);
+  }
+}
+
 /// One refinement with these options, from a fresh refiner.
 std::optional<RefinedCenter> refine_once(const DetectorOptions& o, const CompensatedEventsView& view, const Box2D& box,
                                          double t_box_s) {

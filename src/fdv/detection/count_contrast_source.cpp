@@ -25,6 +25,8 @@ std::string CountContrastSourceOptions::validate() const {
     why << "count_cue_still_isolation must be finite and at least 1, got " << still_min_isolation;
   else if (!(still_min_motion_z >= 0 && std::isfinite(still_min_motion_z)))
     why << "count_cue_still_motion_z must be finite and at least 0, got " << still_min_motion_z;
+  else if (!(sparse_chance >= 0 && sparse_chance < 1))
+    why << "count_cue_sparse_chance must be in [0, 1), got " << sparse_chance;
   return why.str();
 }
 
@@ -61,17 +63,32 @@ double motion_z(const CompensatedEventsView& events, const cv::Rect& box) {
 
 }  // namespace
 
+int fewest_unlikely_active(int n, double p, double centres, double chance) {
+  if (!(p > 0)) return 1;
+  if (!(p < 1)) return n + 1;
+  // The tail from the top down, each term from its log (n ≤ 961: no overflow, no underflow that matters).
+  const double log_p = std::log(p), log_q = std::log1p(-p);
+  double tail = 0;
+  for (int m = n; m >= 1; --m) {
+    tail += std::exp(std::lgamma(n + 1.0) - std::lgamma(m + 1.0) - std::lgamma(n - m + 1.0) + m * log_p +
+                     (n - m) * log_q);
+    if (centres * tail > chance) return m + 1;
+  }
+  return 1;
+}
+
 void CountTables::allocate(int width, int height) {
   saturated8_.create(height, width, CV_8U);
   active8_.create(height, width, CV_8U);
   saturated_integral_.create(height + 1, width + 1, CV_32S);
   active_integral_.create(height + 1, width + 1, CV_32S);
+  fired_integral_.create(height + 1, width + 1, CV_32S);
 }
 
 void CountTables::reset(const TimeImages& ti, int min_pixel_events) {
   ti_ = &ti;
   min_pixel_events_ = min_pixel_events;
-  active_built_ = saturated_built_ = false;
+  active_built_ = saturated_built_ = fired_built_ = false;
 }
 
 const cv::Mat& CountTables::active() {
@@ -81,6 +98,15 @@ const cv::Mat& CountTables::active() {
     active_built_ = true;
   }
   return active_integral_;
+}
+
+const cv::Mat& CountTables::fired() {
+  if (!fired_built_) {
+    cv::compare(ti_->count, 0, active8_, cv::CMP_GT);  // 255 where any event; active8_ is scratch
+    cv::integral(active8_, fired_integral_, CV_32S);
+    fired_built_ = true;
+  }
+  return fired_integral_;
 }
 
 const cv::Mat& CountTables::saturated() {
@@ -101,26 +127,55 @@ void CountContrastSource::allocate(int width, int height) {
 }
 
 std::optional<Candidate> CountContrastSource::find(SourceWindow& in, DetectionResult& res) {
-  if (!options_.count_contrast.enabled) return std::nullopt;
+  const CountContrastSourceOptions& cc = options_.count_contrast;
+  if (!cc.enabled) return std::nullopt;
   const auto t = std::chrono::steady_clock::now();
   tables_.reset(in.ti, options_.min_pixel_events);
-  std::optional<Candidate> found;
-  for (const Box2D& gate : in.gates) {
-    if (!options_.count_contrast.in_gates) break;
-    found = find_in(in, box_pixels(gate, in.events.width, in.events.height), false, res);
-    if (found && gate.contains(found->center)) {
-      res.track_aided = true;
-      break;
-    }
-    found.reset();
+  // The tracks' gates (where the track is the evidence of motion), then the whole image. The sparse
+  // search also looks in the gates of tentative tracks: a far ball's sparse blob passes the motion
+  // test in a few windows only, and from its first detection on the gate carries its track.
+  auto search = [&](Activity activity) -> std::optional<Candidate> {
+    auto in_gates = [&](std::span<const Box2D> gates) -> std::optional<Candidate> {
+      for (const Box2D& gate : gates) {
+        auto found = find_in(in, box_pixels(gate, in.events.width, in.events.height), true, activity, res);
+        if (found && gate.contains(found->center)) {
+          res.track_aided = true;
+          return found;
+        }
+      }
+      return std::nullopt;
+    };
+    std::optional<Candidate> found;
+    if (cc.in_gates) found = in_gates(in.gates);
+    if (!found && activity == Activity::kSparse) found = in_gates(in.tentative_gates);
+    if (!found && in.first_object) found = find_in(in, {0, 0, in.events.width, in.events.height}, false, activity, res);
+    return found;
+  };
+  std::optional<Candidate> found = search(Activity::kDense);
+  if (!found && cc.sparse_chance > 0 && camera_still(in)) {
+    res.count_cue_sparse_min_active = sparse_min_active(in.ti);
+    found = search(Activity::kSparse);
   }
-  if (!found && in.first_object) found = find_in(in, {0, 0, in.events.width, in.events.height}, true, res);
   res.timings.count_cue_ms = ms_since(t);
   return found;
 }
 
-std::optional<Candidate> CountContrastSource::find_in(const SourceWindow& in, const cv::Rect& search, bool time_test,
-                                                      DetectionResult& res) {
+bool CountContrastSource::camera_still(const SourceWindow& in) const {
+  const DetectorOptions& o = options_;
+  const double camera_motion =
+      o.threshold_a_s_per_rad * in.events.omega_rad_s + o.threshold_b_s_per_m * in.events.speed_m_s;
+  return o.count_contrast.still_motion > 0 && camera_motion <= o.count_contrast.still_motion;
+}
+
+int CountContrastSource::sparse_min_active(const TimeImages& ti) {
+  const int w = ti.count.cols, h = ti.count.rows, k = options_.count_contrast.box_px;
+  const double fired_pixels = tables_.fired().at<std::int32_t>(h, w) / 255.0;
+  return fewest_unlikely_active(k * k, fired_pixels / (static_cast<double>(w) * h), static_cast<double>(w) * h,
+                                options_.count_contrast.sparse_chance);
+}
+
+std::optional<Candidate> CountContrastSource::find_in(const SourceWindow& in, const cv::Rect& search, bool in_gate,
+                                                      Activity activity, DetectionResult& res) {
   const DetectorOptions& o = options_;
   const CountContrastSourceOptions& cc = o.count_contrast;
   const TimeImages& ti = in.ti;
@@ -134,7 +189,9 @@ std::optional<Candidate> CountContrastSource::find_in(const SourceWindow& in, co
   res.count_cue_ran = true;
   // The active pixels' table covers the whole image: the surround of a centre near the search
   // area's border reaches outside it.
-  const cv::Mat& active = tables_.active();
+  const bool sparse = activity == Activity::kSparse;
+  const cv::Mat& active = sparse ? tables_.fired() : tables_.active();
+  const double min_fill = sparse ? res.count_cue_sparse_min_active / (static_cast<double>(k) * k) : cc.min_fill;
   auto box_sum = [](const cv::Mat& sat, int x, int y, int width, int height) {
     return static_cast<double>(sat.at<std::int32_t>(y + height, x + width) - sat.at<std::int32_t>(y, x + width) -
                                sat.at<std::int32_t>(y + height, x) + sat.at<std::int32_t>(y, x));
@@ -145,6 +202,7 @@ std::optional<Candidate> CountContrastSource::find_in(const SourceWindow& in, co
   // same integers.
   constexpr int kDirectSums = 1000;
   int filled = 0;  // centres that pass the fill test
+  Box2D filled_span{1e300, 1e300, -1e300, -1e300};  // their extent
   auto count_sum = [&](int x, int y, int width, int height) {
     if (tables_.has_saturated() || filled > kDirectSums) return box_sum(tables_.saturated(), x, y, width, height);
     std::int32_t sum = 0;
@@ -174,14 +232,16 @@ std::optional<Candidate> CountContrastSource::find_in(const SourceWindow& in, co
     for (int x0 = area.x; x0 < area.x + area.width; x0 += kBlock) {
       const int cols = std::min(kBlock, area.x + area.width - x0);
       const double union_fill = box_sum(active, x0 - hk, y0 - hk, cols + 2 * hk, rows + 2 * hk) / (255.0 * center_area);
-      if (!(union_fill < cc.min_fill)) live.push_back(x0);
+      if (!(union_fill < min_fill)) live.push_back(x0);
     }
     for (int y = y0; y < y0 + rows && !live.empty(); ++y) {
       for (const int x0 : live) {
         for (int x = x0; x < std::min(x0 + kBlock, area.x + area.width); ++x) {
           const double fill = box_sum(active, x - hk, y - hk, k, k) / (255.0 * center_area);
-          if (fill < cc.min_fill) continue;
+          if (fill < min_fill) continue;
           ++filled;
+          filled_span.x0 = std::min<double>(filled_span.x0, x), filled_span.x1 = std::max<double>(filled_span.x1, x);
+          filled_span.y0 = std::min<double>(filled_span.y0, y), filled_span.y1 = std::max<double>(filled_span.y1, y);
           const double inner = count_sum(x - hk, y - hk, k, k);
           const double surround = (count_sum(x - hs, y - hs, 2 * hs + 1, 2 * hs + 1) - inner) / ring_area;
           const double contrast = inner / center_area / std::max(surround, image_density);
@@ -195,10 +255,17 @@ std::optional<Candidate> CountContrastSource::find_in(const SourceWindow& in, co
       }
     }
   }
-  res.count_cue_contrast = best;
-  res.count_cue_fill = best_fill;
-  res.count_cue_filled_centres = filled;
+  if (!sparse) {  // the diagnostics are the dense search's
+    res.count_cue_contrast = best;
+    res.count_cue_fill = best_fill;
+    res.count_cue_filled_centres = filled;
+  }
   if (at.x < 0 || best < cc.min_contrast) return std::nullopt;
+  // Scattered events seldom fill a sparse box anywhere: filled centres beyond one surround square
+  // are a second blob, and the background is not scattered noise (texture of a hovering camera).
+  if (sparse && std::max(filled_span.width(), filled_span.height()) > 2 * hs) {
+    return std::nullopt;
+  }
   // The blob's box: Algorithm 1 on the events above the surround's level, I − max(surround, mean),
   // within the surround square around the densest centre (zero elsewhere), from that square.
   const double level = std::max(best_surround, image_density);
@@ -223,7 +290,8 @@ std::optional<Candidate> CountContrastSource::find_in(const SourceWindow& in, co
   if (box.area() == 0) return std::nullopt;
   cand.events = static_cast<int>(cv::sum(ti.count(box))[0]);
   cand.event_density = static_cast<double>(cand.events) / box.area();
-  if (cand.events < o.roi_min_events || cand.event_density < o.min_event_density) return std::nullopt;
+  // A sparse blob is below the density gate by construction; the still-camera test stands for it.
+  if (cand.events < o.roi_min_events || (!sparse && cand.event_density < o.min_event_density)) return std::nullopt;
   // Its events must not follow the background's time profile: their mean time stands out from all
   // events' by θ's margin a‖ω‖ + b‖v‖ + c, in N's units (the margin by which a pixel of S stands out
   // from mean(N)); early or late, since a late burst of background events (a jerk of the camera)
@@ -231,20 +299,18 @@ std::optional<Candidate> CountContrastSource::find_in(const SourceWindow& in, co
   cand.t_mean_s = cv::sum(ti.sum_time_s(box))[0] / cand.events;
   const double image_t_mean_s = cv::sum(ti.sum_time_s)[0] / ti.events;
   res.count_cue_time_offset = (cand.t_mean_s - image_t_mean_s) / (ti.t_max_s - ti.t_min_s);
-  if (time_test && !(std::abs(res.count_cue_time_offset) >= in.theta - ti.mean_normalized) &&
-      !still_camera_object(in, cand, box, image_density, res))
-    return std::nullopt;
+  const bool passes = sparse ? still_camera_object(in, cand, box, image_density, in_gate, res)
+                              : in_gate || std::abs(res.count_cue_time_offset) >= in.theta - ti.mean_normalized ||
+                                    still_camera_object(in, cand, box, image_density, false, res);
+  if (!passes) return std::nullopt;
   cand.score = 1.0 - 1.0 / best;  // the fraction of the centre's events above the background level
   return cand;
 }
 
 bool CountContrastSource::still_camera_object(const SourceWindow& in, const Candidate& cand, const cv::Rect& box,
-                                              double image_density, DetectionResult& res) const {
-  const DetectorOptions& o = options_;
-  const CountContrastSourceOptions& cc = o.count_contrast;
-  const double camera_motion =
-      o.threshold_a_s_per_rad * in.events.omega_rad_s + o.threshold_b_s_per_m * in.events.speed_m_s;
-  if (!(cc.still_motion > 0 && camera_motion <= cc.still_motion)) return false;
+                                              double image_density, bool in_gate, DetectionResult& res) const {
+  const CountContrastSourceOptions& cc = options_.count_contrast;
+  if (!camera_still(in)) return false;
   const cv::Mat& count = in.ti.count;
   const cv::Rect surround =
       cv::Rect(box.x - box.width, box.y - box.height, 3 * box.width, 3 * box.height) & cv::Rect(0, 0, count.cols, count.rows);
@@ -252,6 +318,7 @@ bool CountContrastSource::still_camera_object(const SourceWindow& in, const Cand
   const double surround_density = surround_pixels > 0 ? (cv::sum(count(surround))[0] - cand.events) / surround_pixels : 0;
   res.count_cue_isolation = cand.event_density / std::max(surround_density, image_density);
   if (!(res.count_cue_isolation >= cc.still_min_isolation)) return false;
+  if (in_gate) return true;  // a track's gate: its track is the evidence of motion
   res.count_cue_motion_z = motion_z(in.events, box);
   return res.count_cue_motion_z >= cc.still_min_motion_z;
 }

@@ -4,7 +4,9 @@
 /// (CountContrastSourceOptions), its box from Algorithm 1 on I above the background level. First
 /// inside the tracks' gates without the time test (in_gates), then over the whole image with it: the
 /// blob's mean event time must stand out from all events' by θ's margin, or, with the camera nearly
-/// still, the blob must stand out from its own-scale surround and move within the window.
+/// still, the blob must stand out from its own-scale surround and move within the window. With the
+/// camera nearly still and nothing found, the same search again for a sparse blob (Activity::kSparse):
+/// a far object that fires an event on a fraction of its pixels per window.
 ///
 ///   CountContrastSource source(options);   // once; allocate(width, height) before the first find()
 ///   std::optional<Candidate> c = source.find(in, res);   // res.count_cue_* say how close
@@ -26,14 +28,21 @@ class CountTables {
   void reset(const TimeImages& ti, int min_pixel_events);
   const cv::Mat& active();
   const cv::Mat& saturated();
+  const cv::Mat& fired();  ///< I ≥ 1, as 255
   bool has_saturated() const { return saturated_built_; }
 
  private:
   const TimeImages* ti_ = nullptr;
   int min_pixel_events_ = 1;
-  cv::Mat active8_, active_integral_, saturated8_, saturated_integral_;
-  bool active_built_ = false, saturated_built_ = false;
+  cv::Mat active8_, active_integral_, saturated8_, saturated_integral_, fired_integral_;
+  bool active_built_ = false, saturated_built_ = false, fired_built_ = false;
 };
+
+/// The fewest active pixels of n that a centre box needs so that, were the image's active pixels
+/// scattered independently with the image's fraction p, the expected number of `centres` boxes
+/// reaching it is at most `chance`: the least m with centres · P(Binomial(n, p) ≥ m) ≤ chance
+/// (n + 1 when no count is that unlikely).
+int fewest_unlikely_active(int n, double p, double centres, double chance);
 
 class CountContrastSource final : public CandidateSource {
  public:
@@ -43,17 +52,29 @@ class CountContrastSource final : public CandidateSource {
   std::optional<Candidate> find(SourceWindow& in, DetectionResult& res) override;
 
  private:
-  /// The candidate among centres within `search`; with `time_test`, its events' mean time must
-  /// stand out from all events' by θ's margin. Sets res.count_cue_*.
-  std::optional<Candidate> find_in(const SourceWindow& in, const cv::Rect& search, bool time_test,
+  /// What makes a centre box filled. kDense: min_fill of its pixels hold min_pixel_events. kSparse
+  /// (the camera nearly still and kDense found nothing): sparse_min_active() of its pixels hold an
+  /// event, a count that scattered events would seldom reach, and no filled centre lies outside the
+  /// best one's surround; the density gate is waived and the still-camera test is required.
+  enum class Activity { kDense, kSparse };
+  /// The candidate among centres within `search`. Over the image (not `in_gate`), a kDense blob's
+  /// mean event time must stand out from all events' by θ's margin, or the blob pass the
+  /// still-camera test. Sets res.count_cue_*.
+  std::optional<Candidate> find_in(const SourceWindow& in, const cv::Rect& search, bool in_gate, Activity activity,
                                    DetectionResult& res);
+  /// θ's motion term a‖ω‖ + b‖v‖ at most CountContrastSourceOptions::still_motion.
+  bool camera_still(const SourceWindow& in) const;
+  /// kSparse's active pixels per centre box: the fewest that the image's fired pixels, scattered at
+  /// random, would fill in CountContrastSourceOptions::sparse_chance boxes per window.
+  int sparse_min_active(const TimeImages& ti);
   /// The still-camera test (CountContrastSourceOptions::still_motion): with the camera nearly still
   /// its compensated background is sparse, so a blob that stands out from its own-scale surround and
   /// moves within the window is an object even when its events fire evenly over the window (a
-  /// spinning ball coming head-on), which the time test cannot see. Sets res.count_cue_isolation
-  /// and count_cue_motion_z.
+  /// spinning ball coming head-on), which the time test cannot see. In a track's gate the motion
+  /// within the window is not asked: the track is its evidence. Sets res.count_cue_isolation and
+  /// count_cue_motion_z.
   bool still_camera_object(const SourceWindow& in, const Candidate& cand, const cv::Rect& box,
-                           double image_density, DetectionResult& res) const;
+                           double image_density, bool in_gate, DetectionResult& res) const;
   DetectorOptions options_;
   CountTables tables_;
   std::vector<int> live_blocks_;  ///< the scan's blocks in one band that it cannot skip

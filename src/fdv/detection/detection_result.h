@@ -58,7 +58,7 @@ struct DetectionResult {
   double motion_cue_r2 = 0, motion_cue_span = 0;
   /// The count-contrast source (DetectorOptions::count_contrast), when it ran: the highest contrast
   /// among centres that fill min_fill (0: none did), that centre's fill, and how many centres filled
-  /// it (of its last search: the gates' come first, then the image's).
+  /// it (of its last dense search: the gates' come first, then the image's).
   bool count_cue_ran = false;
   double count_cue_contrast = 0, count_cue_fill = 0;
   int count_cue_filled_centres = 0;
@@ -67,6 +67,8 @@ struct DetectionResult {
   /// The still-camera test, when it ran (the time test failed with the camera nearly still): the
   /// blob's isolation and, if that passed, the Wald z of its motion (0: not reached).
   double count_cue_isolation = 0, count_cue_motion_z = 0;
+  /// The sparse search's active pixels per centre box, when it ran (0: it did not).
+  int count_cue_sparse_min_active = 0;
   DetectionTimings timings;
   /// The first object found, or nullptr.
   const Detection2D* strongest() const { return detections.empty() ? nullptr : &detections.front(); }

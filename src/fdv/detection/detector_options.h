@@ -148,6 +148,11 @@ struct CountContrastSourceOptions {
   /// (x and y regressed on t) at least this [-]; a flickering light does not move.
   /// YAML `count_cue_still_motion_z`
   double still_min_motion_z = 2.0;
+  /// The sparse search (docs/DETECTION.md, "Count-contrast cue"): with the camera nearly still and
+  /// nothing found, a centre box is filled when so many of its pixels fired at all that, were the
+  /// image's fired pixels scattered at random, this many boxes of the image would be expected to
+  /// reach it per window [-]; 0 = off. YAML `count_cue_sparse_chance`
+  double sparse_chance = 1e-3;
   std::string validate() const;
 };
 
@@ -162,6 +167,7 @@ void describe(V& v, CountContrastSourceOptions& o) {
   v("count_cue_still_motion", o.still_motion, "-", "the still-camera test replaces the time test while a‖ω‖ + b‖v‖ ≤ this (0 = off); tuned");
   v("count_cue_still_isolation", o.still_min_isolation, "-", "... the blob's density / its own-scale surround's (or the image mean's) ≥ this; tuned");
   v("count_cue_still_motion_z", o.still_min_motion_z, "-", "... and the Wald z of its events' position-on-time slopes ≥ this; tuned");
+  v("count_cue_sparse_chance", o.sparse_chance, "-", "still camera, nothing found: boxes of scattered events expected per window to fill a sparse centre box (0 = off); tuned");
 }
 
 struct DetectorOptions {
