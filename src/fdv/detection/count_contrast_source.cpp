@@ -152,7 +152,8 @@ std::optional<Candidate> CountContrastSource::find(SourceWindow& in, DetectionRe
     return found;
   };
   std::optional<Candidate> found = search(Activity::kDense);
-  if (!found && cc.sparse_chance > 0 && camera_still(in)) {
+  const bool sparse_has_place = in.first_object || !in.tentative_gates.empty() || (cc.in_gates && !in.gates.empty());
+  if (!found && cc.sparse_chance > 0 && sparse_has_place && camera_still(in)) {
     res.count_cue_sparse_min_active = sparse_min_active(in.ti);
     found = search(Activity::kSparse);
   }
@@ -242,6 +243,10 @@ std::optional<Candidate> CountContrastSource::find_in(const SourceWindow& in, co
           ++filled;
           filled_span.x0 = std::min<double>(filled_span.x0, x), filled_span.x1 = std::max<double>(filled_span.x1, x);
           filled_span.y0 = std::min<double>(filled_span.y0, y), filled_span.y1 = std::max<double>(filled_span.y1, y);
+          // Scattered events seldom fill a sparse box anywhere: filled centres beyond one surround
+          // square are a second blob, and the background is not scattered noise (the texture of a
+          // hovering camera fires in clumps). Nothing is reported; the scan stops here.
+          if (sparse && std::max(filled_span.width(), filled_span.height()) > 2 * hs) return std::nullopt;
           const double inner = count_sum(x - hk, y - hk, k, k);
           const double surround = (count_sum(x - hs, y - hs, 2 * hs + 1, 2 * hs + 1) - inner) / ring_area;
           const double contrast = inner / center_area / std::max(surround, image_density);
@@ -261,11 +266,6 @@ std::optional<Candidate> CountContrastSource::find_in(const SourceWindow& in, co
     res.count_cue_filled_centres = filled;
   }
   if (at.x < 0 || best < cc.min_contrast) return std::nullopt;
-  // Scattered events seldom fill a sparse box anywhere: filled centres beyond one surround square
-  // are a second blob, and the background is not scattered noise (texture of a hovering camera).
-  if (sparse && std::max(filled_span.width(), filled_span.height()) > 2 * hs) {
-    return std::nullopt;
-  }
   // The blob's box: Algorithm 1 on the events above the surround's level, I − max(surround, mean),
   // within the surround square around the densest centre (zero elsewhere), from that square.
   const double level = std::max(best_surround, image_density);
