@@ -353,8 +353,8 @@ HandMadeWindow quiet_window() {
 // The sparse search: with the camera still and nothing dense, a lone blob whose boxes hold more fired
 // pixels than scattered noise would reach is found; not when the search is off, when a second such
 // blob makes the background more than noise, when the camera moves, or when it does not move
-// within the window (a flickering light) over the image. In a tentative track's gate the motion is
-// not asked.
+// within the window (a flickering light) over the image. In a tentative track's gate neither the
+// second blob nor the motion is asked about.
 TEST(CountContrastSource, ALoneSparseMovingBlobIsFoundWithTheCameraStill) {
   const DetectorOptions o;
   constexpr double kSpeed = 4 / kWindowS;
@@ -385,10 +385,18 @@ TEST(CountContrastSource, ALoneSparseMovingBlobIsFoundWithTheCameraStill) {
   {
     HandMadeWindow w = quiet_window();
     add_sparse_square(w, 100, kSpeed);
-    add_sparse_square(w, 40, kSpeed);
+    add_sparse_square(w, 60, kSpeed);
     DetectionResult res;
     EXPECT_FALSE(count_cue(o, w, res));
     EXPECT_GT(res.count_cue_sparse_min_active, 0);
+    // A track's gate holding both is searched for its best blob all the same.
+    w.tentative_gates = {Box2D{45, 55, 115, 85}};
+    DetectionResult gated_res;
+    const std::optional<Candidate> c = count_cue(o, w, gated_res);
+    ASSERT_TRUE(c);
+    EXPECT_TRUE(gated_res.track_aided);
+    EXPECT_NEAR(c->center.y(), 70.0, 1.0);
+    EXPECT_LT(std::min(std::abs(c->center.x() - 100.0), std::abs(c->center.x() - 60.0)), 1.0) << c->center.x();
   }
   {
     HandMadeWindow w = quiet_window();

@@ -243,10 +243,11 @@ std::optional<Candidate> CountContrastSource::find_in(const SourceWindow& in, co
           ++filled;
           filled_span.x0 = std::min<double>(filled_span.x0, x), filled_span.x1 = std::max<double>(filled_span.x1, x);
           filled_span.y0 = std::min<double>(filled_span.y0, y), filled_span.y1 = std::max<double>(filled_span.y1, y);
-          // Scattered events seldom fill a sparse box anywhere: filled centres beyond one surround
-          // square are a second blob, and the background is not scattered noise (the texture of a
-          // hovering camera fires in clumps). Nothing is reported; the scan stops here.
-          if (sparse && std::max(filled_span.width(), filled_span.height()) > 2 * hs) return std::nullopt;
+          // Scattered events seldom fill a sparse box anywhere: over the image, filled centres beyond
+          // one surround square are a second blob, and the background is not scattered noise (the
+          // texture of a hovering camera fires in clumps). Nothing is reported; the scan stops
+          // here. A track's gate is searched for its best blob all the same.
+          if (sparse && !in_gate && std::max(filled_span.width(), filled_span.height()) > 2 * hs) return std::nullopt;
           const double inner = count_sum(x - hk, y - hk, k, k);
           const double surround = (count_sum(x - hs, y - hs, 2 * hs + 1, 2 * hs + 1) - inner) / ring_area;
           const double contrast = inner / center_area / std::max(surround, image_density);

@@ -54,8 +54,9 @@ class CountContrastSource final : public CandidateSource {
  private:
   /// What makes a centre box filled. kDense: min_fill of its pixels hold min_pixel_events. kSparse
   /// (the camera nearly still and kDense found nothing): sparse_min_active() of its pixels hold an
-  /// event, a count that scattered events would seldom reach, and no filled centre lies outside the
-  /// best one's surround; the density gate is waived and the still-camera test is required.
+  /// event, a count that scattered events would seldom reach, and over the image no filled centre
+  /// lies outside the best one's surround; the density gate is waived and the still-camera test is
+  /// required.
   enum class Activity { kDense, kSparse };
   /// The candidate among centres within `search`. Over the image (not `in_gate`), a kDense blob's
   /// mean event time must stand out from all events' by θ's margin, or the blob pass the
