@@ -350,6 +350,15 @@ HandMadeWindow quiet_window() {
   return w;
 }
 
+/// The count cue with `gate` as a tentative track's only gate; what it finds there is track-aided.
+std::optional<Candidate> count_cue_in_tentative_gate(const DetectorOptions& o, HandMadeWindow& w, const Box2D& gate) {
+  w.tentative_gates = {gate};
+  DetectionResult res;
+  std::optional<Candidate> c = count_cue(o, w, res);
+  EXPECT_EQ(res.track_aided, c.has_value());
+  return c;
+}
+
 // The sparse search: with the camera still and nothing dense, a lone blob whose boxes hold more fired
 // pixels than scattered noise would reach is found; not when the search is off, when a second such
 // blob makes the background more than noise, when the camera moves, or when it does not move
@@ -390,11 +399,8 @@ TEST(CountContrastSource, ALoneSparseMovingBlobIsFoundWithTheCameraStill) {
     EXPECT_FALSE(count_cue(o, w, res));
     EXPECT_GT(res.count_cue_sparse_min_active, 0);
     // A track's gate holding both is searched for its best blob all the same.
-    w.tentative_gates = {Box2D{45, 55, 115, 85}};
-    DetectionResult gated_res;
-    const std::optional<Candidate> c = count_cue(o, w, gated_res);
+    const std::optional<Candidate> c = count_cue_in_tentative_gate(o, w, Box2D{45, 55, 115, 85});
     ASSERT_TRUE(c);
-    EXPECT_TRUE(gated_res.track_aided);
     EXPECT_NEAR(c->center.y(), 70.0, 1.0);
     EXPECT_LT(std::min(std::abs(c->center.x() - 100.0), std::abs(c->center.x() - 60.0)), 1.0) << c->center.x();
   }
@@ -405,11 +411,8 @@ TEST(CountContrastSource, ALoneSparseMovingBlobIsFoundWithTheCameraStill) {
     EXPECT_FALSE(count_cue(o, w, res));
     EXPECT_GE(res.count_cue_isolation, o.count_contrast.still_min_isolation);
     EXPECT_LT(res.count_cue_motion_z, o.count_contrast.still_min_motion_z);
-    w.tentative_gates = {Box2D{85, 55, 115, 85}};
-    DetectionResult gated_res;
-    const std::optional<Candidate> c = count_cue(o, w, gated_res);
+    const std::optional<Candidate> c = count_cue_in_tentative_gate(o, w, Box2D{85, 55, 115, 85});
     ASSERT_TRUE(c);
-    EXPECT_TRUE(gated_res.track_aided);
     EXPECT_NEAR(c->center.x(), 100.0, 1.0);
   }
 }
