@@ -80,8 +80,9 @@ struct DetectionResult {
 struct DetectionPrior {
   Eigen::Vector2d center_raw = Eigen::Vector2d::Zero();
   Eigen::Vector2d box_size_px = Eigen::Vector2d::Zero();
-  /// False for a tentative track's prior: its gate is searched by the dense-motion cue only, whose
-  /// time-plane test is the strictest of the gate sources (docs/DETECTION.md).
+  /// False for a tentative track's prior: its gate is searched by the dense-motion cue, whose
+  /// time-plane test is the strictest of the gate sources, and by the count-contrast cue's sparse
+  /// search with a still camera only (docs/DETECTION.md).
   bool confirmed = true;
 };
 

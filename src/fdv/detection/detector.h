@@ -96,7 +96,7 @@ class Detector {
   cv::Rect rest_bounds_;
   RegionScratch region_;      ///< retrieval's scratch, shared by the two pattern sources
   std::vector<Box2D> gates_;            ///< this window's confirmed tracks' gates
-  std::vector<Box2D> tentative_gates_;  ///< and its tentative tracks' (dense-motion cue only)
+  std::vector<Box2D> tentative_gates_;  ///< and its tentative tracks' (DetectionPrior::confirmed)
   // The candidate sources, tried in this order (sources()).
   GaussianFitSource gaussian_fit_;
   TrackAidedSource track_aided_;

@@ -91,8 +91,9 @@ struct PerceptionOptions {
   /// and its 3D history go on instead of a new track starting from nothing (Tracker, ExternalGate).
   bool estimate_aided_association = true;
   /// A tentative track detected in the last window also lends the detector its gate, for the
-  /// dense-motion cue only: the windows before confirmation are where a fast ball is most often
-  /// missed (docs/DETECTION.md, "Gates of tentative tracks").
+  /// dense-motion cue and the count-contrast cue's sparse search only: the windows before
+  /// confirmation are where a fast ball is most often missed (docs/DETECTION.md, "Gates of
+  /// tentative tracks").
   bool tentative_track_priors = true;
   /// When a track is confirmed, the depth frames segmented since its first detection (while it
   /// was tentative, and so skipped) are segmented for it then, with its filter's prediction at
@@ -121,7 +122,7 @@ struct PerceptionOptions {
 
 /// Whether `track` lends the detector its gate (a DetectionPrior) in the next window: when
 /// confirmed, or, with PerceptionOptions::tentative_track_priors, when tentative and detected in the
-/// last window (DetectionPrior::confirmed false: the dense-motion cue only).
+/// last window (DetectionPrior::confirmed false: the dense-motion cue and the sparse search only).
 bool lends_detector_gate(const Track& track, const PerceptionOptions& options);
 
 /// The field list (fdv/core/field_list.h): the top-level keys of `fdv run --config` and one
@@ -139,7 +140,7 @@ void describe(V& v, PerceptionOptions& o) {
   v("estimate_aided_association", o.estimate_aided_association, "-",
     "a usable fusion estimate keeps a detection it predicts that the image gate rejects");
   v("tentative_track_priors", o.tentative_track_priors, "-",
-    "a tentative track detected in the last window lends its gate to the detector's dense-motion cue");
+    "a tentative track detected in the last window lends its gate to the detector's dense-motion cue and sparse count search");
   v("depth_since_first_detection", o.depth_since_first_detection, "-",
     "on confirmation, segment the depth frames since the track's first detection");
   v.ms("max_lateness_ms", o.max_lateness_ns, "how long a completed window may wait for IMU and odometry");
