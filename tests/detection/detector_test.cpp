@@ -757,6 +757,8 @@ TEST_F(DetectorTest, InvalidOptionsAreRejected) {
       {"count_cue_still_motion", [](DetectorOptions& x) { x.count_contrast.still_motion = -0.1; }},
       {"count_cue_still_isolation", [](DetectorOptions& x) { x.count_contrast.still_min_isolation = 0.5; }},
       {"count_cue_still_motion_z", [](DetectorOptions& x) { x.count_contrast.still_min_motion_z = NAN; }},
+      {"count_cue_sparse_chance", [](DetectorOptions& x) { x.count_contrast.sparse_chance = 1; }},
+      {"count_cue_sparse_chance", [](DetectorOptions& x) { x.count_contrast.sparse_chance = NAN; }},
   };
   for (const auto& [name, make_bad] : cases) {
     DetectorOptions bad;
