@@ -20,6 +20,14 @@ TEST(Summarize, HandComputedValues) {
   EXPECT_EQ(summarize(std::vector<double>{}).count, 0u);
 }
 
+TEST(SampleStandardDeviation, HandComputedValuesAndTooFewValues) {
+  // Mean 5, squared deviations 9 + 1 + 1 + 9 = 20, over n − 1 = 3.
+  EXPECT_DOUBLE_EQ(sample_standard_deviation(std::vector<double>{2, 4, 6, 8}), std::sqrt(20.0 / 3.0));
+  EXPECT_DOUBLE_EQ(sample_standard_deviation(std::vector<double>{3, 3, 3}), 0.0);
+  EXPECT_TRUE(std::isnan(sample_standard_deviation(std::vector<double>{1})));
+  EXPECT_TRUE(std::isnan(sample_standard_deviation(std::vector<double>{})));
+}
+
 TEST(AbsolutePositionError, ConstantOffsetGivesThatError) {
   std::vector<ObjectState> truth;
   for (int i = 0; i <= 10; ++i) truth.push_back({i * kNsPerMs, 1, {0.1 * i, 0, 5}, {100, 0, 0}});

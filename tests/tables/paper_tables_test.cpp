@@ -1,6 +1,8 @@
 // The Markdown of Table I: figures and notes come from the table, not from fixed text.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "fdv/tables/paper_tables.h"
 
 namespace fdv {
@@ -59,7 +61,7 @@ TEST(Table1Markdown, AnySizeRowsPerBinAndPerBall) {
 
   const std::string md = to_markdown(t, Provenance{"fdv table1 --seeds 7", "2026-11-26", "abc1234"});
   EXPECT_NE(md.find("| close_pass | 1280x720 | 50 | 92.9 % of 14, 2.50 px | – | 90.0 % of 10, 2.00 px | – | "
-                    "100.0 % of 4, 6.00 px | 80.0 % of 5, 2.50 px | 4.50 (2) | 5 / 6 | 0.0 % |"),
+                    "100.0 % of 4, 6.00 px | 80.0 % of 5, 2.50 px | 4.50 (2) | 5 / 6 | 0.0 % | – / – |"),
             std::string::npos)
       << md;
   EXPECT_NE(md.find("(issue 25; rotation_translation; seeds 7)"), std::string::npos) << md;
@@ -80,6 +82,60 @@ TEST(Table1Markdown, AnySizeRowsPerBinAndPerBall) {
   EXPECT_FALSE(target("recall, ball 2, two_balls").met);         // 80 % < 90 %
   EXPECT_TRUE(target("identity switches in one seed (most), ball 1").met);
   EXPECT_FALSE(target("identity switches in one seed (most), ball 2").met);
+}
+
+DetectionMetrics seed_metrics(std::size_t windows, std::size_t eligible, std::size_t found,
+                              std::size_t false_detections, std::vector<double> errors_px) {
+  DetectionMetrics m;
+  m.windows = windows;
+  m.eligible = eligible;
+  m.found = found;
+  m.false_detections = false_detections;
+  m.center_errors_px = std::move(errors_px);
+  m.any_size = {eligible, found, m.center_errors_px, std::vector<double>(m.center_errors_px.size(), 20)};
+  return m;
+}
+
+// The seed-to-seed spread is the sample SD of each seed's own figure, over the seeds where the
+// figure is defined; the Markdown shows it beside the pooled figures, "–" where undefined.
+TEST(Table1Markdown, SeedToSeedSpreadOfEachDetectionRow) {
+  // Recall 0.5 and 1.0 (SD 0.3536), median errors 2 and 4 px (SD 1.414), false detections per
+  // window 0.1, 0.0, 0.2 (SD 0.1); the third seed has no eligible window.
+  const std::vector<DetectionMetrics> per_seed{seed_metrics(10, 4, 2, 1, {1.0, 2.0, 3.0}),
+                                               seed_metrics(10, 2, 2, 0, {4.0}),
+                                               seed_metrics(10, 0, 0, 2, {})};
+  const SeedSpread sd = seed_spread(per_seed);
+  EXPECT_NEAR(sd.recall, std::sqrt(0.125), 1e-12);
+  EXPECT_NEAR(sd.any_size_recall, std::sqrt(0.125), 1e-12);
+  EXPECT_NEAR(sd.median_center_error_px, std::sqrt(2.0), 1e-12);
+  EXPECT_NEAR(sd.false_per_window, 0.1, 1e-12);
+  EXPECT_TRUE(std::isnan(seed_spread({per_seed[0]}).recall));
+
+  Table1 t;
+  t.seeds = {1, 2, 3};
+  t.window_ns = 25'000'000;
+  CompensationRow r;
+  r.scene = "hover_headon";
+  r.method = "rotation_translation";
+  for (const DetectionMetrics& m : per_seed) {
+    r.per_seed.push_back(m);
+    r.detection.merge(m);
+  }
+  t.rows.push_back(r);
+  AnySizeRow a;
+  a.scene = {"hover_headon", 346, 260, ""};
+  a.balls = 1;
+  a.detection = r.detection;
+  a.per_seed = r.per_seed;
+  t.any_size_rows = {a};
+  t.any_size_seeds = t.seeds;
+  const std::string md = to_markdown(t, Provenance{"fdv table1 --seeds 1-3", "2026-11-27", "abc1234"});
+  // Pooled: 4 of 6 eligible windows, median of 1, 2, 3, 4 px, 3 false detections in 30 windows.
+  EXPECT_NE(md.find("| hover_headon | rotation_translation | 30 | 6 | 66.7 % | 2.50 | 10.0 % | "
+                    "35.4 % / 1.41 / 10.0 % |"),
+            std::string::npos)
+      << md;
+  EXPECT_NE(md.find("| 10.0 % | 35.4 % / 10.0 % |"), std::string::npos) << md;
 }
 
 TEST(Table1Scenes, VariantsNameTheirCameraAndCacheFolder) {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <numeric>
 #include <vector>
@@ -31,6 +32,15 @@ Summary summarize(std::span<const double> values) {
   for (double x : v) sq += x * x;
   s.rmse = std::sqrt(sq / static_cast<double>(v.size()));
   return s;
+}
+
+double sample_standard_deviation(std::span<const double> values) {
+  if (values.size() < 2) return std::numeric_limits<double>::quiet_NaN();
+  const double n = static_cast<double>(values.size());
+  const double mean = std::accumulate(values.begin(), values.end(), 0.0) / n;
+  double sq = 0;
+  for (double x : values) sq += (x - mean) * (x - mean);
+  return std::sqrt(sq / (n - 1));
 }
 
 nlohmann::json Summary::to_json() const {

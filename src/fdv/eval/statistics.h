@@ -15,4 +15,7 @@ struct Summary {
 /// the 99th and 100th). An empty input gives count 0 and zeros.
 Summary summarize(std::span<const double> values);
 
+/// The sample standard deviation (divisor n − 1); NaN (undefined) for fewer than two values.
+double sample_standard_deviation(std::span<const double> values);
+
 }  // namespace fdv

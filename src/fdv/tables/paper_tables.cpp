@@ -4,6 +4,7 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <sstream>
 
@@ -57,6 +58,12 @@ std::string targets_markdown(const std::vector<TableTarget>& targets) {
   for (const TableTarget& t : targets)
     out += fmt::format("| {} | {} | {} | {} |\n", t.what, t.figure, t.goal, yes_no(t.met));
   return out;
+}
+
+/// A seed-to-seed standard deviation, "–" where undefined (fewer than two seeds).
+std::string spread_cell(double sd, bool as_percent) {
+  if (!std::isfinite(sd)) return "–";
+  return as_percent ? percent(sd) : fmt::format("{:.2f}", sd);
 }
 
 /// "97.0 % of 120, 1.23 px": a recall with its eligible windows and median centre error.
@@ -190,19 +197,20 @@ std::vector<AnySizeRow> any_size_rows(const Table1& table, const PaperTableOptio
       spdlog::warn("table1: {} not found: no {} row with that camera", v.camera_file, v.preset);
       continue;
     }
-    AnySizeRow row{v, 0, {}};
+    AnySizeRow row{v, 0, {}, {}};
     const CompensationRow* paper = v.width == 0 && v.camera_file.empty()
                                        ? table.row(v.preset, kPipelineMethod)
                                        : nullptr;
     if (paper && table.any_size_seeds == table.seeds) {
       row.detection = paper->detection;
+      row.per_seed = paper->per_seed;
       row.balls = static_cast<int>(dataset(v, options.seeds.front(), options).truth.radius_m.size());
     } else {
       for (const std::uint64_t seed : table.any_size_seeds) {
         const Dataset d = dataset(v, seed, options);
         row.balls = static_cast<int>(d.truth.radius_m.size());
-        row.detection.merge(
-            detection_metrics(d.truth, run(d, options, kPipelineMethod, false).windows));
+        row.per_seed.push_back(detection_metrics(d.truth, run(d, options, kPipelineMethod, false).windows));
+        row.detection.merge(row.per_seed.back());
       }
     }
     rows.push_back(std::move(row));
@@ -211,6 +219,18 @@ std::vector<AnySizeRow> any_size_rows(const Table1& table, const PaperTableOptio
 }
 
 }  // namespace
+
+SeedSpread seed_spread(const std::vector<DetectionMetrics>& per_seed) {
+  std::vector<double> recall, error, false_rate, any_size;
+  for (const DetectionMetrics& m : per_seed) {
+    if (m.eligible > 0) recall.push_back(m.recall());
+    if (!m.center_errors_px.empty()) error.push_back(summarize(m.center_errors_px).median);
+    if (m.windows > 0) false_rate.push_back(m.false_per_window());
+    if (m.any_size.eligible > 0) any_size.push_back(m.any_size.recall());
+  }
+  return {sample_standard_deviation(recall), sample_standard_deviation(error),
+          sample_standard_deviation(false_rate), sample_standard_deviation(any_size)};
+}
 
 Table1 compute_table1(const PaperTableOptions& options) {
   if (const std::string why = options.validate(); !why.empty()) throw ConfigError("table1: " + why);
@@ -221,7 +241,7 @@ Table1 compute_table1(const PaperTableOptions& options) {
   table.denoise_opening_px = options.perception.detection.opening_px;
   for (const std::string& scene : table1_detection_scenes())
     for (const std::string& method : table1_methods())
-      table.rows.push_back({scene, method, {}, {}, {}, {}});
+      table.rows.push_back({scene, method, {}, {}, {}, {}, {}});
   for (const std::uint64_t seed : options.seeds)
     for (const std::string& scene : table1_detection_scenes()) {
       const Dataset d = dataset(scene, seed, options);
@@ -238,7 +258,8 @@ Table1 compute_table1(const PaperTableOptions& options) {
                                 r.front_end_ms.end());
         row.relative_contrast.insert(row.relative_contrast.end(), r.relative_contrast.begin(),
                                      r.relative_contrast.end());
-        row.detection.merge(detection_metrics(d.truth, r.windows));
+        row.per_seed.push_back(detection_metrics(d.truth, r.windows));
+        row.detection.merge(row.per_seed.back());
       }
     }
   table.any_size_seeds = options.any_size_seeds.value_or(options.seeds);
@@ -352,17 +373,19 @@ std::string any_size_markdown(const Table1& table) {
     out += fmt::format(" {} |", size_bin_label(bin));
   out +=
       " Cut by the border | Whole-object centre of those [px] (n) | Fills the view: reported / "
-      "windows | False detections / window |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+      "windows | False detections / window | Seed-to-seed SD: all sizes' recall / false detections "
+      "|\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const AnySizeRow& r : table.any_size_rows) {
     const DetectionMetrics& m = r.detection;
     out += fmt::format("| {} | {} | {} | {} |", r.scene.preset, r.scene.camera_label(), m.windows,
                        recall_cell(m.any_size));
     for (const RecallCounts& c : m.size_bins) out += fmt::format(" {} |", recall_cell(c));
     const Summary full = summarize(m.center_full_errors_px);
-    out += fmt::format(" {} | {} | {} / {} | {} |\n", recall_cell(m.partial),
+    const SeedSpread sd = seed_spread(r.per_seed);
+    out += fmt::format(" {} | {} | {} / {} | {} | {} / {} |\n", recall_cell(m.partial),
                        dash_if(full.count == 0, fmt::format("{:.2f} ({})", full.median, full.count)),
-                       m.fills_view_reported, m.fills_view_windows,
-                       percent(m.false_per_window()));
+                       m.fills_view_reported, m.fills_view_windows, percent(m.false_per_window()),
+                       spread_cell(sd.any_size_recall, true), spread_cell(sd.false_per_window, true));
   }
   bool several = false;
   for (const AnySizeRow& r : table.any_size_rows) several = several || r.balls > 1;
@@ -413,17 +436,20 @@ std::string to_markdown(const Table1& table, const Provenance& provenance) {
   out +=
       "| Scene | Method | Windows | Eligible windows | Recall | Median centre error [px] | False "
       "detections / "
-      "window |\n|---|---|---|---|---|---|---|\n";
+      "window | Seed-to-seed SD: recall / centre error [px] / false detections "
+      "|\n|---|---|---|---|---|---|---|---|\n";
   for (const std::string& scene : table1_detection_scenes())
     for (const std::string& method : table1_methods()) {
       const CompensationRow* r = table.row(scene, method);
       if (!r) continue;
       const DetectionMetrics& m = r->detection;
       const Summary e = summarize(m.center_errors_px);
-      out += fmt::format("| {} | {} | {} | {} | {} | {} | {} |\n", scene, method, m.windows,
-                         m.eligible, dash_if(m.eligible == 0, percent(m.recall())),
+      const SeedSpread sd = seed_spread(r->per_seed);
+      out += fmt::format("| {} | {} | {} | {} | {} | {} | {} | {} / {} / {} |\n", scene, method,
+                         m.windows, m.eligible, dash_if(m.eligible == 0, percent(m.recall())),
                          dash_if(e.count == 0, fmt::format("{:.2f}", e.median)),
-                         percent(m.false_per_window()));
+                         percent(m.false_per_window()), spread_cell(sd.recall, true),
+                         spread_cell(sd.median_center_error_px, false), spread_cell(sd.false_per_window, true));
     }
   out += any_size_markdown(table);
   out += "\n### Targets\n\n" + targets_markdown(table1_targets(table));
@@ -451,7 +477,10 @@ std::string to_markdown(const Table1& table, const Provenance& provenance) {
       "centre lies "
       "in its true box (+2 px). Centre error: |detected − true projected centre| of those "
       "detections. "
-      "False detection: a detection in no ball's box, counted in every window.\n",
+      "False detection: a detection in no ball's box, counted in every window. Seed-to-seed SD: "
+      "the sample standard deviation of the seeds' own figures (each seed's recall, median centre "
+      "error, false detections per window), over the seeds where the figure is defined; a row that "
+      "moves by less between two runs has moved within what the choice of seeds does.\n",
       dt_ms, table.denoise_mean_filter_px, table.denoise_opening_px);
   return out;
 }

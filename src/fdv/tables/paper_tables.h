@@ -56,6 +56,7 @@ struct CompensationRow {
   std::vector<double> compensation_ms, front_end_ms;  ///< every window of every seed
   std::vector<double> relative_contrast;              ///< every window where η is defined
   DetectionMetrics detection;
+  std::vector<DetectionMetrics> per_seed;  ///< each seed's own, for the seed-to-seed spread
 };
 
 /// A simulated scene of Table I's any-size detection table (issue 25): a preset at its own event
@@ -77,7 +78,20 @@ struct AnySizeRow {
   SceneVariant scene;
   int balls = 0;  ///< balls in the scene's truth
   DetectionMetrics detection;
+  std::vector<DetectionMetrics> per_seed;  ///< each seed's own, for the seed-to-seed spread
 };
+
+/// How much a detection row's figures vary from seed to seed: the sample standard deviation of
+/// each seed's own figure, over the seeds where it is defined (recall and centre error need an
+/// eligible window); NaN with fewer than two such seeds. The yardstick of issue 25's "no Table I
+/// row gets worse by more than its seed-to-seed spread".
+struct SeedSpread {
+  double recall = 0;                ///< Table I's recall (per window)
+  double median_center_error_px = 0;
+  double false_per_window = 0;
+  double any_size_recall = 0;       ///< issue 25's, every eligible (window, ball) pair
+};
+SeedSpread seed_spread(const std::vector<DetectionMetrics>& per_seed);
 
 struct Table1 {
   std::vector<std::uint64_t> seeds;
