@@ -147,15 +147,16 @@ std::optional<Candidate> CountContrastSource::find(SourceWindow& in, DetectionRe
     };
     std::optional<Candidate> found;
     if (cc.in_gates) found = in_gates(in.gates);
-    if (!found && activity == Activity::kSparse) found = in_gates(in.tentative_gates);
+    if (!found && activity.sparse) found = in_gates(in.tentative_gates);
     if (!found && in.first_object) found = find_in(in, {0, 0, in.events.width, in.events.height}, false, activity, res);
     return found;
   };
-  std::optional<Candidate> found = search(Activity::kDense);
+  std::optional<Candidate> found = search({.sparse = false, .min_fill = cc.min_fill});
   const bool sparse_has_place = in.first_object || !in.tentative_gates.empty() || (cc.in_gates && !in.gates.empty());
   if (!found && cc.sparse_chance > 0 && sparse_has_place && camera_still(in)) {
     res.count_cue_sparse_min_active = sparse_min_active(in.ti);
-    found = search(Activity::kSparse);
+    const double centre_box_pixels = static_cast<double>(cc.box_px) * cc.box_px;
+    found = search({.sparse = true, .min_fill = res.count_cue_sparse_min_active / centre_box_pixels});
   }
   res.timings.count_cue_ms = ms_since(t);
   return found;
@@ -190,9 +191,9 @@ std::optional<Candidate> CountContrastSource::find_in(const SourceWindow& in, co
   res.count_cue_ran = true;
   // The active pixels' table covers the whole image: the surround of a centre near the search
   // area's border reaches outside it.
-  const bool sparse = activity == Activity::kSparse;
+  const bool sparse = activity.sparse;
   const cv::Mat& active = sparse ? tables_.fired() : tables_.active();
-  const double min_fill = sparse ? res.count_cue_sparse_min_active / (static_cast<double>(k) * k) : cc.min_fill;
+  const double min_fill = activity.min_fill;
   auto box_sum = [](const cv::Mat& sat, int x, int y, int width, int height) {
     return static_cast<double>(sat.at<std::int32_t>(y + height, x + width) - sat.at<std::int32_t>(y, x + width) -
                                sat.at<std::int32_t>(y + height, x) + sat.at<std::int32_t>(y, x));

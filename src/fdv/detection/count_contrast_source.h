@@ -52,13 +52,17 @@ class CountContrastSource final : public CandidateSource {
   std::optional<Candidate> find(SourceWindow& in, DetectionResult& res) override;
 
  private:
-  /// What makes a centre box filled. kDense: min_fill of its pixels hold min_pixel_events. kSparse
-  /// (the camera nearly still and kDense found nothing): sparse_min_active() of its pixels hold an
-  /// event, a count that scattered events would seldom reach, and over the image no filled centre
-  /// lies outside the best one's surround; the density gate is waived and the still-camera test is
-  /// required.
-  enum class Activity { kDense, kSparse };
-  /// The candidate among centres within `search`. Over the image (not `in_gate`), a kDense blob's
+  /// What makes a centre box filled: a fraction ≥ min_fill of its pixels is active. Dense: active =
+  /// I ≥ min_pixel_events, min_fill = CountContrastSourceOptions::min_fill. Sparse (the camera
+  /// nearly still and the dense search found nothing): active = I ≥ 1, min_fill =
+  /// sparse_min_active() / k², a count that scattered events would seldom reach; over the image no
+  /// filled centre may lie outside the best one's surround, the density gate is waived and the
+  /// still-camera test is required.
+  struct Activity {
+    bool sparse = false;
+    double min_fill = 0;
+  };
+  /// The candidate among centres within `search`. Over the image (not `in_gate`), a dense blob's
   /// mean event time must stand out from all events' by θ's margin, or the blob pass the
   /// still-camera test. Sets res.count_cue_*.
   std::optional<Candidate> find_in(const SourceWindow& in, const cv::Rect& search, bool in_gate, Activity activity,
