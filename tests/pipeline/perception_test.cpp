@@ -113,6 +113,31 @@ Collected run(TimeNs lag_ns, const SimulatedThrow& s = simulated_throw(), const 
   return out;
 }
 
+// Issue 25: a ball cut by the border is observed at its whole centre where the detector estimated
+// one, and weighs less the less of it is in view (its centre's noise σ / visible fraction).
+TEST(Perception, AnObjectCutByTheBorderIsObservedAtItsWholeCentreWithItsNoiseGrown) {
+  const PinholeCamera camera{640, 480, 500.0, 400.0, 320.0, 240.0, {}};
+  const double sigma_n = 0.002;
+  Detection2D cut;
+  cut.partial = true;
+  cut.visible_fraction = 0.4;
+  cut.center_full_raw = Eigen::Vector2d(-80, 440);  // off the left edge: (-400 / 500, 200 / 400)
+  EventObservation obs;
+  obs.xn = {-0.5, 0.4};  // the visible part's centre
+  observe_cut_object(cut, camera, sigma_n, obs);
+  EXPECT_NEAR(obs.xn.x(), -0.8, 1e-12);
+  EXPECT_NEAR(obs.xn.y(), 0.5, 1e-12);
+  EXPECT_NEAR(obs.sigma_n, sigma_n / 0.4, 1e-15);
+
+  // A corner gives no whole centre: the visible part's is kept. A sliver counts as a tenth.
+  cut.center_full_raw.reset();
+  cut.visible_fraction = 0.02;
+  obs.xn = {-0.5, 0.4};
+  observe_cut_object(cut, camera, sigma_n, obs);
+  EXPECT_EQ(obs.xn, Eigen::Vector2d(-0.5, 0.4));
+  EXPECT_NEAR(obs.sigma_n, sigma_n / 0.1, 1e-15);
+}
+
 TEST(Perception, ATentativeTrackLendsItsGateOnlyWhenDetectedInTheLastWindow) {
   Tracker tracker;  // confirm_hits 3
   const PerceptionOptions on;

@@ -356,7 +356,9 @@ std::vector<int> Perception::add_event_observations(const TrackerStep& step, std
     obs.t = d.t;
     obs.xn = d.center_normalized;
     obs.T_W_E = *T_W_E;
-    if (const Detection2D& found = detections[a.detection]; found.partial) partial_observation(found, obs);
+    if (const Detection2D& found = detections[a.detection]; found.partial)
+      observe_cut_object(found, calibration_.event_camera,
+                         options_.estimation.event_sigma_px / options_.estimation.event_focal_px, obs);
     TrackEstimators& e = estimators_for(a.track_id);
     e.fusion_new |= e.fusion.add(obs) == AddResult::kAccepted;
     if (e.mono) e.mono_new |= e.mono->add(obs) == AddResult::kAccepted;
@@ -368,16 +370,11 @@ std::vector<int> Perception::add_event_observations(const TrackerStep& step, std
   return to_solve;
 }
 
-// An object cut by the frame's border (docs/DETECTION.md, "Objects cut by the border"): the
-// whole object's centre where the detector could estimate it, else the visible part's, with the
-// centre noise σ grown by 1 / visible fraction, since the estimate's error grows with the part
-// out of view.
-void Perception::partial_observation(const Detection2D& found, EventObservation& obs) const {
+void observe_cut_object(const Detection2D& found, const PinholeCamera& camera, double sigma_n, EventObservation& obs) {
   if (found.center_full_raw) {
-    const Eigen::Vector2d xn = calibration_.event_camera.pixel_to_normalized(*found.center_full_raw);
+    const Eigen::Vector2d xn = camera.pixel_to_normalized(*found.center_full_raw);
     if (xn.allFinite()) obs.xn = xn;
   }
-  const double sigma_n = options_.estimation.event_sigma_px / options_.estimation.event_focal_px;
   obs.sigma_n = sigma_n / std::clamp(found.visible_fraction, 0.1, 1.0);
 }
 

@@ -125,6 +125,13 @@ struct PerceptionOptions {
 /// last window (DetectionPrior::confirmed false: the dense-motion cue and the sparse search only).
 bool lends_detector_gate(const Track& track, const PerceptionOptions& options);
 
+/// An object cut by the frame's border (`found.partial`; docs/DETECTION.md, "Objects cut by the
+/// border") as its track's event observation: the whole object's centre where the detector
+/// estimated one (`center_full_raw`, mapped through `camera`), else the visible part's already in
+/// `obs`, with the centre noise `sigma_n` [normalised units] divided by the visible fraction
+/// (floored at 0.1), since the centre's error grows with the part out of view.
+void observe_cut_object(const Detection2D& found, const PinholeCamera& camera, double sigma_n, EventObservation& obs);
+
 /// The field list (fdv/core/field_list.h): the top-level keys of `fdv run --config` and one
 /// section per stage. YAML in and out: fdv/pipeline/options_yaml.h.
 template <class V>
@@ -308,7 +315,6 @@ class Perception {
   TrackerStep associate(TimeNs t, std::span<const Detection2D> detections);
   void vouch_by_trajectory();  ///< fills vouched_ for tracker_inputs_
   std::vector<int> add_event_observations(const TrackerStep& step, std::span<const Detection2D> detections);
-  void partial_observation(const Detection2D& found, EventObservation& obs) const;
   void segment_depth_since_first_detection(std::span<const int> confirmed);
   /// Every depth segmentation of the pending frames starts here: the frames up to `up_to`, for
   /// every confirmed track, each accepted observation then solved.
