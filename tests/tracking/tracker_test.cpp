@@ -335,6 +335,35 @@ TEST(Tracker, ADetectionOfPartOfTheObjectContinuesItsTrack) {
   EXPECT_FALSE(run(0.0, inside, 52).taken);
 }
 
+// Issue 25: a ball entering through one border and leaving through the other is seen as its
+// visible part (clipped box, centre of the visible part, which moves at half the ball's speed while
+// it is cut): one track from entry to exit.
+TEST(Tracker, AnObjectEnteringAndLeavingThroughTheBorderKeepsOneTrack) {
+  constexpr double kWidth = 320, kDiameter = 40, kStep = 12;  // px, px, px per window
+  Tracker tracker;
+  int id = -1, windows = 0;
+  for (int k = 1;; ++k) {
+    const double centre = -0.5 * kDiameter + kStep * k;
+    const double lo = std::max(0.0, centre - 0.5 * kDiameter), hi = std::min(kWidth, centre + 0.5 * kDiameter);
+    if (hi - lo < 2) break;  // gone
+    TrackerDetection d = det(k * kWindow, 0.5 * (lo + hi), 120, kDiameter);
+    d.box_size_px.x() = hi - lo;
+    const TrackerStep step = tracker.update(k * kWindow, std::vector<TrackerDetection>{d});
+    ASSERT_EQ(step.assignments.size(), 1u);
+    const TrackAssignment& a = step.assignments[0];
+    if (id < 0) {
+      EXPECT_EQ(a.outcome, Outcome::kNewTrack);
+      id = a.track_id;
+    } else {
+      EXPECT_EQ(a.outcome, Outcome::kUpdated) << "window " << k << ", visible " << lo << "-" << hi;
+      EXPECT_EQ(a.track_id, id) << "window " << k;
+    }
+    ++windows;
+  }
+  EXPECT_GT(windows, static_cast<int>((kWidth + kDiameter) / kStep) - 2);
+  EXPECT_EQ(tracker.tracks().size(), 1u);
+}
+
 // An external gate does not lift the hard radius cap (gate_max_distance_px).
 TEST(Tracker, ExternalGateKeepsTheHardRadiusCap) {
   Tracker tracker;
