@@ -19,8 +19,11 @@ from pathlib import Path
 
 
 def front_end_ms(summary_path):
-    timing = json.loads(Path(summary_path).read_text())["timing_ms"]
-    return timing["compensation"]["median"] + timing["detection_total"]["median"]
+    try:
+        timing = json.loads(Path(summary_path).read_text())["timing_ms"]
+        return timing["compensation"]["median"] + timing["detection_total"]["median"]
+    except (OSError, ValueError, KeyError, TypeError) as e:
+        sys.exit(f"{summary_path}: no timing_ms.compensation / detection_total median ({e!r})")
 
 
 def main():
@@ -39,7 +42,10 @@ def main():
             for build, binary in (("before", args.before), ("after", args.after)):
                 for i, dataset in enumerate(args.datasets):
                     out = Path(work) / f"{build}_{round_index}_{i}"
-                    run = subprocess.run([binary, "run", dataset, "--out", str(out)], capture_output=True, text=True)
+                    try:
+                        run = subprocess.run([binary, "run", dataset, "--out", str(out)], capture_output=True, text=True)
+                    except OSError as e:
+                        sys.exit(f"{binary}: cannot run it ({e.strerror})")
                     if run.returncode != 0:
                         sys.exit(f"{binary} run {dataset} failed ({run.returncode}): {run.stderr.strip()[-400:]}")
                     figures[build][dataset].append(front_end_ms(out / "summary.json"))
