@@ -1,6 +1,7 @@
 #pragma once
 /// Writes a `fdv run` results folder (schema.h): the JSON-lines files and timing.csv as the
-/// pipeline's callbacks arrive, then the TUM trajectories and summary.json.
+/// pipeline's callbacks arrive, then the TUM trajectories and summary.json. A run goes through
+/// RecordingRun or RunRecorder (run.h), which own one and fill the summary; this is their part.
 ///
 ///   ResultsWriter out(dir);                       // creates dir, the four .jsonl files, timing.csv
 ///   callbacks.on_window = [&](const WindowResult& w) { out.window(w); };   // likewise on_depth,
