@@ -10,9 +10,10 @@
 #include <nlohmann/json.hpp>
 
 #include "apps/commands.h"
-#include "apps/experiment.h"
+#include "apps/evaluate.h"
 #include "fdv/estimation/collision.h"
 #include "fdv/results/reader.h"
+#include "fdv/results/run.h"
 #include "fdv/sim/dataset_cache.h"
 #include "fdv/sim/scenario_config.h"
 #include "fdv/tables/dodge_eval.h"
@@ -33,10 +34,11 @@ void demo(const DemoArgs& args) {
   const std::string results = (fs::path(args.out) / "results").string();
   // Simulated again only when the folder does not hold this scenario and seed already.
   sim::ensure_simulated(sim::make_preset(args.scenario, args.seed), dataset);
-  RunArgs run;
-  run.input = dataset;
-  run.out = results;
-  run_recording(run);
+  PerceptionCallbacks also;
+  also.on_warning = [](const std::string& w) { spdlog::warn("{}", w); };
+  RunRequest request;
+  request.input = dataset;
+  RecordingRun(std::move(request)).into(results, also);
   const nlohmann::json metrics = evaluate(results, dataset);
   const DatasetTruth truth = load_dataset_truth(dataset);
 

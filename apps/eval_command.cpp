@@ -10,7 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "apps/commands.h"
-#include "apps/experiment.h"
+#include "apps/evaluate.h"
 #include "fdv/core/error.h"
 #include "fdv/eval/statistics.h"
 #include "fdv/results/reader.h"

@@ -5,24 +5,31 @@
 #include <yaml-cpp/yaml.h>
 
 #include <filesystem>
+#include <optional>
+#include <string>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "apps/commands.h"
-#include "apps/experiment.h"
 #include "apps/reader_flags.h"
 #include "fdv/core/error.h"
 #include "fdv/core/field_list.h"
 #include "fdv/pipeline/options_yaml.h"
 #include "fdv/pipeline/perception.h"
-#include "fdv/pipeline/replay.h"
-#include "fdv/pipeline/sensor_policy.h"
-#include "fdv/results/writer.h"
-#include "fdv/tables/experiment.h"
+#include "fdv/results/run.h"
 
 namespace fdv::cli {
 namespace fs = std::filesystem;
 namespace {
+
+struct RunArgs {
+  std::string input, calib, config, method, out;
+  bool visualize = false;
+  bool assume_static = false;
+  std::optional<int> threads;  ///< overrides the options' threads
+  bool print_config = false;   ///< print the effective options as YAML and exit
+  ReaderOptions reader;
+};
 
 PerceptionOptions load_options(const RunArgs& args) {
   PerceptionOptions o;
@@ -65,91 +72,39 @@ void write_visualization(const WindowResult& w, const fs::path& dir) {
   cv::imwrite((dir / fmt::format("window_{:06d}.png", w.index)).string(), panel);
 }
 
-/// What the run counted without saying it while running (fallback flags, overload decimation): a
-/// line each. With "none" the compensation uses no sensor, and its flags say nothing of the results.
-std::vector<std::string> after_run_warnings(const PerceptionCounters& c, bool compensation_uses_sensors) {
-  std::vector<std::string> lines;
-  for (const auto& [flag, n] : windows_by_fallback_flag(c))
-    if (n > 0 && compensation_uses_sensors)
-      lines.push_back(fmt::format("{} of {} windows flagged '{}' by the compensation (windows_with_fallback_flag)",
-                                  n, c.windows, flag));
-  if (c.events_dropped.overload > 0)
-    lines.push_back(fmt::format("{} of {} events decimated by the overload policy", c.events_dropped.overload, c.events));
-  return lines;
-}
-
-}  // namespace
-
+/// `fdv run`: the pipeline over a recording, results into args.out (docs/FORMATS.md "`fdv run` outputs").
 void run_recording(const RunArgs& args) {
   if (args.print_config) {
     fmt::print("{}", to_yaml(load_options(args)));
     return;
   }
   if (args.input.empty() || args.out.empty()) throw CLI::RequiredError("run needs INPUT and --out");
-  auto reader = open_recording(args.input, args.reader);
-  const RecordingInfo info = reader->info();
-  std::vector<std::string> warnings;
-  auto warn = [&](const std::string& w) {
-    spdlog::warn("{}", w);
-    warnings.push_back(w);
-  };
-  // What the input's sensors allow of the requested options (fdv/pipeline/sensor_policy.h).
-  std::optional<Calibration> calib_file;
-  if (!args.calib.empty()) calib_file = load_calibration(args.calib);
-  const PerceptionOptions requested_options = load_options(args);
-  SensorPolicy policy;
-  try {
-    policy = apply_sensor_policy(declared_sensors(info, std::move(calib_file)), requested_options);
-  } catch (const ConfigError& e) {  // a missing or mismatched sensor size: name where it came from
-    throw InputError(args.calib.empty() ? args.input : args.calib, "", e.what());
+  RunRequest request;
+  request.input = args.input;
+  request.reader = args.reader;
+  request.options = load_options(args);
+  if (!args.calib.empty()) {
+    request.calibration = load_calibration(args.calib);
+    request.calibration_source = args.calib;
   }
-  for (const std::string& w : policy.warnings) warn(w);
-  const Calibration& calib = policy.calibration;
-  const PerceptionOptions& options = policy.options;
-  const CompensationMethod requested = requested_options.compensation.method;
-  const std::string calib_source = !args.calib.empty() ? args.calib
-                                   : policy.pixel_only ? "none (pixel coordinates, no compensation)"
-                                                       : "from the recording";
+  RecordingRun run(std::move(request));
+  const RecordingInfo& info = run.info();
   spdlog::info("{} ({}, {}x{}), calibration {}, compensation '{}'", args.input, info.format, info.width,
-               info.height, calib_source, to_string(options.compensation.method));
+               info.height, run.calibration_source(), to_string(run.policy().options.compensation.method));
 
-  ResultsWriter out(args.out);
   const fs::path png_dir = fs::path(args.out) / "windows";
-  if (args.visualize) fs::create_directories(png_dir);
-  PerceptionCallbacks callbacks;
-  callbacks.on_window = [&](const WindowResult& w) {
-    out.window(w);
-    if (args.visualize) write_visualization(w, png_dir);
-  };
-  callbacks.on_depth = [&](const DepthResult& d) { out.depth(d); };
-  callbacks.on_estimate = [&](const EstimateResult& e) { out.estimate(e); };
-  callbacks.on_prediction = [&](const PredictionResult& p) { out.prediction(p); };
-  callbacks.on_dodge = [&](const DodgeDecision& d) { out.dodge(d); };
-  callbacks.on_warning = warn;
-  ReadReport reader_report;
-  const PerceptionCounters c = replay(std::move(reader), calib, options, callbacks, &reader_report);
-  for (const std::string& w : after_run_warnings(c, options.compensation.method != CompensationMethod::kNone)) warn(w);
-  for (const auto& [reason, e] : reader_report.dropped())
-    warn(fmt::format("the reader dropped {} record(s): {} (first at {})", e.count, reason, e.first_where));
-
-  RunSummary summary;
-  summary.input = args.input;
-  summary.format = info.format;
-  summary.width = info.width;
-  summary.height = info.height;
-  summary.calibration = calib_source;
-  summary.method_requested = to_string(requested);
-  summary.method = to_string(options.compensation.method);
-  summary.threads = options.threads;
-  summary.reader_report = reader_report.to_json();
-  summary.counts = c;
-  summary.timing_ms = out.timing_ms();
-  summary.warnings = warnings;
-  summary.options = to_json(options);
-  summary.detector_in_use = detector_in_use(options, calib.event_camera);
-  out.finish(summary);
-  spdlog::info("{} windows, {} detections; results in {}", c.windows, c.detections, args.out);
+  PerceptionCallbacks also;
+  if (args.visualize) {
+    fs::create_directories(png_dir);
+    also.on_window = [&](const WindowResult& w) { write_visualization(w, png_dir); };
+  }
+  also.on_warning = [](const std::string& w) { spdlog::warn("{}", w); };
+  const RunOutcome outcome = run.into(args.out, also);
+  spdlog::info("{} windows, {} detections; results in {}", outcome.counts.windows, outcome.counts.detections,
+               args.out);
 }
+
+}  // namespace
 
 void add_run_command(CLI::App& app) {
   auto* cmd = app.add_subcommand("run", "detect, track and estimate 3D trajectories over a recording");

@@ -12,10 +12,9 @@
 #include "fdv/io/recording.h"
 #include "fdv/pipeline/options_yaml.h"
 #include "fdv/pipeline/perception.h"
-#include "fdv/pipeline/replay.h"
 #include "fdv/pipeline/sensor_policy.h"
 #include "fdv/results/schema.h"
-#include "fdv/results/writer.h"
+#include "fdv/results/run.h"
 
 namespace fdv::python {
 namespace {
@@ -26,28 +25,13 @@ constexpr const char* kListNames[] = {"windows", "depth", "trajectories", "predi
 /// Rows in the order the pipeline produced them, kept until the GIL is held again.
 struct RowQueue {
   std::vector<std::pair<RowKind, nlohmann::json>> rows;
-  PerceptionCallbacks callbacks(ResultsWriter* writer = nullptr) {
+  PerceptionCallbacks callbacks() {
     PerceptionCallbacks c;
-    c.on_window = [this, writer](const WindowResult& w) {
-      rows.emplace_back(RowKind::kWindow, window_row(w));
-      if (writer) writer->window(w);
-    };
-    c.on_depth = [this, writer](const DepthResult& d) {
-      rows.emplace_back(RowKind::kDepth, depth_row(d));
-      if (writer) writer->depth(d);
-    };
-    c.on_estimate = [this, writer](const EstimateResult& e) {
-      rows.emplace_back(RowKind::kTrajectory, trajectory_row(e));
-      if (writer) writer->estimate(e);
-    };
-    c.on_prediction = [this, writer](const PredictionResult& p) {
-      rows.emplace_back(RowKind::kPrediction, prediction_row(p));
-      if (writer) writer->prediction(p);
-    };
-    c.on_dodge = [this, writer](const DodgeDecision& d) {
-      rows.emplace_back(RowKind::kDodge, dodge_row(d));
-      if (writer) writer->dodge(d);
-    };
+    c.on_window = [this](const WindowResult& w) { rows.emplace_back(RowKind::kWindow, window_row(w)); };
+    c.on_depth = [this](const DepthResult& d) { rows.emplace_back(RowKind::kDepth, depth_row(d)); };
+    c.on_estimate = [this](const EstimateResult& e) { rows.emplace_back(RowKind::kTrajectory, trajectory_row(e)); };
+    c.on_prediction = [this](const PredictionResult& p) { rows.emplace_back(RowKind::kPrediction, prediction_row(p)); };
+    c.on_dodge = [this](const DodgeDecision& d) { rows.emplace_back(RowKind::kDodge, dodge_row(d)); };
     c.on_warning = [this](const std::string& w) { rows.emplace_back(RowKind::kWarning, w); };
     return c;
   }
@@ -237,58 +221,32 @@ class PyPerception {
   bool finished_ = false;
 };
 
-/// `fdv run` from Python: the same sensor policy, replay and (with `out`) results folder.
+/// `fdv run` from Python: the library's one run of a recording (fdv/results/run.h), so the same
+/// sensor policy, warnings and (with `out`) results folder.
 py::dict run(const std::string& path, std::optional<Calibration> calibration, const std::string& calibration_name,
              const PerceptionOptions& requested, const std::string& out, const ReaderOptions& reader_options) {
   RowQueue queue;
-  std::vector<std::string> warnings;
-  ReadReport report;
-  PerceptionCounters counters;
+  RunOutcome outcome;
   SensorPolicy policy;
   {
     py::gil_scoped_release release;
-    auto reader = open_recording(path, reader_options);
-    const RecordingInfo info = reader->info();
-    const bool from_file = calibration.has_value();
-    try {
-      policy = apply_sensor_policy(declared_sensors(info, std::move(calibration)), requested);
-    } catch (const ConfigError& e) {  // a missing or mismatched sensor size: name where it came from
-      throw InputError(from_file ? calibration_name : path, "", e.what());
-    }
-    warnings = policy.warnings;
-    std::optional<ResultsWriter> writer;
-    if (!out.empty()) writer.emplace(out);
-    counters = replay(std::move(reader), policy.calibration, policy.options,
-                      queue.callbacks(writer ? &*writer : nullptr), &report);
-    for (const auto& [kind, j] : queue.rows)
-      if (kind == RowKind::kWarning) warnings.push_back(j.get<std::string>());
-    if (writer) {
-      RunSummary s;
-      s.input = path;
-      s.format = info.format;
-      s.width = info.width;
-      s.height = info.height;
-      s.calibration = from_file ? calibration_name : policy.pixel_only ? "none (pixel coordinates, no compensation)"
-                                                                       : "from the recording";
-      s.method_requested = to_string(requested.compensation.method);
-      s.method = to_string(policy.options.compensation.method);
-      s.threads = policy.options.threads;
-      s.reader_report = report.to_json();
-      s.counts = counters;
-      s.timing_ms = writer->timing_ms();
-      s.warnings = warnings;
-      s.options = to_json(policy.options);
-      s.detector_in_use = detector_in_use(policy.options, policy.calibration.event_camera);
-      writer->finish(s);
-    }
+    RunRequest request;
+    request.input = path;
+    request.reader = reader_options;
+    request.calibration = std::move(calibration);
+    request.calibration_source = calibration_name;
+    request.options = requested;
+    RecordingRun recording(std::move(request));
+    policy = recording.policy();
+    outcome = recording.into(out, queue.callbacks());
   }
   py::dict d;
   for (const char* name : kListNames) d[name] = py::list();
   for (const auto& [kind, j] : queue.rows)
     if (kind != RowKind::kWarning) d[kListNames[static_cast<std::size_t>(kind)]].cast<py::list>().append(to_python(j));
-  d["warnings"] = warnings;
-  d["counts"] = to_python(counts_json(counters));
-  d["reader_report"] = to_python(report.to_json());
+  d["warnings"] = outcome.warnings;
+  d["counts"] = to_python(counts_json(outcome.counts));
+  d["reader_report"] = to_python(outcome.reader_report.to_json());
   d["options"] = to_python(to_json(policy.options));
   return d;
 }

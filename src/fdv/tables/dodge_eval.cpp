@@ -14,8 +14,7 @@
 #include "fdv/core/thread_pool.h"
 #include "fdv/io/recording.h"
 #include "fdv/pipeline/options_yaml.h"
-#include "fdv/pipeline/replay.h"
-#include "fdv/results/writer.h"
+#include "fdv/results/run.h"
 #include "fdv/sim/dataset_cache.h"
 #include "fdv/sim/random_throw.h"
 #include "fdv/tables/experiment.h"
@@ -35,47 +34,23 @@ struct MethodRun {
   std::optional<TimeNs> first_ball_detection;
 };
 
+/// One variant's run over the dataset, through the same run as `fdv run` (into `results_dir`
+/// when it is not empty).
 MethodRun run_method(const DatasetTruth& truth, int ball, const PerceptionOptions& options,
                      const std::string& results_dir) {
   MethodRun run;
-  std::optional<ResultsWriter> writer;
-  if (!results_dir.empty()) writer.emplace(results_dir);
-  PerceptionCallbacks callbacks;
   std::vector<WindowDetections> windows;
-  callbacks.on_window = [&](const WindowResult& w) {
+  PerceptionCallbacks also;
+  also.on_window = [&](const WindowResult& w) {
     run.window_ends.push_back(w.t_end);
     windows.push_back(window_detections(w));
-    if (writer) writer->window(w);
   };
-  callbacks.on_dodge = [&](const DodgeDecision& d) {
-    run.decisions.push_back(d);
-    if (writer) writer->dodge(d);
-  };
-  if (writer) {
-    callbacks.on_depth = [&](const DepthResult& d) { writer->depth(d); };
-    callbacks.on_estimate = [&](const EstimateResult& e) { writer->estimate(e); };
-    callbacks.on_prediction = [&](const PredictionResult& p) { writer->prediction(p); };
-  }
-  std::vector<std::string> warnings;
-  callbacks.on_warning = [&](const std::string& w) { warnings.push_back(w); };
-  const PerceptionCounters counts = replay(open_recording(truth.dir), truth.calibration, options, callbacks);
+  also.on_dodge = [&](const DodgeDecision& d) { run.decisions.push_back(d); };
+  RunRequest request;
+  request.input = truth.dir;
+  request.options = options;
+  RecordingRun(std::move(request)).into(results_dir, also);
   if (const auto first = first_ball_detection(truth, windows, ball)) run.first_ball_detection = first->window_end;
-  if (writer) {
-    RunSummary summary;
-    summary.input = truth.dir;
-    summary.format = "fdv_dataset";
-    summary.width = truth.calibration.event_camera.width;
-    summary.height = truth.calibration.event_camera.height;
-    summary.calibration = "the dataset's";
-    summary.method_requested = summary.method = to_string(options.compensation.method);
-    summary.threads = options.threads;
-    summary.counts = counts;
-    summary.timing_ms = writer->timing_ms();
-    summary.warnings = warnings;
-    summary.options = to_json(options);
-    summary.detector_in_use = detector_in_use(options, truth.calibration.event_camera);
-    writer->finish(summary);
-  }
   return run;
 }
 
