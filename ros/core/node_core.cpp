@@ -16,6 +16,7 @@
 #include "fdv/core/error.h"
 #include "fdv/eval/statistics.h"
 #include "fdv/io/rosbag/message_decoder.h"
+#include "fdv/io/time_order.h"
 #include "fdv/pipeline/options_yaml.h"
 #include "fdv/pipeline/perception.h"
 #include "fdv/pipeline/sensor_policy.h"
@@ -25,8 +26,6 @@ namespace fdv::ros_core {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-constexpr TimeNs kNever = std::numeric_limits<TimeNs>::max();
-constexpr TimeNs kBeforeAll = std::numeric_limits<TimeNs>::min();
 /// Latency is summarized over this many recent windows (a flight runs for hours).
 constexpr std::size_t kLatencyWindows = 2000;
 constexpr std::array<Stream, 4> kStreams = {Stream::kEvents, Stream::kImu, Stream::kDepth, Stream::kOdometry};
@@ -46,8 +45,6 @@ StreamKind kind(Stream s) {
   }
   return StreamKind::kEvents;
 }
-
-TimeNs from_seconds(double s) { return static_cast<TimeNs>(s * 1e9); }
 
 /// The options file with each override set on its key ("section.key" or a top-level "key").
 PerceptionOptions load_options(const NodeConfig& config) {
@@ -313,10 +310,12 @@ struct NodeCore::Impl {
     }
   }
 
-  /// Every awaited stream has passed this time (stream time): what may be released.
-  TimeNs horizon() {
-    if (first_t == kNever) return kBeforeAll;  // nothing received yet
-    TimeNs h = kNever;
+  /// The earliest time each stream's next item can have (stream time); kNever for a stream not
+  /// awaited.
+  std::array<TimeNs, 4> awaited_until() {
+    std::array<TimeNs, 4> until;
+    until.fill(kNever);
+    if (first_t == kNever) return until;  // nothing received yet
     for (Stream s : kStreams) {
       if (!subscribed(s) || (s == Stream::kDepth && !config.wait_for_depth)) continue;
       StreamHealth& sh = health[index(s)];
@@ -328,30 +327,35 @@ struct NodeCore::Impl {
                          to_string(s), config.missing_after_s));
       }
       if (newest_t - newest > from_seconds(config.max_hold_s)) continue;  // silent: not awaited
-      h = std::min(h, newest);
+      until[index(s)] = newest;
     }
-    return h;
+    return until;
   }
 
+  /// Hands the Perception every held item that may go now, by fdv::io's time-order rule (the
+  /// merger's); all of them with `all`.
   void release(bool all) {
     if (!perception) return;
-    const TimeNs limit = all ? kNever : horizon();
+    std::array<StreamFront, 4> fronts;
+    if (!all) {
+      const std::array<TimeNs, 4> until = awaited_until();
+      for (Stream s : kStreams) fronts[index(s)].next = until[index(s)];
+    }
     while (true) {
-      // The earliest held item; ties in fdv run's merger order (events, IMU, depth, odometry).
-      const std::array<TimeNs, 4> heads = {events.empty() ? kNever : events.front()[events_released].t,
-                                           imu.empty() ? kNever : imu.front().t,
-                                           depth.empty() ? kNever : depth.front().t,
-                                           odometry.empty() ? kNever : odometry.front().t};
-      const std::size_t best = std::min_element(heads.begin(), heads.end()) - heads.begin();
-      if (heads[best] == kNever || heads[best] > limit) break;
-      released_until = std::max(released_until, heads[best]);
-      switch (best) {
+      fronts[0].held = events.empty() ? kNever : events.front()[events_released].t;
+      fronts[1].held = imu.empty() ? kNever : imu.front().t;
+      fronts[2].held = depth.empty() ? kNever : depth.front().t;
+      fronts[3].held = odometry.empty() ? kNever : odometry.front().t;
+      const TimeOrderStep step = next_in_time_order(fronts);
+      if (step.earliest == TimeOrderStep::kNone || step.waiting_for != TimeOrderStep::kNone) break;
+      released_until = std::max(released_until, fronts[step.earliest].held);
+      switch (step.earliest) {
         case 0: {
-          const TimeNs others = std::min({limit, heads[1], heads[2], heads[3]});
-          // The front message's events up to that time (at least one), handed over in place.
+          // The front message's events up to run_until (at least one), handed over in place.
           const std::vector<Event>& front = events.front();
           const auto first = front.begin() + static_cast<std::ptrdiff_t>(events_released);
-          auto last = std::upper_bound(first, front.end(), others, [](TimeNs t, const Event& e) { return t < e.t; });
+          auto last = std::upper_bound(first, front.end(), step.run_until,
+                                       [](TimeNs t, const Event& e) { return t < e.t; });
           if (last == first) ++last;
           released_until = std::max(released_until, (last - 1)->t);
           perception->push_events(std::span<const Event>(&*first, static_cast<std::size_t>(last - first)));

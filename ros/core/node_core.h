@@ -19,7 +19,8 @@
 /// an item is released once every awaited stream has passed its time, so a complete, slow replay
 /// gives `fdv run`'s windows exactly. Depth is awaited only with `wait_for_depth` (a 30 Hz camera
 /// would add up to 33 ms of latency). A stream silent for `max_hold_s` of stream time is no longer
-/// awaited; one that never arrived within `missing_after_s` is reported missing.
+/// awaited; one that never arrived within `missing_after_s` is reported missing. Durations in
+/// seconds are rounded to the nearest nanosecond.
 #include <cstdint>
 #include <functional>
 #include <memory>
