@@ -19,7 +19,11 @@
 /// an item is released once every awaited stream has passed its time, so a complete, slow replay
 /// gives `fdv run`'s windows exactly. Depth is awaited only with `wait_for_depth` (a 30 Hz camera
 /// would add up to 33 ms of latency). A stream silent for `max_hold_s` of stream time is no longer
-/// awaited; one that never arrived within `missing_after_s` is reported missing.
+/// awaited; one that never arrived within `missing_after_s` is reported missing. Durations in
+/// seconds are rounded to the nearest nanosecond.
+///
+/// Not thread-safe: one call at a time (the ROS 1 node's single spinner thread). The outputs are
+/// called on the caller's thread, inside push() and finish().
 #include <cstdint>
 #include <functional>
 #include <memory>

@@ -1,13 +1,9 @@
 #include "fdv/io/time_ordered_merger.h"
 
 #include <algorithm>
-#include <limits>
 
 namespace fdv {
 namespace {
-
-constexpr TimeNs kNever = std::numeric_limits<TimeNs>::max();
-constexpr TimeNs kBeforeAll = std::numeric_limits<TimeNs>::min();
 
 template <typename T>
 TimeNs front_time(const std::deque<T>& q) {
@@ -83,22 +79,17 @@ TimeNs TimeOrderedMerger::future_bound(const Source& s, std::size_t kind) const 
 
 bool TimeOrderedMerger::next(StreamItem& item) {
   while (true) {
-    // The earliest buffered item.
-    TimeNs best = kNever;
-    std::size_t best_source = 0, best_kind = 0;
-    for (std::size_t i = 0; i < sources_.size(); ++i)
+    fronts_.clear();
+    for (const Source& s : sources_)
       for (std::size_t k = 0; k < kKinds; ++k)
-        if (const TimeNs t = head_time(sources_[i], k); t < best) {
-          best = t, best_source = i, best_kind = k;
-        }
-    // Is any stream with nothing buffered possibly still going to produce something earlier?
-    Source* lagging = nullptr;
-    for (auto& s : sources_)
-      for (std::size_t k = 0; k < kKinds && !lagging; ++k)
-        if (head_time(s, k) == kNever && future_bound(s, k) < best) lagging = &s;
-    if (lagging) {
+        fronts_.push_back({head_time(s, k), future_bound(s, k)});
+    const TimeOrderStep step = next_in_time_order(fronts_);
+    const TimeNs best =
+        step.earliest == TimeOrderStep::kNone ? kNever : fronts_[step.earliest].held;
+    // A stream that may still bring an earlier item is read first, while memory allows.
+    if (step.waiting_for != TimeOrderStep::kNone) {
       if (buffered_events() < max_buffered_events_) {
-        pull(*lagging);
+        pull(sources_[step.waiting_for / kKinds]);
         continue;
       }
       report_.repair("merged past a silent stream (order across streams not guaranteed)",
@@ -111,6 +102,7 @@ bool TimeOrderedMerger::next(StreamItem& item) {
       return false;
     }
 
+    const std::size_t best_source = step.earliest / kKinds, best_kind = step.earliest % kKinds;
     Source& s = sources_[best_source];
     item = StreamItem{};
     item.kind = static_cast<StreamKind>(best_kind);
@@ -119,13 +111,7 @@ bool TimeOrderedMerger::next(StreamItem& item) {
     switch (best_kind) {
       case 0: {
         // Events up to the earliest time anything else can still have.
-        TimeNs limit = kNever;
-        for (std::size_t i = 0; i < sources_.size(); ++i)
-          for (std::size_t k = 0; k < kKinds; ++k) {
-            if (i == best_source && k == 0) continue;
-            const TimeNs h = head_time(sources_[i], k);
-            limit = std::min(limit, h != kNever ? h : future_bound(sources_[i], k));
-          }
+        const TimeNs limit = step.run_until;
         run_.clear();
         while (!s.events.empty() && run_.size() < max_event_run_ &&
                (s.events.front().t <= limit || run_.empty())) {

@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "fdv/io/recording.h"
+#include "fdv/io/time_order.h"
 
 namespace fdv {
 
@@ -69,6 +70,7 @@ class TimeOrderedMerger {
   TimeNs head_time(const Source& s, std::size_t kind) const;
 
   std::vector<Source> sources_;
+  std::vector<StreamFront> fronts_;  ///< every (source, kind), for next_in_time_order
   std::size_t max_event_run_, max_buffered_events_;
   SensorChunk chunk_;
   std::vector<Event> run_;
