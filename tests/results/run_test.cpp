@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 
 #include "fdv/core/error.h"
 #include "fdv/results/reader.h"
@@ -107,6 +109,65 @@ TEST(RunRecorder, AfterTheRunWarnsOverloadDecimationAndFallbackFlagsOfASensorMet
   RunRecorder no_sensors("");
   EXPECT_EQ(no_sensors.finish(summary).warnings,
             std::vector<std::string>{"40 of 1000 events decimated by the overload policy"});
+}
+
+/// The hidden partial folders beside `dir` (run.h: ".NAME.partial-PID").
+std::vector<std::string> partial_folders_beside(const std::filesystem::path& dir) {
+  std::vector<std::string> out;
+  for (const auto& e : std::filesystem::directory_iterator(dir.parent_path()))
+    if (e.path().filename().string().rfind("." + dir.filename().string() + ".partial-", 0) == 0)
+      out.push_back(e.path().filename().string());
+  return out;
+}
+
+std::string text_of(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  return {std::istreambuf_iterator<char>(in), {}};
+}
+
+TEST(RecordingRun, ARunStoppedByACallbackLeavesTheEarlierFolderAsItWas) {
+  const std::string path = real_data("evt3_trigger_ros2.db3");
+  FDV_REQUIRE_REAL_FILE(path);
+  const std::filesystem::path out = scratch_dir("recording_run_stopped") + "/results";
+  std::filesystem::create_directories(out);
+  std::ofstream(out / "summary.json") << "the earlier run's";
+  PerceptionCallbacks also;
+  int windows = 0;
+  also.on_window = [&](const WindowResult&) {
+    if (++windows == 2) throw std::runtime_error("stop");
+  };
+  EXPECT_THROW(RecordingRun(request_for(path)).into(out, also), std::runtime_error);
+  EXPECT_EQ(windows, 2);
+  EXPECT_EQ(text_of(out / "summary.json"), "the earlier run's");
+  EXPECT_EQ(std::distance(std::filesystem::directory_iterator(out), {}), 1);
+  EXPECT_TRUE(partial_folders_beside(out).empty());
+}
+
+TEST(RunRecorder, ReplacesAResultsFolderWholeAndRefusesAnyOtherFolder) {
+  const std::filesystem::path root = scratch_dir("run_recorder_replace");
+  const std::filesystem::path results = root / "results";
+  std::filesystem::create_directories(results / "windows");
+  std::ofstream(results / "detections.jsonl") << "{}\n";
+  std::ofstream(results / "track_7_fusion.tum") << "stale\n";
+  {
+    RunRecorder recorder(results.string() + "/");  // a trailing slash names the same folder
+    EXPECT_EQ(recorder.folder().parent_path(), std::filesystem::absolute(root).lexically_normal());
+    EXPECT_TRUE(std::filesystem::exists(results / "track_7_fusion.tum"));  // untouched until finish
+    RunSummary summary;
+    summary.method = "none";
+    recorder.finish(summary);
+  }
+  EXPECT_FALSE(std::filesystem::exists(results / "track_7_fusion.tum"));
+  EXPECT_FALSE(std::filesystem::exists(results / "windows"));
+  EXPECT_TRUE(std::filesystem::exists(results / "summary.json"));
+  EXPECT_TRUE(partial_folders_beside(results).empty());
+
+  const std::filesystem::path users = root / "users";
+  std::filesystem::create_directories(users);
+  std::ofstream(users / "notes.txt") << "mine";
+  EXPECT_THROW(RunRecorder{users}, InputError);
+  EXPECT_TRUE(std::filesystem::exists(users / "notes.txt"));
+  EXPECT_TRUE(partial_folders_beside(users).empty());
 }
 
 }  // namespace

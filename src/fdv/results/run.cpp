@@ -1,6 +1,9 @@
 #include "fdv/results/run.h"
 
 #include <fmt/format.h>
+#include <unistd.h>
+
+#include <system_error>
 
 #include "fdv/core/error.h"
 #include "fdv/pipeline/options_yaml.h"
@@ -22,10 +25,52 @@ std::vector<std::string> after_run_warnings(const PerceptionCounters& c, bool co
   return lines;
 }
 
+namespace fs = std::filesystem;
+
+/// A folder that a run may replace: absent, empty, or written by a run before (see run.h).
+bool replaceable(const fs::path& dir) {
+  std::error_code ec;
+  if (!fs::exists(dir, ec)) return true;
+  if (!fs::is_directory(dir, ec)) return false;
+  return fs::is_empty(dir, ec) || fs::exists(dir / kSummaryFile, ec) || fs::exists(dir / kDetectionsFile, ec);
+}
+
+/// `dir` with a file name: "out/" and "out/." name the folder "out".
+fs::path named_folder(const fs::path& dir) {
+  fs::path p = fs::absolute(dir).lexically_normal();
+  return p.has_filename() ? p : p.parent_path();
+}
+
+/// Moves `from` over `to`: the old `to` is set aside, then removed once `from` is in its place.
+void replace_folder(const fs::path& from, const fs::path& to) {
+  const fs::path old = to.parent_path() / ("." + to.filename().string() + ".old-" + std::to_string(getpid()));
+  fs::remove_all(old);
+  const bool had_old = fs::exists(to);
+  if (had_old) fs::rename(to, old);
+  fs::rename(from, to);
+  if (had_old) fs::remove_all(old);
+}
+
 }  // namespace
 
 RunRecorder::RunRecorder(const std::filesystem::path& dir, PerceptionCallbacks also) : also_(std::move(also)) {
-  if (!dir.empty()) writer_.emplace(dir);
+  if (dir.empty()) return;
+  destination_ = named_folder(dir);
+  if (!replaceable(destination_))
+    throw InputError(dir.string(), "",
+                     "exists and is not a results folder (no summary.json or detections.jsonl): refusing to "
+                     "replace it; name a new or empty folder");
+  partial_ = destination_.parent_path() /
+             ("." + destination_.filename().string() + ".partial-" + std::to_string(getpid()));
+  fs::remove_all(partial_);  // a crashed run of a process that had this pid
+  writer_.emplace(partial_);
+}
+
+RunRecorder::~RunRecorder() {
+  if (partial_.empty()) return;
+  writer_.reset();  // close the files first
+  std::error_code ec;  // a destructor must not throw; what cannot be removed stays hidden
+  fs::remove_all(partial_, ec);
 }
 
 PerceptionCallbacks RunRecorder::callbacks() {
@@ -72,6 +117,9 @@ RunSummary RunRecorder::finish(RunSummary summary, const ReadReport* reader_repo
   if (writer_) {
     summary.timing_ms = writer_->timing_ms();
     writer_->finish(summary);
+    writer_.reset();
+    replace_folder(partial_, destination_);
+    partial_.clear();
   }
   return summary;
 }
@@ -95,6 +143,11 @@ RecordingRun::~RecordingRun() = default;
 RunOutcome RecordingRun::into(const std::filesystem::path& out, PerceptionCallbacks also) {
   if (!reader_) throw std::logic_error("RecordingRun::into: the recording was run already");
   RunRecorder recorder(out, std::move(also));
+  return into(recorder);
+}
+
+RunOutcome RecordingRun::into(RunRecorder& recorder) {
+  if (!reader_) throw std::logic_error("RecordingRun::into: the recording was run already");
   for (const std::string& w : policy_.warnings) recorder.warn(w);
   RunOutcome outcome;
   outcome.counts = replay(std::move(reader_), policy_.calibration, policy_.options, recorder.callbacks(),

@@ -18,7 +18,14 @@
 ///
 /// Every warning of a run, whoever raises it (the sensor policy, the pipeline while it runs, the
 /// counters after it, the reader's drops), goes to `also.on_warning` as it is raised and into
-/// summary.json's "warnings" in the same order. Not thread-safe: one run per object.
+/// summary.json's "warnings" in the same order.
+///
+/// A folder is replaced whole, never mixed: the run writes into a hidden sibling, `.NAME.partial-PID`,
+/// renamed over NAME when it finishes. A run that ends early (an error, or an exception thrown
+/// from a callback to stop it: that is how a signal stops `fdv run`) removes its partial folder and
+/// leaves NAME as it was. An existing NAME is replaced only when it is empty or a results folder
+/// (it holds summary.json or detections.jsonl), so that `--out .` cannot delete a user's files.
+/// Not thread-safe: one run per object.
 #include <filesystem>
 #include <memory>
 #include <optional>
@@ -59,8 +66,17 @@ struct RunOutcome {
 class RunRecorder {
  public:
   /// `dir` empty: no folder is written; the warnings and the summary are still gathered.
-  /// `also`: called after the writer for each result (and for each warning).
+  /// `also`: called after the writer for each result (and for each warning). Throws InputError
+  /// when `dir` exists and is neither empty nor a results folder, or cannot be written beside.
   explicit RunRecorder(const std::filesystem::path& dir, PerceptionCallbacks also = {});
+  /// Removes the partial folder of a run that did not finish.
+  ~RunRecorder();
+  RunRecorder(const RunRecorder&) = delete;
+  RunRecorder& operator=(const RunRecorder&) = delete;
+
+  /// The folder being written until finish() (the partial one), for files a caller adds beside
+  /// the results (e.g. `fdv run --visualize`'s PNGs); empty without a folder.
+  const std::filesystem::path& folder() const { return partial_; }
 
   /// The callbacks to build the Perception with.
   PerceptionCallbacks callbacks();
@@ -71,10 +87,11 @@ class RunRecorder {
   /// decimation) and what the reader dropped, then writes the TUM files and summary.json. The
   /// caller fills the summary's description (input, format, resolution, calibration, method,
   /// threads, options, detector_in_use) and counts; warnings, timing and the reader's report are
-  /// filled here. Returns the summary as written.
+  /// filled here. Then the partial folder replaces the destination. Returns the summary as written.
   RunSummary finish(RunSummary summary, const ReadReport* reader_report = nullptr);
 
  private:
+  std::filesystem::path destination_, partial_;
   std::optional<ResultsWriter> writer_;
   PerceptionCallbacks also_;
   std::vector<std::string> warnings_;
@@ -95,6 +112,8 @@ class RecordingRun {
 
   /// Replays the recording into the folder `out` ("" writes none). Once only.
   RunOutcome into(const std::filesystem::path& out, PerceptionCallbacks also = {});
+  /// The same through a recorder the caller made (to know its folder() before the run).
+  RunOutcome into(RunRecorder& recorder);
 
  private:
   RunRequest request_;

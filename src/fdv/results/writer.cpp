@@ -8,15 +8,22 @@ namespace fdv {
 
 ResultsWriter::ResultsWriter(const std::filesystem::path& dir) : dir_(dir) {
   std::filesystem::create_directories(dir);
-  for (auto [name, stream] : {std::pair{kDetectionsFile, &detections_}, {kDepthFile, &depth_},
-                              {kTrajectoriesFile, &trajectories_}, {kPredictionsFile, &predictions_},
-                              {kDodgeFile, &dodge_}, {kTimingFile, &timing_csv_}}) {
+  for (auto [name, stream] : row_files()) {
     stream->open(dir / name);
     if (!*stream) throw InputError((dir / name).string(), "", "cannot create output file");
   }
   timing_csv_ << "window,t_start";
   for (const char* stage : kWindowTimingStages) timing_csv_ << "," << stage;
   timing_csv_ << "\n";
+}
+
+std::array<std::pair<const char*, std::ofstream*>, 6> ResultsWriter::row_files() {
+  return {{{kDetectionsFile, &detections_},
+           {kDepthFile, &depth_},
+           {kTrajectoriesFile, &trajectories_},
+           {kPredictionsFile, &predictions_},
+           {kDodgeFile, &dodge_},
+           {kTimingFile, &timing_csv_}}};
 }
 
 void ResultsWriter::write(const WindowRow& row) { detections_ << nlohmann::json(row).dump() << "\n"; }
@@ -63,7 +70,10 @@ std::map<std::string, Summary> ResultsWriter::timing_ms() const {
 }
 
 void ResultsWriter::finish(const RunSummary& summary) {
-  for (std::ofstream* f : {&detections_, &depth_, &trajectories_, &predictions_, &dodge_, &timing_csv_}) f->close();
+  for (auto [name, stream] : row_files()) {
+    stream->close();
+    if (!*stream) throw InputError((dir_ / name).string(), "", "write failed (disk full?)");
+  }
   for (const auto& [name, finals] : {std::pair{"fusion", &final_fusion_}, {"mono", &final_mono_}})
     for (const auto& [id, est] : *finals) {
       std::ofstream f(dir_ / fmt::format("track_{}_{}.tum", id, name));
@@ -72,7 +82,13 @@ void ResultsWriter::finish(const RunSummary& summary) {
         f << fmt::format("{:.9f} {:.6f} {:.6f} {:.6f} 0 0 0 1\n", to_seconds(t), p.x(), p.y(), p.z());
       }
     }
-  std::ofstream(dir_ / kSummaryFile) << nlohmann::json(summary).dump(2) << "\n";
+  // A path that is not UTF-8 (a folder named in another encoding) is written with U+FFFD in its
+  // place: JSON holds only UTF-8, and the summary must not be lost for a name.
+  const std::string text = nlohmann::json(summary).dump(2, ' ', false, nlohmann::json::error_handler_t::replace);
+  std::ofstream summary_file(dir_ / kSummaryFile);
+  summary_file << text << "\n";
+  summary_file.close();
+  if (!summary_file) throw InputError((dir_ / kSummaryFile).string(), "", "write failed (disk full?)");
 }
 
 }  // namespace fdv

@@ -10,7 +10,8 @@
 ///   out.finish(s);                                // TUM files and summary.json
 ///
 /// Each line is written when its callback returns (buffered by the stream). Throws InputError when
-/// a file cannot be created. Not thread-safe.
+/// a file cannot be created or written (checked as it is closed). Not thread-safe.
+#include <array>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -50,6 +51,9 @@ class ResultsWriter {
   void finish(const RunSummary& summary);
 
  private:
+  /// The files written row by row, with their names.
+  std::array<std::pair<const char*, std::ofstream*>, 6> row_files();
+
   std::filesystem::path dir_;
   std::ofstream detections_, depth_, trajectories_, predictions_, dodge_, timing_csv_;
   std::map<std::string, std::vector<double>> timing_;
