@@ -3,7 +3,9 @@
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
+#include <cstdio>
 #include <exception>
+#include <iostream>
 
 #include "apps/commands.h"
 
@@ -26,8 +28,17 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
+  } catch (const fdv::cli::Interrupted& e) {
+    spdlog::warn("{}", e.what());
+    return 128 + e.signal;
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
+    return 1;
+  }
+  // Output a pipe or a full disk refused is a failure, not a silent success (`fdv info > /dev/full`).
+  std::cout.flush();
+  if (!std::cout || std::fflush(stdout) != 0 || std::ferror(stdout)) {
+    spdlog::error("cannot write to standard output");
     return 1;
   }
   return 0;

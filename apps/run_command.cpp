@@ -4,6 +4,7 @@
 #include <spdlog/spdlog.h>
 #include <yaml-cpp/yaml.h>
 
+#include <csignal>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -21,6 +22,23 @@
 namespace fdv::cli {
 namespace fs = std::filesystem;
 namespace {
+
+/// The signal that asked `fdv run` to stop (0: none). Set by the handler, read between windows.
+volatile std::sig_atomic_t stop_signal = 0;
+
+/// SIGINT and SIGTERM stop the run at the next window's end: the run unwinds, its partial results
+/// folder is removed and the folder named by --out is left as it was (fdv/results/run.h). A second
+/// signal, when no window ends (a reader blocked on its input), ends the program at once.
+void stop_at_next_window_on_signals() {
+  for (int s : {SIGINT, SIGTERM})
+    std::signal(s, [](int signal_number) {
+      if (stop_signal != 0) {
+        std::signal(signal_number, SIG_DFL);
+        std::raise(signal_number);
+      }
+      stop_signal = signal_number;
+    });
+}
 
 struct RunArgs {
   std::string input, calib, config, method, out;
@@ -92,14 +110,17 @@ void run_recording(const RunArgs& args) {
   spdlog::info("{} ({}, {}x{}), calibration {}, compensation '{}'", args.input, info.format, info.width,
                info.height, run.calibration_source(), to_string(run.policy().options.compensation.method));
 
-  const fs::path png_dir = fs::path(args.out) / "windows";
+  fs::path png_dir;  // in the folder being written, known once the recorder exists
   PerceptionCallbacks also;
-  if (args.visualize) {
-    fs::create_directories(png_dir);
-    also.on_window = [&](const WindowResult& w) { write_visualization(w, png_dir); };
-  }
+  also.on_window = [&](const WindowResult& w) {
+    if (stop_signal != 0) throw Interrupted(stop_signal);
+    if (args.visualize) write_visualization(w, png_dir);
+  };
   also.on_warning = [](const std::string& w) { spdlog::warn("{}", w); };
-  const RunOutcome outcome = run.into(args.out, also);
+  RunRecorder recorder(args.out, also);
+  if (args.visualize) fs::create_directories(png_dir = recorder.folder() / "windows");
+  stop_at_next_window_on_signals();
+  const RunOutcome outcome = run.into(recorder);
   spdlog::info("{} windows, {} detections; results in {}", outcome.counts.windows, outcome.counts.detections,
                args.out);
 }
