@@ -5,6 +5,7 @@
 #include <pybind11/stl.h>
 
 #include <cstring>
+#include <mutex>
 #include <optional>
 
 #include "common.h"
@@ -74,6 +75,9 @@ T field(const std::byte* record, std::size_t offset) {
   return v;
 }
 
+/// fdv.Perception. Calls from several Python threads are serialised: each takes the object's lock
+/// with the GIL released, so a push racing finish() waits for it (and is then refused as used
+/// after finish) instead of corrupting the pipeline. A refused push changes nothing.
 class PyPerception {
  public:
   PyPerception(const Calibration& calibration, const PerceptionOptions& options, const std::string& time_unit,
@@ -86,12 +90,12 @@ class PyPerception {
   }
 
   void push_events(const py::array& a) {
-    check_running("push_events");
     const EventLayout f = event_layout(a);
     const auto* base = static_cast<const std::byte*>(a.data());
     const auto n = static_cast<std::size_t>(a.size());
-    {
-      py::gil_scoped_release release;
+    locked("push_events", [&] {
+      // Checked whole before anything is pushed, so that a refused array leaves the time cursor.
+      TimeNs last = last_event_t_;
       events_.resize(n);
       for (std::size_t i = 0; i < n; ++i) {
         const std::byte* r = base + i * f.itemsize;
@@ -99,38 +103,33 @@ class PyPerception {
         const std::int16_t p = field<std::int16_t>(r, f.p);
         const std::int64_t t_unit = field<std::int64_t>(r, f.t);
         const TimeNs t = to_ns(t_unit, unit_);
-        if (t < last_event_t_)
+        if (t < last)
           throw py::value_error("push_events: event times go backwards at index " + std::to_string(i) + " (t " +
-                                std::to_string(t_unit) + " after " + std::to_string(from_ns(last_event_t_, unit_)) +
-                                "); events must be pushed in time order");
-        last_event_t_ = t;
+                                std::to_string(t_unit) + " after " + std::to_string(from_ns(last, unit_)) +
+                                "); events must be pushed in time order; nothing of this array was pushed");
+        last = t;
         events_[i] = {t, x, y, p > 0};
       }
       perception_->push_events(events_);
-    }
-    deliver();
+      last_event_t_ = last;
+    });
   }
 
   void push_imu(const py::array& a) {
-    check_running("push_imu");
     require_records(a, py::dtype::of<ImuRecord>(), "push_imu");
     const auto* in = static_cast<const ImuRecord*>(a.data());
-    {
-      py::gil_scoped_release release;
+    locked("push_imu", [&] {
       for (py::ssize_t i = 0; i < a.size(); ++i) {
         const ImuRecord& r = in[i];
         perception_->push_imu({to_ns(r.t, unit_), {r.gx, r.gy, r.gz}, {r.ax, r.ay, r.az}});
       }
-    }
-    deliver();
+    });
   }
 
   void push_odometry(const py::array& a) {
-    check_running("push_odometry");
     require_records(a, py::dtype::of<OdometryRecord>(), "push_odometry");
     const auto* in = static_cast<const OdometryRecord*>(a.data());
-    {
-      py::gil_scoped_release release;
+    locked("push_odometry", [&] {
       for (py::ssize_t i = 0; i < a.size(); ++i) {
         const OdometryRecord& r = in[i];
         OdometrySample s;
@@ -141,16 +140,14 @@ class PyPerception {
         s.omega_B = {r.wx, r.wy, r.wz};
         perception_->push_odometry(s);
       }
-    }
-    deliver();
+    });
   }
 
   /// A depth image in uint16 millimetres (0 = no depth) of the calibration's depth camera size.
   void push_depth(const py::array& a, std::int64_t t) {
-    check_running("push_depth");
     if (!a.dtype().equal(py::dtype::of<std::uint16_t>()))
       throw py::type_error("push_depth: expected uint16 millimetres, got dtype " + py::repr(a.dtype()).cast<std::string>());
-    const auto& depth_camera = perception_->calibration().depth_camera;
+    const auto& depth_camera = perception_->calibration().depth_camera;  // set at construction: no lock
     if (!depth_camera) throw py::value_error("push_depth: the calibration has no depth camera");
     const auto shape = [](py::ssize_t h, py::ssize_t w) { return "(" + std::to_string(h) + ", " + std::to_string(w) + ")"; };
     if (a.ndim() != 2 || a.shape(0) != depth_camera->height || a.shape(1) != depth_camera->width)
@@ -160,8 +157,7 @@ class PyPerception {
     if (!(a.flags() & py::array::c_style))
       throw py::value_error("push_depth: the array is not contiguous (use numpy.ascontiguousarray)");
     const auto* in = static_cast<const std::uint16_t*>(a.data());
-    {
-      py::gil_scoped_release release;
+    locked("push_depth", [&] {
       DepthFrame f;
       f.t = to_ns(t, unit_);
       f.width = depth_camera->width;
@@ -169,18 +165,14 @@ class PyPerception {
       f.depth_m.resize(static_cast<std::size_t>(a.size()));
       for (std::size_t i = 0; i < f.depth_m.size(); ++i) f.depth_m[i] = static_cast<float>(in[i]) * 1e-3f;
       perception_->push_depth(f);
-    }
-    deliver();
+    });
   }
 
   py::dict finish() {
-    check_running("finish");
-    {
-      py::gil_scoped_release release;
+    locked("finish", [&] {
       perception_->finish();
-    }
-    finished_ = true;
-    deliver();
+      finished_ = true;
+    });
     return results();
   }
 
@@ -191,16 +183,30 @@ class PyPerception {
     d["counts"] = counts();
     return d;
   }
-  py::object counts() const { return to_python(counts_json(perception_->counters())); }
+  py::object counts() const {
+    PerceptionCounters c;
+    {
+      py::gil_scoped_release release;
+      std::lock_guard lock(mutex_);
+      c = perception_->counters();
+    }
+    return to_python(counts_json(c));
+  }
   const py::list& list(RowKind k) const { return lists_[static_cast<std::size_t>(k)]; }
 
  private:
-  void check_running(const char* what) const {
-    if (finished_) throw py::value_error(std::string("Perception.") + what + ": used after finish()");
-  }
-  void deliver() {
+  /// Runs `work` on the pipeline under the lock with the GIL released, then hands the rows it
+  /// produced to the Python callbacks or lists (with the GIL, outside the lock).
+  template <class Work>
+  void locked(const char* what, Work&& work) {
     std::vector<std::pair<RowKind, nlohmann::json>> rows;
-    rows.swap(queue_.rows);
+    {
+      py::gil_scoped_release release;
+      std::lock_guard lock(mutex_);
+      if (finished_) throw py::value_error(std::string("Perception.") + what + ": used after finish()");
+      work();
+      rows.swap(queue_.rows);
+    }
     for (const auto& [kind, j] : rows) {
       const auto k = static_cast<std::size_t>(kind);
       py::object row = to_python(j);
@@ -214,6 +220,7 @@ class PyPerception {
   TimeUnit unit_;
   std::array<py::object, 6> handlers_;
   std::array<py::list, 6> lists_;
+  mutable std::mutex mutex_;  ///< guards everything below
   RowQueue queue_;
   std::unique_ptr<Perception> perception_;
   std::vector<Event> events_;
@@ -238,7 +245,15 @@ py::dict run(const std::string& path, std::optional<Calibration> calibration, co
     request.options = requested;
     RecordingRun recording(std::move(request));
     policy = recording.policy();
-    outcome = recording.into(out, queue.callbacks());
+    PerceptionCallbacks callbacks = queue.callbacks();
+    // Ctrl-C at each window's end: the run unwinds, its partial folder is removed, and Python
+    // gets its KeyboardInterrupt (the signal's handler runs only when asked, with the GIL).
+    callbacks.on_window = [queue_row = callbacks.on_window](const WindowResult& w) {
+      queue_row(w);
+      py::gil_scoped_acquire gil;
+      if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+    };
+    outcome = recording.into(out, callbacks);
   }
   py::dict d;
   for (const char* name : kListNames) d[name] = py::list();

@@ -1,9 +1,11 @@
 """Bad input: a Python exception with a clear message, never a crash; the C++ messages kept."""
+import subprocess
+
 import numpy as np
 import pytest
 
 import fdv
-from conftest import cli
+from conftest import FDV_CLI, cli
 
 
 @pytest.fixture(scope="module")
@@ -114,3 +116,10 @@ def test_packed_event_layout_is_accepted(dataset):
     p.push_events(packed)
     p.finish()
     assert p.counts["events_read"] == 2
+
+
+def test_fdv_info_into_a_full_disk_fails(dataset):
+    # Output refused (a full disk, a closed pipe) is an error, not exit 0 with nothing written.
+    with open("/dev/full", "w") as full:
+        done = subprocess.run([FDV_CLI, "info", str(dataset)], stdout=full, stderr=subprocess.PIPE, text=True)
+    assert done.returncode == 1 and "cannot write to standard output" in done.stderr
