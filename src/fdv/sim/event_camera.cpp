@@ -320,6 +320,7 @@ void EventCameraSim::plan_chunk(TimeNs t0, TimeNs t1) {
                      [&](std::size_t i) { plan_tile(i, motion, panel_boxes, sweeps, dt_s); });
 }
 
+// Every motion bound below starts from the camera's exact motion at the plan samples.
 EventCameraSim::CameraMotion EventCameraSim::sample_camera_motion(TimeNs t0, TimeNs t1) const {
   const double dt_s = to_seconds(t1 - t0);
   const Eigen::Matrix3d R_B_E = calib_.T_B_E.linear();
@@ -461,6 +462,7 @@ double EventCameraSim::static_scene_rate(const Tile& tile, const CameraMotion& m
   return 1.15 * tile.scale_px * std::sqrt(flow2) + 1.0;
 }
 
+// The panels the tile renders: those whose box over the chunk meets the tile's bounds.
 std::uint64_t EventCameraSim::panels_in_view(const Tile& tile,
                                              const std::vector<PanelBox>& panel_boxes) {
   std::uint64_t panels = 0;
@@ -591,6 +593,7 @@ void EventCameraSim::render_tile(const Tile& tile, const Frame& f, float* log_i,
   rho_max = std::max(rho_max, 1.0f / z_min);
 }
 
+// The group's rays in W, with their finite inverses, for the scene's lane-parallel ray casts.
 EventCameraSim::PixelGroup EventCameraSim::pixel_group(const Tile& tile, const Frame& f, int x,
                                                        int y) const {
   using namespace lanes;
