@@ -149,9 +149,6 @@ void EventCameraSim::bound_tile(Tile& tile, const LensGrid& lens) const {
       const auto p = pixel(tile, x, y);
       const float margin = footprint_[p];  // ≥ one pixel in normalised units
       const float px = ray_x_[p], py = ray_y_[p];
-      tile.x_abs = std::max(tile.x_abs, std::abs(px) + margin);
-      tile.y_abs = std::max(tile.y_abs, std::abs(py) + margin);
-      tile.xy_abs = std::max(tile.xy_abs, (std::abs(px) + margin) * (std::abs(py) + margin));
       tile.r_max = std::max(tile.r_max, std::sqrt(px * px + py * py) + margin);
       tile.xmin = std::min(tile.xmin, px - margin), tile.xmax = std::max(tile.xmax, px + margin);
       tile.ymin = std::min(tile.ymin, py - margin), tile.ymax = std::max(tile.ymax, py + margin);

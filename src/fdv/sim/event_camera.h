@@ -80,8 +80,8 @@ class EventCameraSim {
   struct alignas(64) Tile {
     int x0, y0, x1, y1;
     std::size_t offset = 0;  ///< first pixel of the tile in the per-pixel arrays
-    float x_abs = 0, y_abs = 0, xy_abs = 0, r_max = 0;  ///< normalised-coordinate extents
-    float xmin = 0, xmax = 0, ymin = 0, ymax = 0;       ///< normalised bounds (+ margin)
+    float r_max = 0;         ///< largest normalised radius (+ margin)
+    float xmin = 0, xmax = 0, ymin = 0, ymax = 0;  ///< normalised bounds (+ margin)
     float scale_px = 0;          ///< largest pixels per normalised unit in the tile
     Eigen::Vector3d center_dir;  ///< unit ray of the tile centre (E)
     double radius_rad = 0;       ///< largest angle between center_dir and a pixel ray (+1.5 px)
