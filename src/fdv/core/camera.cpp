@@ -26,42 +26,67 @@ std::string PinholeCamera::validate() const {
 
 Eigen::Vector2d PinholeCamera::undistort(const Eigen::Vector2d& xd) const {
   if (distortion.is_zero()) return xd;
-  const auto& d = distortion;
   // Damped Newton from the distorted point itself (distortion is a perturbation of identity
-  // near the centre). A step is accepted only if it reduces the residual, and the solution must
-  // lie where the lens map is locally invertible (det J > 0): polynomial models fold back on
-  // themselves beyond the calibrated field of view, and no inverse exists there.
-  Eigen::Vector2d xn = xd;
-  Eigen::Vector2d residual = distort(xn) - xd;
-  Eigen::Matrix2d J = Eigen::Matrix2d::Identity();
-  for (int it = 0; it < 50 && residual.squaredNorm() > 1e-30; ++it) {
-    const double x = xn.x(), y = xn.y();
-    const double r2 = x * x + y * y;
-    const double radial = 1 + r2 * (d.k1 + r2 * (d.k2 + r2 * d.k3));
-    const double dradial_dr2 = d.k1 + r2 * (2 * d.k2 + 3 * r2 * d.k3);
-    J(0, 0) = radial + 2 * x * x * dradial_dr2 + 2 * d.p1 * y + 6 * d.p2 * x;
-    J(0, 1) = 2 * x * y * dradial_dr2 + 2 * d.p1 * x + 2 * d.p2 * y;
-    J(1, 0) = J(0, 1);
-    J(1, 1) = radial + 2 * y * y * dradial_dr2 + 6 * d.p1 * y + 2 * d.p2 * x;
-    if (J.determinant() <= 0) break;
+  // near the centre). The solution must lie where the lens map is locally invertible: polynomial
+  // models fold back on themselves beyond the calibrated field of view, and no inverse exists
+  // there.
+  const LensInversion inverse = invert_distortion(xd, xd);
+  if (inverse.residual > 1e-9 || inverse.folded) {
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    return {nan, nan};
+  }
+  return inverse.xn;
+}
+
+namespace {
+
+/// d distort / d xn at xn.
+Eigen::Matrix2d distortion_jacobian(const Distortion& d, const Eigen::Vector2d& xn) {
+  const double x = xn.x(), y = xn.y();
+  const double r2 = x * x + y * y;
+  const double radial = 1 + r2 * (d.k1 + r2 * (d.k2 + r2 * d.k3));
+  const double dradial_dr2 = d.k1 + r2 * (2 * d.k2 + 3 * r2 * d.k3);
+  Eigen::Matrix2d J;
+  J(0, 0) = radial + 2 * x * x * dradial_dr2 + 2 * d.p1 * y + 6 * d.p2 * x;
+  J(0, 1) = 2 * x * y * dradial_dr2 + 2 * d.p1 * x + 2 * d.p2 * y;
+  J(1, 0) = J(0, 1);
+  J(1, 1) = radial + 2 * y * y * dradial_dr2 + 6 * d.p1 * y + 2 * d.p2 * x;
+  return J;
+}
+
+}  // namespace
+
+LensInversion PinholeCamera::invert_distortion(const Eigen::Vector2d& xd,
+                                               const Eigen::Vector2d& start,
+                                               const LensInversionSettings& settings) const {
+  LensInversion out;
+  out.xn = start;
+  Eigen::Vector2d residual = distort(out.xn) - xd;
+  for (int steps = 0; steps < settings.max_steps && !(residual.norm() < settings.tolerance);
+       ++steps) {
+    const Eigen::Matrix2d J = distortion_jacobian(distortion, out.xn);
+    if (J.determinant() <= 0) {
+      out.folded = true;
+      break;
+    }
     const Eigen::Vector2d step = J.inverse() * residual;
+    // A damped step is accepted only if it reduces the residual.
     double scale = 1.0;
-    bool improved = false;
+    bool taken = false;
     for (int halvings = 0; halvings < 20; ++halvings, scale *= 0.5) {
-      const Eigen::Vector2d candidate = xn - scale * step;
+      const Eigen::Vector2d candidate = out.xn - scale * step;
       const Eigen::Vector2d r = distort(candidate) - xd;
-      if (r.squaredNorm() < residual.squaredNorm()) {
-        xn = candidate;
+      if (!settings.damped || r.squaredNorm() < residual.squaredNorm()) {
+        out.xn = candidate;
         residual = r;
-        improved = true;
+        taken = true;
         break;
       }
     }
-    if (!improved) break;
+    if (!taken) break;
   }
-  const double nan = std::numeric_limits<double>::quiet_NaN();
-  if (residual.norm() > 1e-9 || J.determinant() <= 0) return {nan, nan};
-  return xn;
+  out.residual = residual.norm();
+  return out;
 }
 
 Eigen::Vector2d PinholeCamera::project(const Eigen::Vector3d& X) const {

@@ -21,6 +21,22 @@ struct Distortion {
   bool is_zero() const { return k1 == 0 && k2 == 0 && p1 == 0 && p2 == 0 && k3 == 0; }
 };
 
+/// How PinholeCamera::invert_distortion iterates Newton's method on distort(xn) = xd.
+struct LensInversionSettings {
+  int max_steps = 50;
+  double tolerance = 1e-15;  ///< stops once |distort(xn) - xd| < tolerance (normalised units)
+  /// Halves a step until it reduces the residual: needed from a cold start far out in a strongly
+  /// distorted lens; from a nearby solution the plain step converges.
+  bool damped = true;
+};
+
+/// Where PinholeCamera::invert_distortion stopped.
+struct LensInversion {
+  Eigen::Vector2d xn;   ///< the last iterate (normalised undistorted coordinates)
+  double residual = 0;  ///< |distort(xn) - xd|
+  bool folded = false;  ///< stopped where the lens map folds back (det J <= 0): no inverse there
+};
+
 struct PinholeCamera {
   int width = 0;
   int height = 0;
@@ -43,6 +59,11 @@ struct PinholeCamera {
   }
   /// Inverse of distort(); NaN where the lens map has no inverse.
   Eigen::Vector2d undistort(const Eigen::Vector2d& xd) const;
+  /// Newton's method on distort(xn) = xd from `start`, the solver undistort() uses (from xd
+  /// itself, with the default settings), for callers with a better start, e.g. the solution of a
+  /// neighbouring pixel. The caller judges the result (residual, folded).
+  LensInversion invert_distortion(const Eigen::Vector2d& xd, const Eigen::Vector2d& start,
+                                  const LensInversionSettings& settings = {}) const;
 
   /// Point in the camera frame (z > 0) -> raw pixel.
   Eigen::Vector2d project(const Eigen::Vector3d& X) const;

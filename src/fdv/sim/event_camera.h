@@ -61,9 +61,12 @@ class EventCameraSim {
     std::uint8_t on;
     std::int16_t label;
   };
+  static constexpr int kMaxBalls = 8;
   struct BallFrame {
-    float c[3];  ///< centre in W
-    float r;
+    float oc[3];     ///< centre relative to the camera centre, in W
+    float oc_len;    ///< |oc|
+    float r;         ///< radius [m]
+    float alpha;     ///< angular radius of the silhouette [rad]
     float R_O_W[9];  ///< W -> ball frame, row-major
     int index;       ///< into balls / scene looks
     bool exists;     ///< false before release for a hidden ball
@@ -72,16 +75,16 @@ class EventCameraSim {
     float R[9];  ///< R_W_E row-major
     float o[3];  ///< camera centre in W
     int ball_count = 0;
-    BallFrame ball[8];
+    BallFrame ball[kMaxBalls];
   };
   struct alignas(64) Tile {
     int x0, y0, x1, y1;
     std::size_t offset = 0;  ///< first pixel of the tile in the per-pixel arrays
-    float x_abs = 0, y_abs = 0, xy_abs = 0, r_max = 0;  ///< normalised-coordinate extents
-    float xmin = 0, xmax = 0, ymin = 0, ymax = 0;       ///< normalised bounds (+ margin)
+    float r_max = 0;         ///< largest normalised radius (+ margin)
+    float xmin = 0, xmax = 0, ymin = 0, ymax = 0;  ///< normalised bounds (+ margin)
     float scale_px = 0;          ///< largest pixels per normalised unit in the tile
     Eigen::Vector3d center_dir;  ///< unit ray of the tile centre (E)
-    double radius_rad = 0;       ///< largest angle between center_dir and a pixel ray (+1 px)
+    double radius_rad = 0;       ///< largest angle between center_dir and a pixel ray (+1.5 px)
     float rho_max = 0;           ///< largest inverse depth at the last sample [1/m]
     TimeNs noise_next = 0;       ///< earliest noise event of the tile's pixels
     Rng noise_rng, jitter_rng;
@@ -98,15 +101,51 @@ class EventCameraSim {
     return tile.offset + static_cast<std::size_t>(y - tile.y0) * (tile.x1 - tile.x0) +
            (x - tile.x0);
   }
-  Frame make_frame(TimeNs t) const;
+
+  // Construction: the steps of the constructor, in this order.
+  struct LensGrid;
+  void lay_out_tiles();
+  LensGrid trace_pixel_rays() const;
+  void measure_lens_scale(LensGrid& lens) const;
+  void store_pixel_geometry(const Tile& tile, const LensGrid& lens);
+  void bound_tile(Tile& tile, const LensGrid& lens) const;
+  void aim_tile(Tile& tile) const;
+  void draw_pixel_constants(const Tile& tile, std::size_t tile_index);
+
+  /// Each tile's number of samples for the chunk (t0, t1]: the steps of plan_chunk, in this order.
   void plan_chunk(TimeNs t0, TimeNs t1);
-  /// Renders pixel p of `tile` into (log intensity, label, inverse depth).
+  struct CameraMotion;
+  struct PanelBox;
+  struct BallSweep;
+  CameraMotion sample_camera_motion(TimeNs t0, TimeNs t1) const;
+  std::vector<PanelBox> bound_panels(const CameraMotion& motion) const;
+  std::vector<BallSweep> sweep_balls(const CameraMotion& motion) const;
+  void plan_tile(std::size_t tile_index, const CameraMotion& motion,
+                 const std::vector<PanelBox>& panel_boxes, const std::vector<BallSweep>& sweeps,
+                 double dt_s);
+  double nearest_inverse_depth(std::size_t tile_index) const;
+  static double static_scene_rate(const Tile& tile, const CameraMotion& motion, double rho_max);
+  static std::uint64_t panels_in_view(const Tile& tile, const std::vector<PanelBox>& panel_boxes);
+  bool may_touch(const Tile& tile, const BallSweep& sweep) const;
+  static double ball_rate(const Tile& tile, const BallSweep& sweep);
+
+  Frame make_frame(TimeNs t) const;
+  void process_tile(Tile& tile, TimeNs t0, TimeNs t1);
+  /// Renders `tile` at frame `f` into (log intensity, label) per pixel, tile row-major, and
+  /// raises `rho_max` to the largest inverse depth seen: the steps of render_tile, in this order.
   void render_tile(const Tile& tile, const Frame& f, float* log_i, std::int16_t* label,
                    float& rho_max) const;
-  void process_tile(Tile& tile, TimeNs t0, TimeNs t1);
-  void add_noise(Tile& tile, TimeNs t0, TimeNs t1);
+  struct PixelGroup;
+  struct GroupShading;
+  PixelGroup pixel_group(const Tile& tile, const Frame& f, int x, int y) const;
+  GroupShading shade_static_scene(const Tile& tile, const Frame& f, const PixelGroup& g) const;
+  void shade_balls(const Tile& tile, const Frame& f, const PixelGroup& g, GroupShading& s) const;
+  void shade_ball(const BallFrame& ball, const float* dir, float norm, float pixel_angle,
+                  float& intensity, float& z, std::int16_t& label) const;
+
   void push_event(Tile& tile, double t_ns, int x, int y, bool on, std::int16_t label, TimeNs t0,
                   TimeNs t1);
+  void add_noise(Tile& tile, TimeNs t0, TimeNs t1);
 
   const ScenarioConfig& config_;
   const Scene& scene_;

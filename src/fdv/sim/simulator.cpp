@@ -166,8 +166,6 @@ SimulationSummary Simulator::run(SimulationSink& sink) {
 
 std::string Simulator::manifest_yaml() const {
   const auto& c = config_;
-  const auto& e = c.event_camera;
-  const auto& d = c.depth_camera;
   YAML::Emitter out;
   out << YAML::BeginMap;
   out << YAML::Key << "scenario" << YAML::Value << c.name;
@@ -188,54 +186,8 @@ std::string Simulator::manifest_yaml() const {
     out << YAML::EndMap;
   }
   out << YAML::EndSeq;
-  auto kv = [&](const char* key, double v) {
-    out << YAML::Key << key << YAML::Value << fmt::format("{}", v);
-  };
-  out << YAML::Key << "noise" << YAML::Value << YAML::BeginMap;
-  out << YAML::Key << "event_camera" << YAML::Value << YAML::BeginMap;
-  kv("contrast_threshold_mean", e.contrast_threshold_mean);
-  kv("contrast_threshold_spread", e.contrast_threshold_spread);
-  kv("refractory_s", e.refractory_s);
-  kv("background_rate_hz", e.background_rate_hz);
-  kv("background_rate_spread_decades", e.background_rate_spread_decades);
-  kv("background_on_fraction", e.background_on_fraction);
-  kv("hot_pixel_fraction", e.hot_pixel_fraction);
-  kv("hot_pixel_rate_median_hz", e.hot_pixel_rate_median_hz);
-  kv("hot_pixel_rate_spread_decades", e.hot_pixel_rate_spread_decades);
-  kv("timestamp_jitter_s", e.timestamp_jitter_s);
-  kv("timestamp_resolution_s", e.timestamp_resolution_s);
-  kv("dark_current_lux", e.dark_current_lux);
-  kv("max_motion_px", e.max_motion_px);
-  out << YAML::EndMap;
-  out << YAML::Key << "depth_camera" << YAML::Value << YAML::BeginMap;
-  kv("sigma_formula_subpixel_px", d.subpixel_px);
-  kv("baseline_m", d.baseline_m);
-  kv("focal_px", d.fx);
-  kv("min_range_m", d.min_range_m);
-  kv("max_range_m", d.max_range_m);
-  kv("hole_fraction", d.hole_fraction);
-  kv("edge_hole_probability", d.edge_hole_probability);
-  kv("noise_correlation_px", d.noise_correlation_px);
-  out << YAML::EndMap;
-  out << YAML::Key << "imu" << YAML::Value << YAML::BeginMap;
-  kv("gyro_noise_density", c.imu.gyro_noise_density);
-  kv("accel_noise_density", c.imu.accel_noise_density);
-  kv("gyro_random_walk", c.imu.gyro_random_walk);
-  kv("accel_random_walk", c.imu.accel_random_walk);
-  kv("gyro_bias_sigma", c.imu.gyro_bias_sigma);
-  kv("accel_bias_sigma", c.imu.accel_bias_sigma);
-  out << YAML::EndMap;
-  out << YAML::Key << "odometry" << YAML::Value << YAML::BeginMap;
-  kv("velocity_sigma_m_s", c.odometry.velocity_sigma_m_s);
-  kv("velocity_correlation_s", c.odometry.velocity_correlation_s);
-  kv("drift_fraction", c.odometry.drift_fraction);
-  kv("position_sigma_m", c.odometry.position_sigma_m);
-  kv("attitude_sigma_deg", c.odometry.attitude_sigma_deg);
-  kv("angular_velocity_sigma_rad_s", c.odometry.angular_velocity_sigma_rad_s);
-  out << YAML::EndMap;
-  out << YAML::EndMap;
   out << YAML::Key << "event_labels" << YAML::Value << kLabelsFile;
-  if (const auto drawn = random_throw_manifest(c))  // issue 26: the throw's drawn parameters
+  if (const auto drawn = random_throw_manifest(c))  // the random throw's drawn parameters
     out << YAML::Key << "random_throw" << YAML::Value << *drawn;
   // The full configuration, less the thread count (which never changes the output).
   YAML::Node full = YAML::Load(to_yaml(c));
