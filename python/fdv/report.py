@@ -14,6 +14,7 @@ import argparse
 import html
 import json
 import os
+import sys
 from pathlib import Path
 
 import matplotlib
@@ -25,18 +26,54 @@ import numpy as np  # noqa: E402
 TRACK_COLORS = plt.rcParams["axes.prop_cycle"].by_key()["color"]
 
 
+class ReportError(ValueError):
+    """An input the report cannot use; the message names the file and the reason."""
+
+
 def read_jsonl(path):
     if not path.exists():
         return []
+    rows = []
     with open(path) as f:
-        return [json.loads(line) for line in f if line.strip()]
+        for number, line in enumerate(f, 1):
+            if line.strip():
+                try:
+                    rows.append(json.loads(line))
+                except json.JSONDecodeError as e:
+                    raise ReportError(f"{path}: line {number}: {e.msg}") from None
+    return rows
+
+
+def read_summary(results):
+    """RESULTS/summary.json, which a run writes last: without it the folder is not a finished run."""
+    path = results / "summary.json"
+    if not path.is_file():
+        raise ReportError(f"{path}: missing: {results} is not a finished `fdv run` results folder")
+    try:
+        return json.loads(path.read_text())
+    except json.JSONDecodeError as e:
+        raise ReportError(f"{path}: line {e.lineno}: {e.msg} (a truncated or foreign file)") from None
+
+
+def check_truth_matches(summary, truth, truth_dir):
+    """The truth must be of the scene the results were run on: same camera size, and the same
+    dataset.yaml when the run's input is still there."""
+    width, height = summary.get("resolution", [truth.calibration.width, truth.calibration.height])
+    if (width, height) != (truth.calibration.width, truth.calibration.height):
+        raise ReportError(f"{truth_dir}: its camera is {truth.calibration.width}x{truth.calibration.height}, "
+                          f"the results' {width}x{height}: --truth is of another scene")
+    ran_on = Path(summary.get("input", "")) / "dataset.yaml"
+    given = Path(truth_dir) / "dataset.yaml"
+    if ran_on.is_file() and given.is_file() and ran_on.read_bytes() != given.read_bytes():
+        raise ReportError(f"{truth_dir}: not the dataset the results were run on ({ran_on.parent}): "
+                          "--truth is of another scene")
 
 
 def read_timing(results):
     """RESULTS/timing.csv: a structured array, one row per window, fields `window`, `t_start` [s] and
     each stage [ms] (NaN where the stage did not run); None when absent (older results)."""
     path = Path(results) / "timing.csv"
-    if not path.exists():
+    if not path.exists() or len(path.read_text().splitlines()) < 2:  # no window: nothing to plot
         return None
     return np.atleast_1d(np.genfromtxt(path, delimiter=",", names=True, dtype=float))
 
@@ -74,7 +111,9 @@ class Truth:
         return t, self.calibration.project(p_E)
 
     def nearest_ball(self, points_W, times_s):
-        """The ball whose truth passes nearest the estimated points."""
+        """The ball whose truth passes nearest the estimated points; None in a scene without one."""
+        if not self.balls:
+            return None
         best = min(self.balls, key=lambda b: np.nanmean(np.linalg.norm(self.position_at(b, times_s) - points_W, axis=1)))
         return best
 
@@ -157,8 +196,8 @@ def plot_trajectories(results, trajectories, truth, out):
         for ax, (i, j, view) in zip(axes, views):
             ax.plot(p[:, i], p[:, j], "-", color="C0", lw=2, label="fusion estimate (observed interval)")
             ax.plot(p[0, i], p[0, j], "o", color="C0")
-            if truth is not None:
-                ball = truth.nearest_ball(p, t)
+            ball = truth.nearest_ball(p, t) if truth is not None else None
+            if ball is not None:
                 tb, pb = truth.ball(ball)
                 in_flight = (tb >= t[0] - 0.1) & (tb <= t[-1] + 0.3)
                 ax.plot(pb[in_flight, i], pb[in_flight, j], "k--", lw=1, label=f"truth, ball {ball}")
@@ -187,6 +226,8 @@ def plot_prediction_error(windows, trajectories, predictions, truth, out):
                 continue
             end = np.array(trajectory_at(rows[-1], [rows[-1]["t_last"]]))
             ball = truth.nearest_ball(end, [rows[-1]["t_last"]])
+            if ball is None:
+                continue
             t_ca = truth.balls[ball]["closest_approach_t"]
             if t_ca is None:
                 continue
@@ -290,14 +331,18 @@ def plot_window_strip(results, windows, out, n=6):
 def write_report(results_dir, truth_dir=None, out_dir=None):
     results = Path(results_dir)
     out = Path(out_dir) if out_dir else results / "report"
-    out.mkdir(parents=True, exist_ok=True)
+    if out.exists() and not out.is_dir():
+        raise ReportError(f"{out}: exists and is not a folder: name a folder for the report")
     if not (results / "detections.jsonl").exists():
-        raise SystemExit(f"{results}: not a `fdv run` results folder (no detections.jsonl)")
+        raise ReportError(f"{results}: not a `fdv run` results folder (no detections.jsonl)")
+    summary = read_summary(results)
     windows = read_jsonl(results / "detections.jsonl")
     trajectories = read_jsonl(results / "trajectories.jsonl")
     predictions = read_jsonl(results / "predictions.jsonl")
-    summary = json.loads((results / "summary.json").read_text()) if (results / "summary.json").exists() else {}
     truth = Truth(truth_dir) if truth_dir else None
+    if truth:
+        check_truth_matches(summary, truth, truth_dir)
+    out.mkdir(parents=True, exist_ok=True)
 
     sections = [("Detection timeline", [plot_timeline(windows, truth, out)])]
     sections.append(("3D trajectories (final usable fusion estimate per track)",
@@ -346,7 +391,10 @@ def main(argv=None):
     parser.add_argument("--truth", help="the simulated dataset folder it ran on (fdv simulate)")
     parser.add_argument("--out", help="output folder (default RESULTS/report)")
     args = parser.parse_args(argv)
-    print(write_report(args.results, args.truth, args.out))
+    try:
+        print(write_report(args.results, args.truth, args.out))
+    except (ReportError, OSError) as e:  # the file and the reason, not a traceback
+        sys.exit(f"fdv.report: {e}")
 
 
 if __name__ == "__main__":

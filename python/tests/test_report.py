@@ -8,6 +8,7 @@ import sys
 import matplotlib.pyplot as plt
 import numpy as np
 
+import fdv
 from fdv.report import read_timing
 
 
@@ -60,3 +61,55 @@ def test_report_without_timing_csv_draws_the_summary_bars(cli_results, workdir):
     images = re.findall(r'<img src="([^"]+)"', (out / "report.html").read_text())
     assert "latency.png" in images and "latency_histograms.png" not in images
     assert plt.imread(out / "latency.png").ndim == 3
+
+
+def report(results, *args):
+    return subprocess.run([sys.executable, "-m", "fdv.report", str(results), *map(str, args)], capture_output=True,
+                          text=True)
+
+
+def copy_of(cli_results, workdir, name, without=()):
+    folder = workdir / name
+    shutil.rmtree(folder, ignore_errors=True)
+    shutil.copytree(cli_results, folder, ignore=shutil.ignore_patterns("windows", "report*", *without))
+    return folder
+
+
+def test_a_folder_without_summary_is_refused_naming_it(cli_results, workdir):
+    folder = copy_of(cli_results, workdir, "no_summary", without=["summary.json"])
+    done = report(folder)
+    assert done.returncode == 1 and "Traceback" not in done.stderr
+    assert f"{folder / 'summary.json'}: missing" in done.stderr
+
+
+def test_a_truncated_file_is_named_with_its_line(cli_results, workdir):
+    folder = copy_of(cli_results, workdir, "truncated")
+    lines = (folder / "detections.jsonl").read_text().splitlines()
+    (folder / "detections.jsonl").write_text("\n".join(lines[:3] + [lines[3][:10]]) + "\n")
+    done = report(folder)
+    assert done.returncode == 1 and "Traceback" not in done.stderr
+    assert f"{folder / 'detections.jsonl'}: line 4:" in done.stderr
+    (folder / "detections.jsonl").write_text("\n".join(lines) + "\n")
+    (folder / "summary.json").write_text((cli_results / "summary.json").read_text()[:40])
+    done = report(folder)
+    assert done.returncode == 1 and f"{folder / 'summary.json'}: line" in done.stderr
+
+
+def test_an_output_that_is_a_file_or_a_truth_of_another_scene_is_refused(cli_results, dataset, workdir):
+    folder = copy_of(cli_results, workdir, "refusals")
+    a_file = workdir / "a_file"
+    a_file.write_text("")
+    done = report(folder, "--out", a_file)
+    assert done.returncode == 1 and f"{a_file}: exists and is not a folder" in done.stderr
+    other = workdir / "another_scene"
+    fdv.simulate("scene1_no_object", seed=2, out=str(other), duration=0.1, resolution=(346, 260))
+    done = report(folder, "--truth", other)
+    assert done.returncode == 1 and "another scene" in done.stderr and "Traceback" not in done.stderr
+
+
+def test_a_run_without_windows_still_reports(cli_results, workdir):
+    folder = copy_of(cli_results, workdir, "no_windows")
+    (folder / "timing.csv").write_text((folder / "timing.csv").read_text().splitlines()[0] + "\n")
+    assert read_timing(folder) is None
+    done = report(folder)
+    assert done.returncode == 0, done.stderr
