@@ -119,5 +119,23 @@ TEST(PinholeCamera, ValidateNamesTheProblem) {
   EXPECT_NE(bad.validate().find("resolution"), std::string::npos);
 }
 
+// Sizes and focal lengths that once passed and then allocated gigabytes or detected nothing
+// without a word (a 60000x60000 depth camera; fx = 1e300, fy = 1e-300).
+TEST(PinholeCamera, ValidateCapsTheSizeAndTheFocalLengths) {
+  PinholeCamera cam = dvxplorer();
+  cam.width = cam.height = kMaxCameraSide;
+  cam.cx = cam.cy = kMaxCameraSide / 2.0;
+  EXPECT_EQ(cam.validate(), "");
+  cam.height = kMaxCameraSide + 1;
+  EXPECT_NE(cam.validate().find("resolution must be 1 to 4096 pixels a side, got 4096x4097"), std::string::npos)
+      << cam.validate();
+  for (const auto& [fx, fy] : {std::pair{1e300, 500.0}, {500.0, 1e-300}, {0.5, 500.0}, {500.0, 2e6}}) {
+    PinholeCamera bad = dvxplorer();
+    bad.fx = fx;
+    bad.fy = fy;
+    EXPECT_NE(bad.validate().find("focal lengths must be 1 to 1e+06 px"), std::string::npos) << bad.validate();
+  }
+}
+
 }  // namespace
 }  // namespace fdv

@@ -13,10 +13,10 @@ std::string PinholeCamera::validate() const {
                            distortion.p1, distortion.p2, distortion.k3};
   for (double v : values)
     if (!std::isfinite(v)) return "non-finite intrinsic or distortion value";
-  if (width <= 0 || height <= 0) {
-    why << "resolution must be positive, got " << width << "x" << height;
-  } else if (fx <= 0 || fy <= 0) {
-    why << "focal lengths must be positive, got fx=" << fx << " fy=" << fy;
+  if (width <= 0 || height <= 0 || width > kMaxCameraSide || height > kMaxCameraSide) {
+    why << "resolution must be 1 to " << kMaxCameraSide << " pixels a side, got " << width << "x" << height;
+  } else if (!(fx >= kMinFocalPx && fx <= kMaxFocalPx && fy >= kMinFocalPx && fy <= kMaxFocalPx)) {
+    why << "focal lengths must be " << kMinFocalPx << " to " << kMaxFocalPx << " px, got fx=" << fx << " fy=" << fy;
   } else if (cx < -width || cx > 2.0 * width || cy < -height || cy > 2.0 * height) {
     why << "principal point (" << cx << ", " << cy << ") is far outside the " << width << "x"
         << height << " image";

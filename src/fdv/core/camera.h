@@ -37,14 +37,21 @@ struct LensInversion {
   bool folded = false;  ///< stopped where the lens map folds back (det J <= 0): no inverse there
 };
 
+/// The largest image side any camera may declare [px], whatever its source (a calibration file, a
+/// dataset, a message): image-sized buffers are allocated from it.
+inline constexpr int kMaxCameraSide = 4096;
+/// The focal lengths a camera may have [px]: outside, a lens is not a pinhole camera of this scale
+/// (1 px: a 180° view of a 2-pixel image; 1e6 px: a 0.2° view of the largest image).
+inline constexpr double kMinFocalPx = 1, kMaxFocalPx = 1e6;
+
 struct PinholeCamera {
   int width = 0;
   int height = 0;
   double fx = 0, fy = 0, cx = 0, cy = 0;
   Distortion distortion;
 
-  /// Empty when valid, else a readable reason (non-positive size or focal length, non-finite
-  /// value, principal point far outside the image).
+  /// Empty when valid, else a readable reason (a size outside 1..kMaxCameraSide, a focal length
+  /// outside kMinFocalPx..kMaxFocalPx, a non-finite value, a principal point far outside the image).
   std::string validate() const;
 
   /// Normalised undistorted coordinates (x/z, y/z) -> normalised distorted coordinates.

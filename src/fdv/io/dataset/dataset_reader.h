@@ -21,6 +21,7 @@
 #include <string_view>
 #include <vector>
 
+#include "fdv/core/camera.h"
 #include "fdv/io/recording.h"
 
 namespace fdv {
@@ -32,7 +33,7 @@ inline constexpr std::size_t kEventsHeaderBytes = 24;
 /// Bounds on what a dataset folder declares (docs/FORMATS.md, "Bad input").
 /// Largest sensor side in dataset.yaml: today's largest event sensors are 1280x960; the pipeline
 /// allocates per-pixel images of width x height.
-inline constexpr int kMaxDatasetSensorSide = 4096;
+inline constexpr int kMaxDatasetSensorSide = kMaxCameraSide;
 /// Pixels of one depth frame, checked in the PNG header before decoding: 4x the 1280x720 of
 /// common depth cameras; 16 MiB as floats.
 inline constexpr std::int64_t kMaxDepthPixels = std::int64_t{2048} * 2048;
