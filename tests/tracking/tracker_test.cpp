@@ -335,7 +335,7 @@ TEST(Tracker, ADetectionOfPartOfTheObjectContinuesItsTrack) {
   EXPECT_FALSE(run(0.0, inside, 52).taken);
 }
 
-// Issue 25: a ball entering through one border and leaving through the other is seen as its
+// A ball entering through one border and leaving through the other is seen as its
 // visible part (clipped box, centre of the visible part, which moves at half the ball's speed while
 // it is cut): one track from entry to exit.
 TEST(Tracker, AnObjectEnteringAndLeavingThroughTheBorderKeepsOneTrack) {
