@@ -26,7 +26,8 @@ struct TableArgs {
   std::string seeds = "101-105";
   std::string cache = "out/cache";
   std::string write;  ///< results document; empty: print only
-  std::string any_size_seeds;  ///< table1 only: seeds of issue 25's table, "none"; empty: --seeds
+  /// table1 only: seeds of the any-size detection table, "none"; empty: --seeds
+  std::string any_size_seeds;
 };
 
 /// stdout of a shell command, or nothing when it cannot run or fails.
@@ -115,7 +116,7 @@ void add_table_commands(CLI::App& app) {
       "table1", "paper Table I: compensation time, relative contrast, detection metrics");
   add_table_options(t1, args1);
   t1->add_option("--any-size-seeds", args1.any_size_seeds,
-                 "seeds of the any-size detection table (issue 25; default: --seeds), or none");
+                 "seeds of the any-size detection table (default: --seeds), or none");
   t1->callback([] { run_table<Table1>("table1", args1, compute_table1); });
   auto* t2 =
       app.add_subcommand("table2", "paper Table II: APE of fusion vs mono; first-estimate latency");

@@ -2,7 +2,7 @@
 // registration of a 640x480 frame into the event camera, depth segmentation on a 640x480
 // registered frame; the dodge's collision risk and manoeuvre choice per estimate.
 //   build-*/bench/backend_bench --benchmark_repetitions=10 --benchmark_report_aggregates_only=true
-// Target (issue 5): estimator update with 20 observations, median <= 0.2 ms.
+// Target: estimator update with 20 observations, median <= 0.2 ms.
 #include <benchmark/benchmark.h>
 
 #include <random>
@@ -202,7 +202,7 @@ BENCHMARK(BM_DepthRegistration640x480)
     ->ArgNames({"plain", "far_quarter"})
     ->Unit(benchmark::kMillisecond);
 
-// The dodge's per-estimate cost (issue 26): the collision risk of the solved 20-observation
+// The dodge's per-estimate cost: the collision risk of the solved 20-observation
 // estimate against the vehicle (linear propagation, disc probability), then the planner's choice
 // among its 72 candidate directions.
 struct DodgeInputs {

@@ -3,7 +3,7 @@
 // implementations (reference_warp.h, reference_time_images.h: the speed-up of the optimised code,
 // measured in the same run, is printed at the end), the detector's stages one by one
 // (segmentation + pre-processing, Gaussian fit, region retrieval), and the detector and the whole
-// front end per window (median, p99, max). Targets (issue 6): compensation + time images
+// front end per window (median, p99, max). Targets: compensation + time images
 // rotation ≥ 100 M ev/s, rotation_translation ≥ 60 M ev/s; whole detection per window median
 // ≤ 2 ms, p99 ≤ 3 ms on one thread, median ≤ 1 ms on both cores. "/threads:2" runs split the
 // per-event stages in two (CompensationOptions::threads, CompensatedEventsView::threads) and let

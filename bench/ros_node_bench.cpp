@@ -1,4 +1,4 @@
-// What fdv_ros_node adds per event window over the library, on the same ROS 1 bag (issue 28's
+// What fdv_ros_node adds per event window over the library, on the same ROS 1 bag (its
 // target: at most 0.5 ms). A plain program (CLI11), like pipeline_bench: one pass is many windows.
 //
 //   build/fdv simulate --scenario hover_headon --seed 1 --out out/headon

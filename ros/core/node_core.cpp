@@ -22,7 +22,7 @@ nlohmann::json tracks_json(const Tracker& tracker, TimeNs t) {
   nlohmann::json tracks = nlohmann::json::array();
   for (const Track& track : tracker.tracks()) {
     const TrackPrediction p = track.predict(t);
-    const Eigen::Matrix2d& c = p.centre_covariance_px2;
+    const Eigen::Matrix2d& c = p.center_covariance_px2;
     tracks.push_back({{"id", track.id()},
                       {"confirmed", track.confirmed()},
                       {"first_t", to_seconds(track.first_time())},

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""fdv_ros_node against a real ROS master (issue 28; README "ROS 1 node").
+"""fdv_ros_node against a real ROS master (README "ROS 1 node").
 
     node_replay_test.py BUILD_DIR WORK_DIR [--events-as event_array|event_packet] [--rate R]
                         [--resolution WxH]

@@ -89,7 +89,7 @@ TEST_F(Cli, RunWritesEveryOutputWithItsDocumentedFieldsAndEvalScoresItAgainstThe
   }
   EXPECT_TRUE(summary.at("warnings").empty()) << summary.at("warnings");
 
-  // detections.jsonl: one object per window, the fields issue #4 names, in the input's time base.
+  // detections.jsonl: one object per window with its fields, in the input's time base.
   const std::vector<json> lines = read_lines(out / "detections.jsonl");
   ASSERT_EQ(lines.size(), windows);
   int detections = 0;
@@ -115,7 +115,7 @@ TEST_F(Cli, RunWritesEveryOutputWithItsDocumentedFieldsAndEvalScoresItAgainstThe
   for (const auto& f : fs::directory_iterator(out / "windows")) pngs += f.path().extension() == ".png";
   EXPECT_EQ(pngs, static_cast<int>(windows));
 
-  // trajectories.jsonl: every row an estimate (issue #5's fields), fusion among them.
+  // trajectories.jsonl: every row an estimate, fusion among them.
   int fusion = 0;
   for (const json& e : read_lines(out / "trajectories.jsonl")) {
     EXPECT_TRUE(e.at("method") == "fusion" || e.at("method") == "mono") << e;
@@ -311,7 +311,7 @@ TEST(CliBadInput, AMissingInputIsAClearErrorNamingThePath) {
 }
 
 // `fdv dodge-eval` on one throw (random_throw seed 6: 346x260, a hovering vehicle, a threat
-// passing 7 cm from the body; about 6 s): the file's keys as issue 26 lists them, the simulated
+// passing 7 cm from the body; about 6 s): the file's keys, the simulated
 // truth against the drawn throw, and --keep's folders.
 TEST(CliDodgeEval, OneThrowGivesTheTotalsTheBaselinesAndItsRow) {
   const fs::path out = test::scratch_dir("cli_dodge_eval");

@@ -18,13 +18,13 @@ struct Visible {
 };
 
 /// The part of a disc inside the sensor, by summing a 0.05 px grid.
-Visible integrate(const Eigen::Vector2d& centre, double r) {
+Visible integrate(const Eigen::Vector2d& center, double r) {
   constexpr double kStep = 0.05;
   double n = 0, inside = 0;
   Eigen::Vector2d sum = Eigen::Vector2d::Zero();
-  for (double y = centre.y() - r; y <= centre.y() + r; y += kStep)
-    for (double x = centre.x() - r; x <= centre.x() + r; x += kStep) {
-      if ((Eigen::Vector2d(x, y) - centre).squaredNorm() > r * r) continue;
+  for (double y = center.y() - r; y <= center.y() + r; y += kStep)
+    for (double x = center.x() - r; x <= center.x() + r; x += kStep) {
+      if ((Eigen::Vector2d(x, y) - center).squaredNorm() > r * r) continue;
       ++n;
       if (x < -0.5 || x > kWidth - 0.5 || y < -0.5 || y > kHeight - 0.5) continue;
       ++inside;
@@ -56,16 +56,16 @@ TEST(BorderCut, ClearOfTheBorderIsNotCut) {
 TEST(BorderCut, WholeCentreAndFractionFromTheVisibleCentroid) {
   // Discs cut by the left, bottom, right and top borders, centre inside and outside the frame.
   const double r = 30;
-  const Eigen::Vector2d centres[] = {{-0.5 + 12, 120}, {-0.5 - 14, 90}, {150, kHeight - 0.5 + 9},
+  const Eigen::Vector2d centers[] = {{-0.5 + 12, 120}, {-0.5 - 14, 90}, {150, kHeight - 0.5 + 9},
                                      {kWidth - 0.5 - 20, 130}, {200, -0.5 + 3}};
-  for (const Eigen::Vector2d& centre : centres) {
-    SCOPED_TRACE(testing::Message() << "centre " << centre.transpose());
-    const Visible v = integrate(centre, r);
+  for (const Eigen::Vector2d& center : centers) {
+    SCOPED_TRACE(testing::Message() << "centre " << center.transpose());
+    const Visible v = integrate(center, r);
     const auto cut = border_cut(square_on(v.centroid, r), kWidth, kHeight);
     ASSERT_TRUE(cut);
     EXPECT_NEAR(cut->visible_fraction, v.fraction, 0.005);
     ASSERT_TRUE(cut->center_full);
-    EXPECT_NEAR((*cut->center_full - centre).norm(), 0.0, 0.1);
+    EXPECT_NEAR((*cut->center_full - center).norm(), 0.0, 0.1);
     EXPECT_GE(cut->visible.x0, -0.5);
     EXPECT_LE(cut->visible.x1, kWidth - 0.5);
     EXPECT_GE(cut->visible.y0, -0.5);

@@ -27,6 +27,7 @@ class DetectorTest : public ::testing::Test {
     c.event_camera = lens();
     CompensationOptions o;
     o.method = CompensationMethod::kNone;
+    o.max_events_per_window = 2'000'000;  // the uniform-density window's 1.2 M events, all kept
     compensator_ = make_compensator(c, o);
   }
   DetectionResult run(const std::vector<Event>& ev, TimeNs t0, TimeNs t1) {

@@ -26,13 +26,13 @@ double fixed_point_side(double s) {
 
 TEST(GaussianFit, ConvergesOnABlobInNoise) {
   const double sigma = 4.0;
-  const Eigen::Vector2d centre(100.3, 80.7);
+  const Eigen::Vector2d center(100.3, 80.7);
   cv::Mat P(240, 320, CV_32F);
   std::mt19937 rng(1);
   std::uniform_real_distribution<float> noise(0.0f, 0.002f);
   for (int y = 0; y < 240; ++y)
     for (int x = 0; x < 320; ++x) {
-      const double d2 = (x - centre.x()) * (x - centre.x()) + (y - centre.y()) * (y - centre.y());
+      const double d2 = (x - center.x()) * (x - center.x()) + (y - center.y()) * (y - center.y());
       P.at<float>(y, x) = static_cast<float>(std::exp(-0.5 * d2 / (sigma * sigma))) + noise(rng);
     }
   DetectorOptions o;
@@ -42,8 +42,8 @@ TEST(GaussianFit, ConvergesOnABlobInNoise) {
   const GaussianFit fit = iterative_gaussian_fit(P, {100, 81}, {160, 120}, o);
   EXPECT_TRUE(fit.converged);
   EXPECT_LT(fit.iterations, o.fit_max_iterations);
-  EXPECT_NEAR(fit.center.x(), centre.x(), 0.3);
-  EXPECT_NEAR(fit.center.y(), centre.y(), 0.3);
+  EXPECT_NEAR(fit.center.x(), center.x(), 0.3);
+  EXPECT_NEAR(fit.center.y(), center.y(), 0.3);
   // Continuous fixed point ≈ 2.9 σ. On the pixel grid the ROI takes whole pixels whose centres
   // lie inside it, which widens the effective window by up to half a pixel each side: the
   // discrete fixed point of the noise-free blob (iterated here on its own, in 1-D about the true
@@ -53,8 +53,8 @@ TEST(GaussianFit, ConvergesOnABlobInNoise) {
   double Ld = L;
   for (int it = 0; it < 100; ++it) {
     double sw = 0, sxx = 0;
-    for (int x = static_cast<int>(std::ceil(centre.x() - Ld / 2)); x <= std::floor(centre.x() + Ld / 2); ++x) {
-      const double d = x - centre.x(), p = std::exp(-0.5 * d * d / (sigma * sigma));
+    for (int x = static_cast<int>(std::ceil(center.x() - Ld / 2)); x <= std::floor(center.x() + Ld / 2); ++x) {
+      const double d = x - center.x(), p = std::exp(-0.5 * d * d / (sigma * sigma));
       sw += p;
       sxx += p * d * d;
     }

@@ -1,4 +1,4 @@
-// The detector on what real sensors show (issue 25): several objects in one window, objects cut by
+// The detector on what real sensors show: several objects in one window, objects cut by
 // the border, objects of any apparent size up to filling the view, and windows of bad input that
 // must end in a named status, never a box. Truth: the synthetic blobs' own positions.
 #include <gtest/gtest.h>

@@ -8,33 +8,26 @@
 #include <random>
 
 #include "ballistic_scenario.h"
+#include "estimator_monte_carlo.h"
 #include "fdv/core/error.h"
 
 namespace fdv {
 namespace {
 
+using test::MonteCarloResult;
 using test::Observations;
 using test::Scene;
+using test::mean;
+using test::monte_carlo;
+using test::options_for;
+using test::percentile;
 
-EstimatorOptions options_for(const Scene& s, EstimatorMode mode = EstimatorMode::kFusion) {
-  EstimatorOptions o;
-  o.mode = mode;
-  o.event_focal_px = s.focal_px;
-  o.gravity_W = s.truth.gravity_W;
-  return o;
-}
-
-/// Feeds all observations in time order, solving after each one as the pipeline does.
+/// test::run_streaming, expecting every observation accepted or ignored.
 TrajectoryEstimate run_streaming(TrajectoryEstimator& est, const Observations& obs) {
-  std::size_t i = 0, j = 0;
-  while (i < obs.events.size() || j < obs.depths.size()) {
-    const bool event_next =
-        j >= obs.depths.size() || (i < obs.events.size() && obs.events[i].t <= obs.depths[j].t);
-    const AddResult r = event_next ? est.add(obs.events[i++]) : est.add(obs.depths[j++]);
-    EXPECT_TRUE(r == AddResult::kAccepted || r == AddResult::kIgnored);
-    est.solve();
-  }
-  return est.latest();
+  int refused = 0;
+  const TrajectoryEstimate e = test::run_streaming(est, obs, refused);
+  EXPECT_EQ(refused, 0);
+  return e;
 }
 
 void expect_truth(const TrajectoryEstimate& e, const BallisticTrajectory& truth, double tol) {
@@ -349,54 +342,8 @@ TEST(TrajectoryEstimator, ShortHeadOnArcIsNotUsableUntilTheVelocityIsPinned) {
   expect_truth(f, later.truth, 1e-6);
 }
 
-struct MonteCarloResult {
-  std::vector<double> fusion, mono;
-  double nees_mean = 0;  ///< mean of (x - x_true)ᵀ Σ⁻¹ (x - x_true) over fusion runs (6 dof)
-  int fusion_usable = 0, mono_usable = 0;
-};
-
-MonteCarloResult monte_carlo(const Scene& s, int first_seed, int runs, double sigma_px) {
-  MonteCarloResult r;
-  int nees_n = 0;
-  for (int seed = first_seed; seed < first_seed + runs; ++seed) {
-    std::mt19937 rng(static_cast<unsigned>(seed));
-    EstimatorOptions o = options_for(s);
-    o.event_sigma_px = sigma_px;
-    const Observations obs = test::observe(s, rng, sigma_px, true);
-    TrajectoryEstimator fusion(o);
-    const TrajectoryEstimate f = run_streaming(fusion, obs);
-    o.mode = EstimatorMode::kMonocular;
-    TrajectoryEstimator mono(o);
-    const TrajectoryEstimate m = run_streaming(mono, obs);
-    const TimeNs t1 = std::max(s.event_times.back(), s.depth_times.back());
-    r.fusion.push_back(test::ape_rmse(f.trajectory, s.truth, 0, t1));
-    r.mono.push_back(test::ape_rmse(m.trajectory, s.truth, 0, t1));
-    r.fusion_usable += f.usable;
-    r.mono_usable += m.usable;
-    if (f.covariance) {
-      Eigen::Matrix<double, 6, 1> err;
-      err << f.trajectory.p0_W - s.truth.p0_W, f.trajectory.v0_W - s.truth.v0_W;
-      r.nees_mean += err.dot(f.covariance->ldlt().solve(err));
-      ++nees_n;
-    }
-  }
-  r.nees_mean /= std::max(1, nees_n);
-  return r;
-}
-
-double mean(const std::vector<double>& v) {
-  double s = 0;
-  for (double x : v) s += x;
-  return s / static_cast<double>(v.size());
-}
-
-double percentile(std::vector<double> v, double p) {
-  std::sort(v.begin(), v.end());
-  return v[static_cast<std::size_t>(p * static_cast<double>(v.size() - 1))];
-}
-
 // Table II setting, 1.5 px detection noise, D435 depth noise, 20 seeds. Bounds come from a
-// 2000-run Monte-Carlo (MonteCarloReport below, seeds 1000-2999): fusion APE RMSE mean 0.078 m
+// 2000-run Monte-Carlo (bench/estimator_accuracy_report, seeds 1000-2999): fusion APE RMSE mean 0.078 m
 // (forward) / 0.073 m (swing), p99 0.22 m, max 0.29 m; mono median 1.4 m / 1.9 m. Asserted with
 // margin: every run < 0.35 m, mean of 20 < 0.12 m (the mean's own spread is ~0.01 m).
 TEST(TrajectoryEstimator, FusionAccuracyOnTableTwoThrows) {
@@ -405,6 +352,7 @@ TEST(TrajectoryEstimator, FusionAccuracyOnTableTwoThrows) {
     for (double e : r.fusion) EXPECT_LT(e, 0.35);
     EXPECT_LT(mean(r.fusion), 0.12);
     EXPECT_EQ(r.fusion_usable, 20);
+    EXPECT_EQ(r.refused, 0);
     // The monocular baseline is much worse on the same observations (medians: mono has
     // divergent runs whose range runs off, which would dominate a mean).
     EXPECT_GT(percentile(r.mono, 0.5), 5 * percentile(r.fusion, 0.5));
@@ -412,57 +360,6 @@ TEST(TrajectoryEstimator, FusionAccuracyOnTableTwoThrows) {
     EXPECT_GT(r.nees_mean, 3.0);
     EXPECT_LT(r.nees_mean, 12.0);
   }
-}
-
-// Run with --gtest_also_run_disabled_tests to reproduce the Monte-Carlo behind the bounds above.
-TEST(TrajectoryEstimator, DISABLED_MonteCarloReport) {
-  for (const auto& [name, s] :
-       {std::pair{"forward", test::forward_scene()}, std::pair{"swing", test::swing_scene()}}) {
-    for (double sigma_px : {1.0, 1.5, 2.0}) {
-      MonteCarloResult r = monte_carlo(s, 1000, 2000, sigma_px);
-      std::printf(
-          "%s sigma %.1f px: fusion mean %.3f median %.3f p99 %.3f max %.3f usable %d | mono "
-          "median %.3f "
-          "p90 %.3f usable %d | NEES %.2f\n",
-          name, sigma_px, mean(r.fusion), percentile(r.fusion, 0.5), percentile(r.fusion, 0.99),
-          percentile(r.fusion, 1.0), r.fusion_usable, percentile(r.mono, 0.5),
-          percentile(r.mono, 0.9), r.mono_usable, r.nees_mean);
-    }
-  }
-}
-
-// Run with --gtest_also_run_disabled_tests: when the first usable fusion estimate appears in the
-// forward stream (events every 30 ms, depth at 33/100/167 ms) and how good it is.
-TEST(TrajectoryEstimator, DISABLED_FirstUsableEstimateReport) {
-  const Scene s = test::forward_scene();
-  std::vector<double> t_first, err_first;
-  for (int seed = 1000; seed < 1500; ++seed) {
-    std::mt19937 rng(static_cast<unsigned>(seed));
-    const Observations obs = test::observe(s, rng, 1.5, true);
-    TrajectoryEstimator est(options_for(s));
-    std::size_t i = 0, j = 0;
-    while (i < obs.events.size() || j < obs.depths.size()) {
-      const bool ev =
-          j >= obs.depths.size() || (i < obs.events.size() && obs.events[i].t <= obs.depths[j].t);
-      const TimeNs t = ev ? obs.events[i].t : obs.depths[j].t;
-      if (ev)
-        est.add(obs.events[i++]);
-      else
-        est.add(obs.depths[j++]);
-      const TrajectoryEstimate& e = est.solve();
-      if (e.usable) {
-        t_first.push_back(to_seconds(t) * 1e3);
-        err_first.push_back(test::ape_rmse(e.trajectory, s.truth, 0, 180 * kNsPerMs));
-        break;
-      }
-    }
-  }
-  std::printf(
-      "first usable after %zu/500 runs: median t %.0f ms (p90 %.0f); APE over 0-180 ms of that "
-      "estimate: "
-      "median %.3f m p90 %.3f m\n",
-      t_first.size(), percentile(t_first, 0.5), percentile(t_first, 0.9),
-      percentile(err_first, 0.5), percentile(err_first, 0.9));
 }
 
 // The linear solution alone is exact on exact data, and rank-deficient input gives nothing.

@@ -1,4 +1,4 @@
-// Issue 25's detection metrics on hand-made windows against a hand-made truth whose pixels are
+// The any-size detection metrics on hand-made windows against a hand-made truth whose pixels are
 // known in closed form (tests/eval/handmade_truth.h): apparent-size bins, balls cut by the border,
 // "fills the view" windows, and two balls scored apart with their identity switches.
 #include <gtest/gtest.h>

@@ -152,11 +152,11 @@ TEST(GroundTruthBox, DistortedLensMatchesABruteForceRaster) {
   // column's outermost inside pixel to 1e-3 px; the extremes must match the box.
   const Distortion d{-0.10, 0.06, 4e-4, -6e-4, 0.0};
   const Calibration c = camera(d);
-  const Eigen::Vector3d centre(1.2, -0.7, 3.0);
+  const Eigen::Vector3d center(1.2, -0.7, 3.0);
   const double r = 0.25;
-  const auto box = ground_truth_box(ball_at(centre), 1, r, still_body(), c, 0, 0);
-  const Eigen::Vector3d axis = centre.normalized();
-  const double cos_alpha = std::cos(std::asin(r / centre.norm()));
+  const auto box = ground_truth_box(ball_at(center), 1, r, still_body(), c, 0, 0);
+  const Eigen::Vector3d axis = center.normalized();
+  const double cos_alpha = std::cos(std::asin(r / center.norm()));
   auto inside = [&](double u, double v) {
     const Eigen::Vector2d xn = c.event_camera.pixel_to_normalized({u, v});
     return Eigen::Vector3d(xn.x(), xn.y(), 1).normalized().dot(axis) >= cos_alpha;
@@ -195,12 +195,12 @@ TEST(VisibleSilhouette, ACutBallsCentreIsItsInViewAreasCentroid) {
   // Independent route: a 0.1 px raster of the image's pixels whose ray lies in the tangent cone;
   // the mean of those in view is the visible part's centroid, their extent its clipped box.
   const double z = 4.0, r = 0.3, x = (10.5 - kCx) / kF * z;  // centre 11 px inside the left border
-  const Eigen::Vector3d centre(x, 0.4, z);
-  const auto s = visible_silhouette(ball_at(centre), 1, r, still_body(), camera(), 0);
+  const Eigen::Vector3d center(x, 0.4, z);
+  const auto s = visible_silhouette(ball_at(center), 1, r, still_body(), camera(), 0);
   ASSERT_TRUE(s.visible);
   EXPECT_TRUE(s.partial());
-  const Eigen::Vector3d axis = centre.normalized();
-  const double cos_alpha = std::cos(std::asin(r / centre.norm()));
+  const Eigen::Vector3d axis = center.normalized();
+  const double cos_alpha = std::cos(std::asin(r / center.norm()));
   Eigen::Vector2d sum = Eigen::Vector2d::Zero();
   double n = 0, u1 = -1e9, v0 = 1e9, v1 = -1e9;
   for (double v = -0.45; v < 480 - 0.5; v += 0.1)
@@ -224,18 +224,18 @@ TEST(VisibleSilhouette, ACutBallsCentreIsItsInViewAreasCentroid) {
 }
 
 TEST(VisibleSilhouette, AWholeBallsCentreIsItsProjectedCentre) {
-  const Eigen::Vector3d centre(0.3, -0.2, 3);
-  const auto s = visible_silhouette(ball_at(centre), 1, 0.1, still_body(), camera(), kNsPerMs);
+  const Eigen::Vector3d center(0.3, -0.2, 3);
+  const auto s = visible_silhouette(ball_at(center), 1, 0.1, still_body(), camera(), kNsPerMs);
   ASSERT_TRUE(s.visible);
   EXPECT_FALSE(s.partial());
   EXPECT_DOUBLE_EQ(s.fraction_in_view, 1.0);
   const Eigen::Vector2d projected(kCx + kF * 0.1, kCy - kF * 0.2 / 3);
   EXPECT_NEAR((s.visible_center_px - projected).norm(), 0, 1e-9);
-  const auto box = ground_truth_box(ball_at(centre), 1, 0.1, still_body(), camera(), kNsPerMs,
+  const auto box = ground_truth_box(ball_at(center), 1, 0.1, still_body(), camera(), kNsPerMs,
                                     kNsPerMs);
   EXPECT_NEAR(s.size_px(), std::max(box.width(), box.height()), 1e-9);
   // No truth at that time: nothing.
-  EXPECT_FALSE(visible_silhouette(ball_at(centre), 1, 0.1, still_body(), camera(), 2 * kNsPerS)
+  EXPECT_FALSE(visible_silhouette(ball_at(center), 1, 0.1, still_body(), camera(), 2 * kNsPerS)
                    .visible);
 }
 

@@ -113,7 +113,7 @@ Collected run(TimeNs lag_ns, const SimulatedThrow& s = simulated_throw(), const 
   return out;
 }
 
-// Issue 25: a ball cut by the border is observed at its whole centre where the detector estimated
+// A ball cut by the border is observed at its whole centre where the detector estimated
 // one, and weighs less the less of it is in view (its centre's noise σ / visible fraction).
 TEST(Perception, AnObjectCutByTheBorderIsObservedAtItsWholeCentreWithItsNoiseGrown) {
   const PinholeCamera camera{640, 480, 500.0, 400.0, 320.0, 240.0, {}};

@@ -1,4 +1,4 @@
-// The whole pipeline on a real recording, against positions marked by hand: issue #4's check that
+// The whole pipeline on a real recording, against positions marked by hand: the check that
 // the ball is found while it is in flight and the moving person is not reported in its place.
 #include <gtest/gtest.h>
 
@@ -57,7 +57,7 @@ TEST(RealRecording, TheThrownBallIsFoundInFlightAndThePersonIsNotReported) {
 }
 
 // davis346_flicker_noise.aedat4 (346x260, 0.13 s, another DAVIS346 than the calibration's): a static
-// workbench where flickering lamps and a screen make most events; nothing moves. Issue 25: a
+// workbench where flickering lamps and a screen make most events; nothing moves. The target: a
 // detection in at most 5 % of its windows, so none of its six. Run as `fdv run` runs a recording
 // without a calibration file (pixel coordinates, no compensation).
 TEST(RealRecording, FlickeringLampsAndAScreenAreNoObject) {

@@ -1,5 +1,5 @@
-// Issue 25's presets, checked on their exact truth (no events rendered): close_pass grows past a
-// third of the frame and leaves through a border; two_balls' image paths cross.
+// The any-size detection's presets, checked on their exact truth (no events rendered): close_pass
+// grows past a third of the frame and leaves through a border; two_balls' image paths cross.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -88,7 +88,7 @@ bool at_border(const GroundTruthBox& box, int width, int height) {
 struct Pass {
   double release_px = 0;  ///< apparent size when first seen (the thrower holds the ball)
   double max_px = 0;      ///< largest apparent size while any part is in view
-  double max_px_30 = 0;   ///< largest while at least 30 % is in view (issue 25's eligible)
+  double max_px_30 = 0;   ///< largest while at least 30 % is in view (eligible at any size)
   std::string border;     ///< where it leaves the view
   bool leaves = false;    ///< seen, then out of view until the end, last seen at a border
 };

@@ -1,5 +1,6 @@
-// Issue 26's random throws: the drawn parameters, the geometry of the configured throw (checked
-// on the simulator's own trajectories, no rendering), and the round trip through a dataset.
+// The random throws of the dodge evaluation: the drawn parameters, the geometry of the configured
+// throw (checked on the simulator's own trajectories, no rendering), and the round trip through a
+// dataset.
 #include "fdv/sim/random_throw.h"
 
 #include <gtest/gtest.h>

@@ -84,9 +84,9 @@ TEST(DodgeOutcome, RefusalIsNotFlown) {
   EXPECT_FALSE(o.maneuvered);
 }
 
-// A ball thrown across behind a still camera (bad input of issue 26: a throw that never enters the
-// view): every method reports no manoeuvre, "never detected"; the truth alone scores the throw, a
-// non-threat 3 m away.
+// A ball thrown across behind a still camera (bad input of the dodge evaluation: a throw that
+// never enters the view): every method reports no manoeuvre, "never detected"; the truth alone
+// scores the throw, a non-threat 3 m away.
 TEST(DodgeEval, ThrowNeverInViewGivesNoDecisionWithTheReason) {
   sim::ScenarioConfig c;
   c.name = "behind";

@@ -31,7 +31,7 @@ TEST(Table1Markdown, RowsAndNotesFollowTheTable) {
   EXPECT_NE(md.find("abc1234"), std::string::npos);
 }
 
-// Issue 25's any-size table from hand-made metrics: the bin cells, the cut-ball and fills-view
+// The any-size table from hand-made metrics: the bin cells, the cut-ball and fills-view
 // columns, the per-ball table of a scene with two balls, and the targets read off them.
 TEST(Table1Markdown, AnySizeRowsPerBinAndPerBall) {
   Table1 t;
@@ -64,7 +64,7 @@ TEST(Table1Markdown, AnySizeRowsPerBinAndPerBall) {
                     "100.0 % of 4, 6.00 px | 80.0 % of 5, 2.50 px | 4.50 (2) | 5 / 6 | 0.0 % | – / – |"),
             std::string::npos)
       << md;
-  EXPECT_NE(md.find("(issue 25; rotation_translation; seeds 7)"), std::string::npos) << md;
+  EXPECT_NE(md.find("(rotation_translation; seeds 7)"), std::string::npos) << md;
   EXPECT_NE(md.find("| two_balls | preset's own | 1 | 10 | 100.0 % | 1.00 | 3; 1 |"), std::string::npos) << md;
   EXPECT_NE(md.find("| two_balls | preset's own | 2 | 10 | 80.0 % | 2.00 | 4; 2 |"), std::string::npos) << md;
 

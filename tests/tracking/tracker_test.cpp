@@ -310,7 +310,7 @@ TEST(Tracker, ADetectionOfPartOfTheObjectContinuesItsTrack) {
     const TrackAssignment& a = step.assignments.at(0);
     const double pulled = (tracker.find(id)->predict(8 * kWindow).center_px - before.center_px).norm();
     return PartRun{a.outcome == TrackAssignment::Outcome::kUpdated && a.track_id == id, a.mahalanobis2, pulled,
-                   before.centre_covariance_px2(0, 0)};
+                   before.center_covariance_px2(0, 0)};
   };
   const Eigen::Vector2d inside(10, -10);
   const PartRun part = run(1.0, inside);
@@ -335,7 +335,7 @@ TEST(Tracker, ADetectionOfPartOfTheObjectContinuesItsTrack) {
   EXPECT_FALSE(run(0.0, inside, 52).taken);
 }
 
-// Issue 25: a ball entering through one border and leaving through the other is seen as its
+// A ball entering through one border and leaving through the other is seen as its
 // visible part (clipped box, centre of the visible part, which moves at half the ball's speed while
 // it is cut): one track from entry to exit.
 TEST(Tracker, AnObjectEnteringAndLeavingThroughTheBorderKeepsOneTrack) {
@@ -343,8 +343,8 @@ TEST(Tracker, AnObjectEnteringAndLeavingThroughTheBorderKeepsOneTrack) {
   Tracker tracker;
   int id = -1, windows = 0;
   for (int k = 1;; ++k) {
-    const double centre = -0.5 * kDiameter + kStep * k;
-    const double lo = std::max(0.0, centre - 0.5 * kDiameter), hi = std::min(kWidth, centre + 0.5 * kDiameter);
+    const double center = -0.5 * kDiameter + kStep * k;
+    const double lo = std::max(0.0, center - 0.5 * kDiameter), hi = std::min(kWidth, center + 0.5 * kDiameter);
     if (hi - lo < 2) break;  // gone
     TrackerDetection d = det(k * kWindow, 0.5 * (lo + hi), 120, kDiameter);
     d.box_size_px.x() = hi - lo;

@@ -32,8 +32,8 @@ namespace fdv {
 
 /// What the vehicle can do.
 struct VehicleLimits {
-  /// Largest acceleration the dodge may command, as the norm of the set-point [m/s²] (issue 26's
-  /// default lateral limit).
+  /// Largest acceleration the dodge may command, as the norm of the set-point [m/s²] (the dodge
+  /// evaluation's default lateral limit).
   double max_acceleration_m_s2 = 10.0;
   /// Per world axis (x, y, z) as well [m/s²]. The default, 1000 m/s² (100 g), leaves only the norm
   /// limit; it is finite so that a written configuration loads again (infinity is accepted too).

@@ -97,10 +97,10 @@ struct CompensationOptions {
   /// neighbours (registration leaves pinholes when the depth camera is coarser or offset).
   int hole_fill_radius_px = 1;
   /// Overload guard: above this many events a window is decimated uniformly in time order and the
-  /// dropped events are counted (5 M ev/s over 25 ms is 125 k events; 16x that is a burst).
-  /// Not a YAML key: fdv::Perception sets it from the top-level `max_events_per_window`, the
-  /// event windower's limit, which decimates first (so this guard acts only for direct callers).
-  std::size_t max_events_per_window = 2'000'000;
+  /// dropped events are counted. Not a YAML key: fdv::Perception sets it from the top-level
+  /// `max_events_per_window`, the event windower's limit, which decimates first (so this guard
+  /// acts only for direct callers).
+  std::size_t max_events_per_window = kDefaultMaxEventsPerWindow;
   /// Threads for the per-event warp of none / rotation / rotation_translation: the events are split
   /// into this many parts; results are identical for any count. Not a YAML key: fdv::Perception
   /// sets it from PerceptionOptions::threads (YAML `threads`), which the detector uses too.

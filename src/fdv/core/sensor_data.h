@@ -3,6 +3,7 @@
 /// E event camera, D depth camera, I IMU. A transform T_A_B maps B coordinates into A.
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -19,6 +20,12 @@ struct Event {
   friend bool operator==(const Event&, const Event&) = default;
 };
 static_assert(sizeof(Event) == 16, "Event is kept at 16 bytes for cache-friendly windows");
+
+/// Default overload cap of one event window, above which it is decimated: the pipeline's
+/// windower and a compensator's own guard share it. 20 M events/s sustained over 25 ms is 500 k
+/// events; twice that is a burst the front end cannot absorb within one window period on one core
+/// (docs/BENCHMARKS.md).
+inline constexpr std::size_t kDefaultMaxEventsPerWindow = 1'000'000;
 
 /// One IMU sample in the IMU frame I: angular velocity [rad/s], specific force [m/s^2].
 struct ImuSample {

@@ -203,7 +203,7 @@ int matched_ball(const DatasetTruth& truth, const std::map<int, GroundTruthBox>&
 
 enum class Eligibility { kNone, kEligible, kFillsView };
 
-/// Issue 25's eligibility of one ball in one window, with its apparent size at the middle.
+/// The any-size eligibility of one ball in one window, with its apparent size at the middle.
 Eligibility any_size_eligibility(const DatasetTruth& truth, int id, const GroundTruthBox& box,
                                  TimeNs t_mid, const DetectionMetricsOptions& o, double& size_px) {
   size_px = 0;

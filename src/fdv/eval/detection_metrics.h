@@ -1,7 +1,7 @@
 #pragma once
 /// Detection metrics against a simulated dataset's truth: recall over the windows where a ball in
-/// flight is well in view (issue 4), centre error of the detections that found it, and false
-/// detections per window; and issue 25's: recall and centre error per apparent-size bin, for balls
+/// flight is well in view (Table I's), centre error of the detections that found it, and false
+/// detections per window; and at any size: recall and centre error per apparent-size bin, for balls
 /// cut by the border, and per ball with its identity switches.
 ///
 ///   DetectionMetrics m = detection_metrics(truth, windows);       // one run
@@ -25,7 +25,7 @@
 namespace fdv {
 
 /// The window status text (DetectionStatus) a detector reports when an object is too large to
-/// detect (issue 25: larger than half the frame's shorter side).
+/// detect (larger than half the frame's shorter side).
 inline constexpr const char* kFillsTheViewStatus = "object fills the view";
 
 /// One window's detections as evaluation needs them.
@@ -45,18 +45,18 @@ struct WindowDetections {
   std::string status{};  ///< DetectionStatus text; empty when unknown
 };
 
-/// Apparent-size bins [px] of issue 25 (lower bound inclusive): < 10, 10-40, 40-100, > 100.
+/// Apparent-size bins [px] (lower bound inclusive): < 10, 10-40, 40-100, > 100.
 inline constexpr std::array<double, 3> kSizeBinEdges_px{10, 40, 100};
 
 struct DetectionMetricsOptions {
-  /// The window-level recall of Table I (issue 4): a ball counts only when at least this fraction
+  /// The window-level recall of Table I: a ball counts only when at least this fraction
   /// of its silhouette is in the image throughout the window ...
   double min_fraction_in_view = 0.8;
   double min_span_px = 8;  ///< ... and it spans at least this many pixels throughout it
   /// A detection belongs to a ball when its centre lies in the ball's true box over the window
   /// grown by this margin [px] (the box is exact; the margin absorbs pixel quantisation).
   double margin_px = 2;
-  /// Issue 25's eligibility, per ball and window: at least this fraction in view throughout the
+  /// Eligibility at any size, per ball and window: at least this fraction in view throughout the
   /// window, and an apparent size (VisibleSilhouette::size_px at the window's middle) between
   /// min_size_px and max_size_of_short_side × the frame's shorter side; larger = fills the view.
   double min_fraction_in_view_any_size = 0.3;
@@ -100,11 +100,11 @@ struct WindowOutcome {
   double fraction_in_view_min = 0, span_px_min = 0;
   /// That ball's true box over the window (raw pixels, clipped to the image), to place a miss.
   GroundTruthBox box = {};
-  double size_px = 0;       ///< that ball's apparent size at the window's middle (issue 25)
-  bool fills_view = false;  ///< some ball in flight fills the view (issue 25)
+  double size_px = 0;       ///< that ball's apparent size at the window's middle
+  bool fills_view = false;  ///< some ball in flight fills the view
 };
 
-/// One (window, ball) pair of issue 25's metrics (the rows of `fdv eval`'s detection_pairs.csv):
+/// One (window, ball) pair of the any-size metrics (the rows of `fdv eval`'s detection_pairs.csv):
 /// every ball that is eligible or fills the view in the window, so that a ball's misses can be
 /// placed when several are in flight.
 struct PairOutcome {
@@ -120,13 +120,13 @@ struct PairOutcome {
 
 /// Two definitions side by side.
 ///
-/// Table I's (issue 4), per window: window w is *eligible* when some ball is in flight at its
+/// Table I's, per window: window w is *eligible* when some ball is in flight at its
 /// middle (true speed >= 1 m/s), visible, and meets min_fraction_in_view and min_span_px
 /// throughout it; *found* when a detection belongs to such a ball. Centre errors: |detected centre
 /// − the true centre projected at the detection's time| of every detection belonging to an
 /// eligible ball.
 ///
-/// Issue 25's, per (window, ball): a detection belongs to the ball whose true box over the window
+/// At any size, per (window, ball): a detection belongs to the ball whose true box over the window
 /// (grown by margin_px) holds its centre, the nearest true centre where several do; a ball takes
 /// at most one detection per window (the nearest to its true centre; the others are counted as
 /// duplicates). A ball in flight at least min_fraction_in_view_any_size in view throughout the
@@ -147,7 +147,7 @@ struct DetectionMetrics {
   std::vector<WindowOutcome> per_window;  ///< in window order (runs appended by merge)
   std::vector<PairOutcome> per_pair;      ///< in window order, then ball id
 
-  // Issue 25.
+  // At any size, per (window, ball).
   RecallCounts any_size;                                ///< every eligible (window, ball)
   std::array<RecallCounts, kSizeBinEdges_px.size() + 1> size_bins;  ///< by apparent size
   RecallCounts partial;                                 ///< the partial pairs (also in their bin)

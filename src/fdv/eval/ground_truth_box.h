@@ -57,7 +57,7 @@ struct GroundTruthBoxOptions {
   std::optional<TimeNs> position_time;
 };
 
-/// The ball's silhouette at one instant as the image shows it (issue 25's apparent size and the
+/// The ball's silhouette at one instant as the image shows it (the apparent size and the
 /// centre of a partly visible ball).
 struct VisibleSilhouette {
   bool visible = false;  ///< some part of the silhouette is in the image

@@ -28,9 +28,7 @@ namespace fdv {
 
 struct EventWindowerOptions {
   TimeNs window_ns = 25 * kNsPerMs;  ///< Δt, paper §III-A
-  /// Decimation cap: 20 M events/s sustained over 25 ms is 500 k events; twice that is a burst
-  /// the front end cannot absorb within one window period on one core (docs/BENCHMARKS.md).
-  std::size_t max_events_per_window = 1'000'000;
+  std::size_t max_events_per_window = kDefaultMaxEventsPerWindow;  ///< decimation cap
   /// Gap policy: consecutive empty windows emitted before the rest of a gap is skipped
   /// (400 = 10 s at Δt = 25 ms; a live camera sees noise events far more often than that).
   std::uint64_t max_empty_windows = 400;

@@ -92,7 +92,8 @@ Perception::Perception(const Calibration& calibration, PerceptionOptions options
         options.estimation.mode = EstimatorMode::kFusion;
         options.compensation.threads = options.threads;
         // One overload limit: the windower decimates first, to at most this many events, so the
-        // compensator's own guard (for direct callers) never acts inside the pipeline.
+        // compensator's own guard (for direct callers) never acts inside the pipeline, also when
+        // the configuration raises the limit above the shared default.
         options.compensation.max_events_per_window = options.windows.max_events_per_window;
         if (const auto why = options.validate(); !why.empty()) throw ConfigError(why);
         if (const auto why = options.estimation.validate(); !why.empty())

@@ -1,4 +1,4 @@
-// The named scenarios of issue 3, each randomised by a seed (docs/SIMULATOR.md, "Scenarios").
+// The simulator's named scenarios, each randomised by a seed (docs/SIMULATOR.md, "Scenarios").
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -92,7 +92,7 @@ BallConfig headon_throw(Rng& rng, double distance, double speed, double release_
   return b;
 }
 
-/// Issue 25's near pass: a ball of radius `radius` thrown from `distance` ahead passes the
+/// A near pass: a ball of radius `radius` thrown from `distance` ahead passes the
 /// camera's plane `miss` metres off its centre, in the direction `phi` (0 left, π/2 up), and
 /// flies on out of view. The thrower's arm is 1.5-3.5 m off the axis on the other side, so the
 /// path crosses the view obliquely and the ball is nearer when it leaves; for a pass above the
@@ -139,7 +139,7 @@ std::vector<std::string> preset_names() {
 }
 
 ScenarioConfig make_preset(const std::string& name, std::uint64_t seed) {
-  // Issue 26: every parameter drawn from the seed (random_throw.h).
+  // The dodge evaluation's throws: every parameter drawn from the seed (random_throw.h).
   if (name == "random_throw") return random_throw_config(sample_random_throw(seed));
   ScenarioConfig c;
   c.name = name;
@@ -192,7 +192,7 @@ ScenarioConfig make_preset(const std::string& name, std::uint64_t seed) {
       c.event_camera.background_rate_hz = 1.0;  // top of DESIGN's 0.1-1 range: more shot noise
     }
   } else if (name == "close_pass") {
-    // Issue 25: a ball passes 0.5-1.5 m from a still (tripod) or hovering camera, growing from
+    // A ball passes 0.5-1.5 m from a still (tripod) or hovering camera, growing from
     // a few pixels to a large part of the frame, and leaves through a border.
     v.motion = MotionKind::kHover;
     v.start_W_m = {0.0, 0.0, 1.8};
@@ -219,7 +219,7 @@ ScenarioConfig make_preset(const std::string& name, std::uint64_t seed) {
     c.duration_s = std::ceil((b.release_t_s + flight_s + 0.1) * 10.0) / 10.0;
     add_panels(c, rng, distance + 2.0, distance + 2.0);
   } else if (name == "two_balls") {
-    // Issue 25: two balls thrown at once across a hovering camera, a slow one near and a fast
+    // Two balls thrown at once across a hovering camera, a slow one near and a fast
     // one far, in opposite directions; both pass one viewing direction at mid-flight, so their
     // images cross (and may overlap) while both are well in view.
     v.motion = MotionKind::kHover;

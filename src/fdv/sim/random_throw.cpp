@@ -1,4 +1,4 @@
-// Issue 26's random throws (docs/SIMULATOR.md, "random_throw").
+// The random throws of the dodge evaluation (docs/SIMULATOR.md, "random_throw").
 #include "fdv/sim/random_throw.h"
 
 #include <fmt/format.h>
@@ -19,13 +19,13 @@ namespace {
 
 constexpr double kReleaseT = 0.2;     ///< [s] as hover_headon: the scene settles first
 constexpr double kAfterPassS = 0.3;   ///< [s] simulated after the closest approach
-constexpr double kThreatMissM = 0.5;  ///< [m] issue 26's safety radius
+constexpr double kThreatMissM = 0.5;  ///< [m] the dodge evaluation's safety radius
 constexpr double kHandMinZ = 0.5;  ///< [m] lowest release height above the floor (a thrower's hand)
 constexpr double kContactM = 0.1;  ///< [m] ball surface to camera centre that counts as a hit
 /// Samples per tile and 5 ms chunk at most (default 2000). Binds only where the ball covers the
 /// lens, in the last tens of ms before it passes or hits, where it bounds the cost of a tile.
 constexpr int kMaxStepsPerChunk = 400;
-constexpr double kMinInViewFraction = 0.5;  ///< "in view for most of its flight" (issue 26)
+constexpr double kMinInViewFraction = 0.5;  ///< "in view for most of its flight"
 constexpr int kMaxAttempts = 1000;          ///< draws before giving up (~7 % are redrawn)
 
 struct Resolution {

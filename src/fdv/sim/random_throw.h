@@ -1,6 +1,6 @@
 #pragma once
-/// Issue 26's random throws: one throw at the vehicle per seed, every parameter drawn from the
-/// seed (docs/SIMULATOR.md, "random_throw", states the distribution).
+/// The random throws of the dodge evaluation: one throw at the vehicle per seed, every parameter
+/// drawn from the seed (docs/SIMULATOR.md, "random_throw", states the distribution).
 ///
 ///   RandomThrowParameters p = sample_random_throw(17);   // what seed 17 draws
 ///   ScenarioConfig c = make_preset("random_throw", 17);  // the same throw, ready to simulate

@@ -29,10 +29,10 @@ namespace fdv::sim {
 
 /// The event camera: geometry, pixel model, noise, and the simulator's sampling controls.
 struct EventCameraConfig {
-  // --- geometry: the paper's iniVation DVXplorer (issue 3)
+  // --- geometry: the paper's iniVation DVXplorer
   int width = 640;    ///< [px] DVXplorer
   int height = 480;   ///< [px] DVXplorer
-  double fx = 536.3;  ///< [px] paper release's DVXplorer intrinsics (issue 3)
+  double fx = 536.3;  ///< [px] paper release's DVXplorer intrinsics
   double fy = 536.3;  ///< [px] idem
   double cx = 320.9;  ///< [px] idem
   double cy = 234.0;  ///< [px] idem
@@ -84,7 +84,7 @@ struct DepthCameraConfig {
   double cy = 240.0;  ///< [px] idem
   Eigen::Vector3d position_B_m{0.11, -0.015, -0.05};  ///< [m] chosen: below and beside the DVS
   Eigen::Vector3d mount_rpy_deg{0.0, 0.0, 0.0};       ///< [deg] on top of forward-looking
-  double rate_hz = 30.0;                              ///< [Hz] D435 at 640x480 (issue 3)
+  double rate_hz = 30.0;                              ///< [Hz] D435 at 640x480
   double subpixel_px = 0.08;           ///< [px] DESIGN: Intel's RMS formula σ = z² s / (f B)
   double baseline_m = 0.05;            ///< [m] D435 stereo baseline (DESIGN)
   double min_range_m = 0.3;            ///< [m] D435 operating range (DESIGN)
@@ -99,7 +99,7 @@ struct DepthCameraConfig {
 
 /// The IMU (flight-controller MEMS unit).
 struct ImuConfig {
-  double rate_hz = 1000.0;                         ///< [Hz] issue 3
+  double rate_hz = 1000.0;                         ///< [Hz] a flight controller's IMU
   Eigen::Vector3d R_B_I_rpy_deg{180.0, 0.0, 0.0};  ///< [deg] FRD IMU on an FLU body (PX4 style)
   double gyro_noise_density = 1.0e-4;              ///< [rad/s/√Hz] DESIGN
   double accel_noise_density = 1.5e-3;             ///< [m/s²/√Hz] DESIGN
@@ -184,7 +184,7 @@ struct SceneConfig {
 /// release position and velocity in W. Before release the ball rests at its origin.
 struct BallConfig {
   int id = 1;
-  double radius_m = 0.105;  ///< [m] the paper's 21 cm ball (issue 3)
+  double radius_m = 0.105;  ///< [m] the paper's 21 cm ball
   std::string mode = "aimed";
   double release_t_s = 0.2;  ///< [s]
   Eigen::Vector3d from_m{4.0, 4.0,

@@ -24,7 +24,7 @@ constexpr double kFalsePerWindowTarget = 0.05;    // on scene1_no_object
 constexpr double kFusionRmseTarget_m = 0.10;      // Table II, both scenes
 constexpr double kFirstEstimateTarget_s = 0.060;  // hover_headon, release -> first fusion estimate
 constexpr const char* kPipelineMethod = "rotation_translation";
-// Issue 25's targets.
+// Targets of the detection at any apparent size.
 constexpr double kBinRecallTarget = 0.95;        // every apparent-size bin but the smallest
 constexpr double kSmallBinRecallTarget = 0.85;   // the < 10 px bin
 constexpr double kCenterErrorFloor_px = 3.0;     // median centre error <= this, or ...
@@ -75,7 +75,8 @@ std::string recall_cell(const RecallCounts& c) {
   return out;
 }
 
-/// Issue 25's centre-error bound for a set of found windows: 3 px or 5 % of their median size.
+/// The any-size detection's centre-error bound for a set of found windows: 3 px or 5 % of their
+/// median size.
 double center_error_bound_px(const RecallCounts& c) {
   return std::max(kCenterErrorFloor_px, kCenterErrorOfSize * summarize(c.sizes_px).median);
 }
@@ -189,7 +190,8 @@ const CompensationRow* Table1::row(const std::string& scene, const std::string& 
 
 namespace {
 
-/// Issue 25's rows: the pipeline's compensation only; the paper's rows' runs are reused.
+/// The any-size detection table's rows: the pipeline's compensation only; the paper's rows' runs
+/// are reused.
 std::vector<AnySizeRow> any_size_rows(const Table1& table, const PaperTableOptions& options) {
   std::vector<AnySizeRow> rows;
   for (const SceneVariant& v : table1_any_size_scenes(options)) {
@@ -269,7 +271,7 @@ Table1 compute_table1(const PaperTableOptions& options) {
 
 namespace {
 
-/// Issue 25's targets, read off the any-size rows.
+/// The any-size detection's targets, read off the any-size rows.
 std::vector<TableTarget> any_size_targets(const Table1& table) {
   std::vector<TableTarget> out;
   if (table.any_size_rows.empty()) return out;
@@ -359,12 +361,12 @@ std::vector<TableTarget> table1_targets(const Table1& table) {
 
 namespace {
 
-/// Issue 25's detection table and, for scenes with several balls, its per-ball table.
+/// The any-size detection table and, for scenes with several balls, its per-ball table.
 std::string any_size_markdown(const Table1& table) {
   if (table.any_size_rows.empty()) return "";
   std::string out =
       fmt::format("\n### Detection at any apparent size, cut by the border, several balls "
-                  "(issue 25; rotation_translation; seeds {})\n\n",
+                  "(rotation_translation; seeds {})\n\n",
                   seeds_text(table.any_size_seeds)) +
       "Each cell: recall of the eligible (window, ball) pairs, their number, and the median "
       "centre error; definitions in docs/RESULTS.md (\"Detection metrics\").\n\n"

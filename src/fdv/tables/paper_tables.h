@@ -8,7 +8,7 @@
 ///
 /// Table I (paper §V-B): per compensation method, the per-window compensation time and the
 /// relative contrast η on scene1_no_object / scene2_ball, plus detection metrics on four scenes;
-/// then issue 25's detection by apparent size, for balls cut by the border and per ball, on more
+/// then detection by apparent size, for balls cut by the border and per ball, on more
 /// scenes and cameras at the pipeline's compensation.
 /// Table II (paper §V-C): APE of the final fusion and monocular estimates of the ball on
 /// fast_forward / swing, and on hover_headon how soon the first fusion estimate came and how well
@@ -29,10 +29,10 @@ struct PaperTableOptions {
                                    105};  ///< evaluation seeds (tuning uses others)
   std::string cache_dir =
       "out/cache";  ///< simulated datasets, reused between runs (ensure_simulated)
-  /// Seeds of Table I's any-size detection table (issue 25; its 1280x720 datasets are slow to
+  /// Seeds of Table I's any-size detection table (its 1280x720 datasets are slow to
   /// simulate): unset = `seeds`, empty = no such table (the paper's rows only).
   std::optional<std::vector<std::uint64_t>> any_size_seeds;
-  /// The event camera of close_pass's DAVIS346 row (issue 25); relative to the working folder.
+  /// The event camera of close_pass's DAVIS346 row; relative to the working folder.
   std::string davis346_calibration = "../shared/data/real/davis346_00000133_calibration.xml";
   /// Base pipeline options; each row overrides compensation.method.
   PerceptionOptions perception;
@@ -59,7 +59,7 @@ struct CompensationRow {
   std::vector<DetectionMetrics> per_seed;  ///< each seed's own, for the seed-to-seed spread
 };
 
-/// A simulated scene of Table I's any-size detection table (issue 25): a preset at its own event
+/// A simulated scene of Table I's any-size detection table: a preset at its own event
 /// camera, at another resolution (same field of view, sim::set_event_resolution), or with the
 /// event camera of a calibration file (`fdv simulate --camera`).
 struct SceneVariant {
@@ -83,13 +83,13 @@ struct AnySizeRow {
 
 /// How much a detection row's figures vary from seed to seed: the sample standard deviation of
 /// each seed's own figure, over the seeds where it is defined (recall and centre error need an
-/// eligible window); NaN with fewer than two such seeds. The yardstick of issue 25's "no Table I
-/// row gets worse by more than its seed-to-seed spread".
+/// eligible window); NaN with fewer than two such seeds. The yardstick of the any-size detection's
+/// "no Table I row gets worse by more than its seed-to-seed spread".
 struct SeedSpread {
   double recall = 0;                ///< Table I's recall (per window)
   double median_center_error_px = 0;
   double false_per_window = 0;
-  double any_size_recall = 0;       ///< issue 25's, every eligible (window, ball) pair
+  double any_size_recall = 0;       ///< any size: every eligible (window, ball) pair
 };
 SeedSpread seed_spread(const std::vector<DetectionMetrics>& per_seed);
 
@@ -110,9 +110,9 @@ const std::vector<std::string>& table1_compensation_scenes();  ///< scene1_no_ob
 const std::vector<std::string>& table1_detection_scenes();     ///< + fast_forward, hover_headon
 const std::vector<std::string>&
 table1_methods();  ///< none, rotation, rotation_translation, contrast_max
-/// Issue 25's scenes: the detection scenes at their own camera, at 346x260 and at 1280x720;
-/// close_pass with the DAVIS346's calibration (options.davis346_calibration), at 640x480 and at
-/// 1280x720; two_balls.
+/// The any-size detection table's scenes: the detection scenes at their own camera, at 346x260 and
+/// at 1280x720; close_pass with the DAVIS346's calibration (options.davis346_calibration), at
+/// 640x480 and at 1280x720; two_balls.
 std::vector<SceneVariant> table1_any_size_scenes(const PaperTableOptions& options);
 
 Table1 compute_table1(const PaperTableOptions& options);

@@ -53,7 +53,7 @@ TrackPrediction Track::predict(TimeNs t) const {
   out.center_px = p.position();
   out.velocity_px_s = p.velocity();
   out.acceleration_px_s2 = p.acceleration();
-  out.centre_covariance_px2 = p.position_covariance();
+  out.center_covariance_px2 = p.position_covariance();
   out.box_size_px = box_size_px_;
   return out;
 }

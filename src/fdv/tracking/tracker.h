@@ -104,7 +104,7 @@ struct TrackPrediction {
   Eigen::Vector2d center_px = Eigen::Vector2d::Zero();
   Eigen::Vector2d velocity_px_s = Eigen::Vector2d::Zero();
   Eigen::Vector2d acceleration_px_s2 = Eigen::Vector2d::Zero();
-  Eigen::Matrix2d centre_covariance_px2 = Eigen::Matrix2d::Zero();
+  Eigen::Matrix2d center_covariance_px2 = Eigen::Matrix2d::Zero();
   Eigen::Vector2d box_size_px = Eigen::Vector2d::Zero();  ///< smoothed width, height
 };
 

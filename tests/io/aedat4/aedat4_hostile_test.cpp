@@ -1,4 +1,4 @@
-// AEDAT 4.0 reader on hostile input (issue #24): the in-memory entry point, an XML stream
+// AEDAT 4.0 reader on hostile input: the in-memory entry point, an XML stream
 // description without a root element, decompression bombs (Zstd and LZ4, with and without a
 // declared content size) and packets above the size limit. Inputs are built in memory with the
 // test's own writer, or are the fuzzer's findings in ../shared/fuzz-findings.

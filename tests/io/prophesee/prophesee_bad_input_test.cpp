@@ -1,4 +1,4 @@
-// Prophesee RAW reader on hostile input (issue #24): the in-memory entry point, time counters
+// Prophesee RAW reader on hostile input: the in-memory entry point, time counters
 // wrapped until the time leaves int64 nanoseconds, header bytes that are not UTF-8. Inputs are
 // built in memory word by word, or are the fuzzer's findings in ../shared/fuzz-findings.
 #include <gtest/gtest.h>
