@@ -534,6 +534,9 @@ TEST(Options, InvalidValuesNameTheSectionAndTheYamlKey) {
   EXPECT_THAT(error_of("compensation: {max_imu_gap_ms: 0}"), HasSubstr("key compensation | max_imu_gap_ms must be positive"));
   EXPECT_THAT(error_of("detector: {opening_px: 4}"), HasSubstr("key detector | opening_px must be odd"));
   EXPECT_EQ(error_of("window_ms: 0"), " | window_ms must be positive");
+  // 1e8 ms once allocated 3.7 GB, 1e9 ms threw std::bad_alloc.
+  EXPECT_EQ(error_of("window_ms: 1000.5"), " | window_ms must be at most 1000 (a window's buffers grow with its length)");
+  EXPECT_EQ(error_of("window_ms: 1e9"), " | window_ms must be at most 1000 (a window's buffers grow with its length)");
   EXPECT_EQ(error_of("max_events_per_window: 0"), " | max_events_per_window must be positive");
   EXPECT_EQ(error_of("threads: 0"), " | threads must be in [1, 64], got 0");
   EXPECT_EQ(error_of("max_lateness_ms: -1"), " | max_lateness_ms must not be negative");

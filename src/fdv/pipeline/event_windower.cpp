@@ -5,7 +5,10 @@
 namespace fdv {
 
 std::string EventWindowerOptions::validate() const {
-  if (window_ns <= 0) return "window_ns must be positive";
+  if (window_ns <= 0) return "window_ms must be positive";
+  if (window_ns > kMaxWindowNs)
+    return "window_ms must be at most " + std::to_string(kMaxWindowNs / kNsPerMs) +
+           " (a window's buffers grow with its length)";
   if (max_events_per_window == 0) return "max_events_per_window must be positive";
   return {};
 }

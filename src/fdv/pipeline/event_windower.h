@@ -26,6 +26,10 @@
 
 namespace fdv {
 
+/// The longest window [ns]: a second holds a thrown ball's whole flight, and the compensation's
+/// per-window tables grow with the length (a window of 1e8 ms allocated 3.7 GB).
+inline constexpr TimeNs kMaxWindowNs = 1000 * kNsPerMs;
+
 struct EventWindowerOptions {
   TimeNs window_ns = 25 * kNsPerMs;  ///< Δt, paper §III-A
   std::size_t max_events_per_window = kDefaultMaxEventsPerWindow;  ///< decimation cap

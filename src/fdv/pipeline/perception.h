@@ -136,7 +136,7 @@ void observe_cut_object(const Detection2D& found, const PinholeCamera& camera, d
 /// section per stage. YAML in and out: fdv/pipeline/options_yaml.h.
 template <class V>
 void describe(V& v, PerceptionOptions& o) {
-  v.ms("window_ms", o.windows.window_ns, "Δt: length of an event window (paper §III-A)");
+  v.ms("window_ms", o.windows.window_ns, "Δt: length of an event window (paper §III-A), at most 1000");
   v("max_events_per_window", o.windows.max_events_per_window, "events",
     "overload guard: a fuller window is decimated uniformly in time order (counted)");
   v("max_empty_windows", o.windows.max_empty_windows, "-",
