@@ -255,7 +255,7 @@ HandMadeWindow evenly_firing_square(double speed_px_s, int body_events = 0) {
   return w;
 }
 
-std::optional<Candidate> count_cue(const DetectorOptions& o, HandMadeWindow& w, DetectionResult& res) {
+std::optional<Candidate> count_contrast(const DetectorOptions& o, HandMadeWindow& w, DetectionResult& res) {
   SourceWindow in = w.build(o);
   CountContrastSource source(o);
   source.allocate(kWidth, kHeight);
@@ -272,7 +272,7 @@ TEST(CountContrastSource, AnEvenlyFiringMovingBlobIsFoundOnlyWithTheCameraStill)
   {
     HandMadeWindow w = evenly_firing_square(kSpeed);
     DetectionResult res;
-    const std::optional<Candidate> c = count_cue(o, w, res);
+    const std::optional<Candidate> c = count_contrast(o, w, res);
     ASSERT_TRUE(c) << "isolation " << res.count_cue_isolation << ", z " << res.count_cue_motion_z;
     EXPECT_LT(std::abs(res.count_cue_time_offset), o.threshold_c);  // the time test alone fails
     EXPECT_GE(res.count_cue_isolation, o.count_contrast.still_min_isolation);
@@ -282,12 +282,12 @@ TEST(CountContrastSource, AnEvenlyFiringMovingBlobIsFoundOnlyWithTheCameraStill)
     DetectorOptions off = o;
     off.count_contrast.still_motion = 0;
     DetectionResult off_res;
-    EXPECT_FALSE(count_cue(off, w, off_res));
+    EXPECT_FALSE(count_contrast(off, w, off_res));
   }
   {
     HandMadeWindow w = evenly_firing_square(0);
     DetectionResult res;
-    EXPECT_FALSE(count_cue(o, w, res));
+    EXPECT_FALSE(count_contrast(o, w, res));
     EXPECT_GE(res.count_cue_isolation, o.count_contrast.still_min_isolation);
     EXPECT_LT(res.count_cue_motion_z, 0.5);
   }
@@ -295,17 +295,17 @@ TEST(CountContrastSource, AnEvenlyFiringMovingBlobIsFoundOnlyWithTheCameraStill)
     HandMadeWindow w = evenly_firing_square(kSpeed);
     w.speed_m_s = 6;  // b‖v‖ = 0.24 > still_motion
     DetectionResult res;
-    EXPECT_FALSE(count_cue(o, w, res));
+    EXPECT_FALSE(count_contrast(o, w, res));
     EXPECT_EQ(res.count_cue_isolation, 0.0);  // the still-camera test did not run
     // Inside a confirmed track's gate there is no time test; a tentative track's gate is not searched.
     const Box2D gate{85, 55, 115, 85};
     w.tentative_gates = {gate};
     DetectionResult tentative_res;
-    EXPECT_FALSE(count_cue(o, w, tentative_res));
+    EXPECT_FALSE(count_contrast(o, w, tentative_res));
     w.tentative_gates.clear();
     w.gates = {gate};
     DetectionResult gated_res;
-    const std::optional<Candidate> c = count_cue(o, w, gated_res);
+    const std::optional<Candidate> c = count_contrast(o, w, gated_res);
     ASSERT_TRUE(c);
     EXPECT_TRUE(gated_res.track_aided);
     EXPECT_NEAR(c->center.x(), 100.0, 0.5);
@@ -313,7 +313,7 @@ TEST(CountContrastSource, AnEvenlyFiringMovingBlobIsFoundOnlyWithTheCameraStill)
   {
     HandMadeWindow w = evenly_firing_square(kSpeed, 2);
     DetectionResult res;
-    EXPECT_FALSE(count_cue(o, w, res));
+    EXPECT_FALSE(count_contrast(o, w, res));
     EXPECT_GT(res.count_cue_contrast, o.count_contrast.min_contrast);  // dense enough for the cue
     EXPECT_GT(res.count_cue_isolation, 1.0);
     EXPECT_LT(res.count_cue_isolation, o.count_contrast.still_min_isolation);
@@ -354,7 +354,7 @@ HandMadeWindow quiet_window() {
 std::optional<Candidate> count_cue_in_tentative_gate(const DetectorOptions& o, HandMadeWindow& w, const Box2D& gate) {
   w.tentative_gates = {gate};
   DetectionResult res;
-  std::optional<Candidate> c = count_cue(o, w, res);
+  std::optional<Candidate> c = count_contrast(o, w, res);
   EXPECT_EQ(res.track_aided, c.has_value());
   return c;
 }
@@ -371,7 +371,7 @@ TEST(CountContrastSource, ALoneSparseMovingBlobIsFoundWithTheCameraStill) {
     HandMadeWindow w = quiet_window();
     add_sparse_square(w, 100, kSpeed);
     DetectionResult res;
-    const std::optional<Candidate> c = count_cue(o, w, res);
+    const std::optional<Candidate> c = count_contrast(o, w, res);
     ASSERT_TRUE(c) << "contrast " << res.count_cue_contrast << ", fill " << res.count_cue_fill << ", isolation "
                    << res.count_cue_isolation << ", z " << res.count_cue_motion_z;
     EXPECT_GT(res.count_cue_sparse_min_active, 0);                       // the sparse search found it
@@ -383,12 +383,12 @@ TEST(CountContrastSource, ALoneSparseMovingBlobIsFoundWithTheCameraStill) {
     DetectorOptions off = o;
     off.count_contrast.sparse_chance = 0;
     DetectionResult off_res;
-    EXPECT_FALSE(count_cue(off, w, off_res));
+    EXPECT_FALSE(count_contrast(off, w, off_res));
     EXPECT_EQ(off_res.count_cue_sparse_min_active, 0);
 
     w.speed_m_s = 6;  // b‖v‖ = 0.24 > still_motion
     DetectionResult moving_res;
-    EXPECT_FALSE(count_cue(o, w, moving_res));
+    EXPECT_FALSE(count_contrast(o, w, moving_res));
     EXPECT_EQ(moving_res.count_cue_sparse_min_active, 0);
   }
   {
@@ -396,7 +396,7 @@ TEST(CountContrastSource, ALoneSparseMovingBlobIsFoundWithTheCameraStill) {
     add_sparse_square(w, 100, kSpeed);
     add_sparse_square(w, 60, kSpeed);
     DetectionResult res;
-    EXPECT_FALSE(count_cue(o, w, res));
+    EXPECT_FALSE(count_contrast(o, w, res));
     EXPECT_GT(res.count_cue_sparse_min_active, 0);
     // A track's gate holding both is searched for its best blob all the same.
     const std::optional<Candidate> c = count_cue_in_tentative_gate(o, w, Box2D{45, 55, 115, 85});
@@ -408,7 +408,7 @@ TEST(CountContrastSource, ALoneSparseMovingBlobIsFoundWithTheCameraStill) {
     HandMadeWindow w = quiet_window();
     add_sparse_square(w, 100, 0);
     DetectionResult res;
-    EXPECT_FALSE(count_cue(o, w, res));
+    EXPECT_FALSE(count_contrast(o, w, res));
     EXPECT_GE(res.count_cue_isolation, o.count_contrast.still_min_isolation);
     EXPECT_LT(res.count_cue_motion_z, o.count_contrast.still_min_motion_z);
     const std::optional<Candidate> c = count_cue_in_tentative_gate(o, w, Box2D{85, 55, 115, 85});

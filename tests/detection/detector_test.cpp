@@ -155,7 +155,7 @@ TEST_F(DetectorTest, CentreForTheCameraAtTheDetectionTimeGoesThroughObservedAt) 
 // Residual background around a fast object's path (imperfect compensation leaves texture events
 // there) pulls a centroid taken over a region centred on the box - which sits on the object's
 // latest sweep, ahead of it - forwards along the motion; the re-centred region
-// (refine_recentre_passes) settles on the object's own events.
+// (refine_recenter_passes) settles on the object's own events.
 TEST(DetectorRefine, RecentredRegionRemovesTheClutterPullAlongTheMotion) {
   test::BlobScene s;
   s.t0 = 2 * kNsPerS;
@@ -184,13 +184,13 @@ TEST(DetectorRefine, RecentredRegionRemovesTheClutterPullAlongTheMotion) {
   const CompensatedWindow& w = comp->compensate({.events = ev, .t_start = s.t0, .t_end = s.t0 + s.duration});
   auto along_error = [&](int passes) {
     DetectorOptions o;
-    o.refine_recentre_passes = passes;
+    o.refine_recenter_passes = passes;
     Detector d(o, lens());
     const DetectionResult r = d.detect(detector_input(w));
     EXPECT_TRUE(r.strongest()) << to_string(r.status);
     return r.strongest() ? r.strongest()->center_undistorted.x() - s.blob_at(r.strongest()->t).x() : 1e9;
   };
-  const double single = along_error(0), recentred = along_error(DetectorOptions{}.refine_recentre_passes);
+  const double single = along_error(0), recentred = along_error(DetectorOptions{}.refine_recenter_passes);
   EXPECT_GT(single, 2.0) << "the set-up must show the pull";
   EXPECT_LT(std::abs(recentred), 1.0);
 
@@ -650,7 +650,7 @@ TEST_F(DetectorTest, CountContrastCueSkipsNoFilledCentreAtTheEdgesOfItsBlocks) {
 
 TEST_F(DetectorTest, CountContrastCueWaivesTheTimeTestOnlyInsideATrackGate) {
   // An evenly firing ball on an evenly firing background: its mean time is the image's, so over
-  // the image the time test rejects it; inside a confirmed track's gate (count_cue_in_gates) the
+  // the image the time test rejects it; inside a confirmed track's gate (count_contrast_in_gates) the
   // track is the evidence that it moves. The camera is still, so the still-camera test, off until
   // the end, finds it over the image too.
   test::BlobScene s;
@@ -742,23 +742,23 @@ TEST_F(DetectorTest, InvalidOptionsAreRejected) {
       {"min_pixel_events", [](DetectorOptions& x) { x.min_pixel_events = 0; }},
       {"min_event_density", [](DetectorOptions& x) { x.min_event_density = -1; }},
       {"gate_focal_px must be 0 (off) or in [10, 1e5], got 5", [](DetectorOptions& x) { x.gate_focal_px = 5; }},
-      {"motion_cue_density_px", [](DetectorOptions& x) { x.dense_motion.density_px = 4; }},
-      {"motion_cue_min_r2", [](DetectorOptions& x) { x.dense_motion.min_r2 = 1.5; }},
-      {"refine_recentre_passes", [](DetectorOptions& x) { x.refine_recentre_passes = -1; }},
+      {"dense_motion_density_px", [](DetectorOptions& x) { x.dense_motion.density_px = 4; }},
+      {"dense_motion_min_r2", [](DetectorOptions& x) { x.dense_motion.min_r2 = 1.5; }},
+      {"refine_recenter_passes", [](DetectorOptions& x) { x.refine_recenter_passes = -1; }},
       {"refine_grow_density must be in [0, 1], got 2", [](DetectorOptions& x) { x.refine_grow_density = 2; }},
       {"refine_grow_contrast", [](DetectorOptions& x) { x.refine_grow_contrast = -1; }},
-      {"motion_cue_min_pixels", [](DetectorOptions& x) { x.dense_motion.min_pixels = 2; }},
+      {"dense_motion_min_pixels", [](DetectorOptions& x) { x.dense_motion.min_pixels = 2; }},
       {"refit_min_roi_px", [](DetectorOptions& x) { x.gaussian_fit.refit_min_roi_px = 0.5; }},
       {"refit_local_scale", [](DetectorOptions& x) { x.gaussian_fit.refit_local_scale = -1; }},
-      {"count_cue_box_px", [](DetectorOptions& x) { x.count_contrast.box_px = 8; }},
-      {"count_cue_surround_scale", [](DetectorOptions& x) { x.count_contrast.surround_scale = 1; }},
-      {"count_cue_min_contrast", [](DetectorOptions& x) { x.count_contrast.min_contrast = 0.5; }},
-      {"count_cue_min_fill", [](DetectorOptions& x) { x.count_contrast.min_fill = 1.2; }},
-      {"count_cue_still_motion", [](DetectorOptions& x) { x.count_contrast.still_motion = -0.1; }},
-      {"count_cue_still_isolation", [](DetectorOptions& x) { x.count_contrast.still_min_isolation = 0.5; }},
-      {"count_cue_still_motion_z", [](DetectorOptions& x) { x.count_contrast.still_min_motion_z = NAN; }},
-      {"count_cue_sparse_chance", [](DetectorOptions& x) { x.count_contrast.sparse_chance = 1; }},
-      {"count_cue_sparse_chance", [](DetectorOptions& x) { x.count_contrast.sparse_chance = NAN; }},
+      {"count_contrast_box_px", [](DetectorOptions& x) { x.count_contrast.box_px = 8; }},
+      {"count_contrast_surround_scale", [](DetectorOptions& x) { x.count_contrast.surround_scale = 1; }},
+      {"count_contrast_min_contrast", [](DetectorOptions& x) { x.count_contrast.min_contrast = 0.5; }},
+      {"count_contrast_min_fill", [](DetectorOptions& x) { x.count_contrast.min_fill = 1.2; }},
+      {"count_contrast_still_motion", [](DetectorOptions& x) { x.count_contrast.still_motion = -0.1; }},
+      {"count_contrast_still_isolation", [](DetectorOptions& x) { x.count_contrast.still_min_isolation = 0.5; }},
+      {"count_contrast_still_motion_z", [](DetectorOptions& x) { x.count_contrast.still_min_motion_z = NAN; }},
+      {"count_contrast_sparse_chance", [](DetectorOptions& x) { x.count_contrast.sparse_chance = 1; }},
+      {"count_contrast_sparse_chance", [](DetectorOptions& x) { x.count_contrast.sparse_chance = NAN; }},
   };
   for (const auto& [name, make_bad] : cases) {
     DetectorOptions bad;

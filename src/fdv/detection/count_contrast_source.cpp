@@ -14,19 +14,19 @@ std::string CountContrastSourceOptions::validate() const {
     if (!std::isfinite(v)) return "non-finite detector parameter";
   std::ostringstream why;
   if (!(box_px >= 1 && box_px % 2 == 1 && box_px <= 31))
-    why << "count_cue_box_px must be odd in [1, 31], got " << box_px;
+    why << "count_contrast_box_px must be odd in [1, 31], got " << box_px;
   else if (!(surround_scale > 1 && surround_scale <= 10))
-    why << "count_cue_surround_scale must be in (1, 10], got " << surround_scale;
-  else if (!(min_contrast >= 1)) why << "count_cue_min_contrast must be at least 1, got " << min_contrast;
-  else if (!(min_fill >= 0 && min_fill <= 1)) why << "count_cue_min_fill must be in [0, 1], got " << min_fill;
+    why << "count_contrast_surround_scale must be in (1, 10], got " << surround_scale;
+  else if (!(min_contrast >= 1)) why << "count_contrast_min_contrast must be at least 1, got " << min_contrast;
+  else if (!(min_fill >= 0 && min_fill <= 1)) why << "count_contrast_min_fill must be in [0, 1], got " << min_fill;
   else if (!(still_motion >= 0 && std::isfinite(still_motion)))
-    why << "count_cue_still_motion must be finite and at least 0, got " << still_motion;
+    why << "count_contrast_still_motion must be finite and at least 0, got " << still_motion;
   else if (!(still_min_isolation >= 1 && std::isfinite(still_min_isolation)))
-    why << "count_cue_still_isolation must be finite and at least 1, got " << still_min_isolation;
+    why << "count_contrast_still_isolation must be finite and at least 1, got " << still_min_isolation;
   else if (!(still_min_motion_z >= 0 && std::isfinite(still_min_motion_z)))
-    why << "count_cue_still_motion_z must be finite and at least 0, got " << still_min_motion_z;
+    why << "count_contrast_still_motion_z must be finite and at least 0, got " << still_min_motion_z;
   else if (!(sparse_chance >= 0 && sparse_chance < 1))
-    why << "count_cue_sparse_chance must be in [0, 1), got " << sparse_chance;
+    why << "count_contrast_sparse_chance must be in [0, 1), got " << sparse_chance;
   return why.str();
 }
 

@@ -14,11 +14,11 @@ std::string DenseMotionSourceOptions::validate() const {
     if (!std::isfinite(v)) return "non-finite detector parameter";
   std::ostringstream why;
   if (!(density_px >= 1 && density_px % 2 == 1 && density_px <= 31))
-    why << "motion_cue_density_px must be odd in [1, 31], got " << density_px;
-  else if (radius_px < 1 || radius_px > 100) why << "motion_cue_radius_px must be in [1, 100], got " << radius_px;
-  else if (!(min_r2 >= 0 && min_r2 <= 1)) why << "motion_cue_min_r2 must be in [0, 1], got " << min_r2;
-  else if (min_pixels < 3) why << "motion_cue_min_pixels must be at least 3, got " << min_pixels;
-  else if (!(min_span >= 0)) why << "motion_cue_min_span must be >= 0, got " << min_span;
+    why << "dense_motion_density_px must be odd in [1, 31], got " << density_px;
+  else if (radius_px < 1 || radius_px > 100) why << "dense_motion_radius_px must be in [1, 100], got " << radius_px;
+  else if (!(min_r2 >= 0 && min_r2 <= 1)) why << "dense_motion_min_r2 must be in [0, 1], got " << min_r2;
+  else if (min_pixels < 3) why << "dense_motion_min_pixels must be at least 3, got " << min_pixels;
+  else if (!(min_span >= 0)) why << "dense_motion_min_span must be >= 0, got " << min_span;
   return why.str();
 }
 

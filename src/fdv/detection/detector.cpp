@@ -89,8 +89,8 @@ std::string DetectorOptions::validate() const {
   else if (!(refine_grow_density >= 0 && refine_grow_density <= 1))
     why << "refine_grow_density must be in [0, 1], got " << refine_grow_density;
   else if (!(refine_grow_contrast >= 0)) why << "refine_grow_contrast must be >= 0, got " << refine_grow_contrast;
-  else if (refine_recentre_passes < 0 || refine_recentre_passes > 20)
-    why << "refine_recentre_passes must be in [0, 20], got " << refine_recentre_passes;
+  else if (refine_recenter_passes < 0 || refine_recenter_passes > 20)
+    why << "refine_recenter_passes must be in [0, 20], got " << refine_recenter_passes;
   else if (min_window_events < 1) why << "min_window_events must be positive, got " << min_window_events;
   else if (!(max_segmented_fraction > 0 && max_segmented_fraction <= 1))
     why << "max_segmented_fraction must be in (0, 1], got " << max_segmented_fraction;

@@ -45,7 +45,7 @@
 namespace fdv {
 
 /// `options` with the gates stated at DetectorOptions::gate_focal_px scaled to `camera`'s fx when
-/// it is shorter: min_event_density × fx / gate_focal_px, count_cue_box_px × the same (odd, ≥ 3).
+/// it is shorter: min_event_density × fx / gate_focal_px, count_contrast_box_px × the same (odd, ≥ 3).
 DetectorOptions scaled_to_camera(const DetectorOptions& options, const PinholeCamera& camera);
 
 class Detector {
