@@ -39,7 +39,7 @@ class DetectorTest : public ::testing::Test {
 
 // The blob's true position at the detection's own time, on the undistorted grid and in raw pixels.
 void expect_on_blob(const DetectionResult& r, const test::BlobScene& s, double tol_px) {
-  ASSERT_TRUE(r.strongest()) << to_string(r.status) << ", fit rejected: " << r.fit_rejected;
+  ASSERT_TRUE(r.strongest()) << to_string(r.status) << ", fit rejected: " << test::fit_rejected(r);
   const Detection2D& d = *r.strongest();
   EXPECT_GT(d.t, s.t0);
   EXPECT_LT(d.t, s.t0 + s.duration);
@@ -270,7 +270,7 @@ TEST_F(DetectorTest, BurstFarAboveTheNormalRate) {
   const DetectionResult late = run(late_burst, s.t0, s.t0 + s.duration);
   expect_on_blob(late, s, 2.0);
   EXPECT_EQ(late.strongest()->source, DetectionSource::kCountContrast);
-  EXPECT_LT(late.count_cue_time_offset, -late.theta + late.mean_normalized);
+  EXPECT_LT(test::count_contrast_of(late).time_offset, -late.theta + late.mean_normalized);
   // With c = 0 the burst passes θ and floods the segmentation: reported as such.
   DetectorOptions o;
   o.threshold_c = 0;
@@ -409,11 +409,11 @@ TEST_F(DetectorTest, DenseMotionCueFindsASlowDenseBlobInsideATrackGateOnly) {
   const Detection2D& d = *found.strongest();
   EXPECT_EQ(d.source, DetectionSource::kDenseMotion);
   EXPECT_TRUE(d.track_aided);
-  EXPECT_GE(found.motion_cue_r2, o.dense_motion.min_r2);
-  EXPECT_DOUBLE_EQ(d.score, found.motion_cue_r2);
+  EXPECT_GE(test::dense_motion_of(found).r2, o.dense_motion.min_r2);
+  EXPECT_DOUBLE_EQ(d.score, test::dense_motion_of(found).r2);
   // T rises by 8 px per window along −y: across the 21 px square that is ≈ 2.6 windows on an
   // infinite edge; the finite disk gives less, but well above the gate.
-  EXPECT_GT(found.motion_cue_span, 0.3);
+  EXPECT_GT(test::dense_motion_of(found).span, 0.3);
   EXPECT_LT((d.center_undistorted - s.blob_at(d.t)).norm(), 2.0)
       << d.center_undistorted.transpose() << " vs " << s.blob_at(d.t).transpose();
   EXPECT_LT(d.box_undistorted.width(), 4 * s.radius_px);
@@ -421,7 +421,7 @@ TEST_F(DetectorTest, DenseMotionCueFindsASlowDenseBlobInsideATrackGateOnly) {
   // Without a gate the cue does not run (it would report any dense moving thing, e.g. a person).
   const DetectionResult no_prior = detect(s, o, {});
   EXPECT_FALSE(no_prior.strongest());
-  EXPECT_FALSE(no_prior.motion_cue_ran);
+  EXPECT_FALSE(test::ran(no_prior, DenseMotionSource::kName));
   // Switched off.
   DetectorOptions off = o;
   off.dense_motion.enabled = false;
@@ -431,8 +431,8 @@ TEST_F(DetectorTest, DenseMotionCueFindsASlowDenseBlobInsideATrackGateOnly) {
   still.velocity_px_s = {0, 0};
   const DetectionResult static_blob = detect(still, o, std::span(&on_blob, 1));
   EXPECT_FALSE(static_blob.strongest());
-  EXPECT_TRUE(static_blob.motion_cue_ran);
-  EXPECT_LT(static_blob.motion_cue_r2, o.dense_motion.min_r2);
+  EXPECT_TRUE(test::ran(static_blob, DenseMotionSource::kName));
+  EXPECT_LT(test::dense_motion_of(static_blob).r2, o.dense_motion.min_r2);
 }
 
 // The hovering camera's jerk (docs/DETECTION.md, "Count-contrast cue"): the textured background
@@ -478,11 +478,11 @@ std::vector<Event> late_background_scene(const PinholeCamera& cam, const test::B
 /// The count-contrast cue's search done the obvious way, for comparison with the detector's pruned
 /// one: every centre whose surround lies in the image, raster order, box sums from a prefix-sum
 /// table in int64 of I saturated at 255 and of its active pixels.
-struct CountCueSearch {
+struct CountContrastSearch {
   double best_contrast = 0, best_fill = 0;
   int filled_centres = 0;
 };
-CountCueSearch count_cue_by_brute_force(const CompensatedEventsView& view, const DetectorOptions& o) {
+CountContrastSearch count_contrast_by_brute_force(const CompensatedEventsView& view, const DetectorOptions& o) {
   TimeImages ti;
   build_time_images(view, ti);
   const int w = ti.count.cols, h = ti.count.rows, k = o.count_contrast.box_px, hk = k / 2;
@@ -502,7 +502,7 @@ CountCueSearch count_cue_by_brute_force(const CompensatedEventsView& view, const
   const double center_area = static_cast<double>(k) * k;
   const double ring_area = static_cast<double>(2 * hs + 1) * (2 * hs + 1) - center_area;
   const double image_density = static_cast<double>(ti.events) / (static_cast<double>(w) * h);
-  CountCueSearch r;
+  CountContrastSearch r;
   for (int y = hs; y < h - hs; ++y)
     for (int x = hs; x < w - hs; ++x) {
       const double fill = sum(active, x - hk, y - hk, k) / center_area;
@@ -516,12 +516,12 @@ CountCueSearch count_cue_by_brute_force(const CompensatedEventsView& view, const
   return r;
 }
 
-void expect_count_cue_search_as_brute_force(const DetectionResult& r, const CompensatedEventsView& view,
+void expect_count_contrast_search_as_brute_force(const DetectionResult& r, const CompensatedEventsView& view,
                                             const DetectorOptions& o) {
-  const CountCueSearch expected = count_cue_by_brute_force(view, o);
-  EXPECT_EQ(r.count_cue_filled_centres, expected.filled_centres);
-  EXPECT_DOUBLE_EQ(r.count_cue_contrast, expected.best_contrast);
-  EXPECT_DOUBLE_EQ(r.count_cue_fill, expected.best_fill);
+  const CountContrastSearch expected = count_contrast_by_brute_force(view, o);
+  EXPECT_EQ(test::count_contrast_of(r).filled_centers, expected.filled_centres);
+  EXPECT_DOUBLE_EQ(test::count_contrast_of(r).contrast, expected.best_contrast);
+  EXPECT_DOUBLE_EQ(test::count_contrast_of(r).fill, expected.best_fill);
 }
 
 TEST_F(DetectorTest, CountContrastCueFindsAnEvenlyFiringBlobOnALateBackground) {
@@ -547,28 +547,29 @@ TEST_F(DetectorTest, CountContrastCueFindsAnEvenlyFiringBlobOnALateBackground) {
   const DetectionResult paper = detect(scene, off);
   EXPECT_TRUE(!paper.strongest() || (paper.strongest()->center_undistorted - s.blob_at(paper.strongest()->t)).norm() > 10)
       << paper.strongest()->center_undistorted.transpose();
-  EXPECT_FALSE(paper.count_cue_ran);
+  EXPECT_FALSE(test::ran(paper, CountContrastSource::kName));
 
   const DetectionResult found = detect(scene, on);
   {
     SCOPED_TRACE("few filled centres: their box sums taken directly");
     const CompensatedWindow& w =
         compensator_->compensate({.events = scene, .t_start = s.t0, .t_end = s.t0 + s.duration});
-    expect_count_cue_search_as_brute_force(found, detector_input(w), on);
-    EXPECT_GT(found.count_cue_filled_centres, 0);
-    EXPECT_LT(found.count_cue_filled_centres, 1000);
+    expect_count_contrast_search_as_brute_force(found, detector_input(w), on);
+    EXPECT_GT(test::count_contrast_of(found).filled_centers, 0);
+    EXPECT_LT(test::count_contrast_of(found).filled_centers, 1000);
   }
-  ASSERT_TRUE(found.strongest()) << to_string(found.status) << ", contrast " << found.count_cue_contrast << ", fill "
-                               << found.count_cue_fill << ", time offset " << found.count_cue_time_offset;
+  const CountContrastDiagnostics cc = test::count_contrast_of(found);
+  ASSERT_TRUE(found.strongest()) << to_string(found.status) << ", contrast " << cc.contrast << ", fill " << cc.fill
+                                 << ", time offset " << cc.time_offset;
   const Detection2D& d = *found.strongest();
   EXPECT_EQ(d.source, DetectionSource::kCountContrast);
   EXPECT_FALSE(d.track_aided);
-  EXPECT_GE(found.count_cue_contrast, on.count_contrast.min_contrast);
-  EXPECT_GE(found.count_cue_fill, on.count_contrast.min_fill);
-  EXPECT_NEAR(d.score, 1.0 - 1.0 / found.count_cue_contrast, 1e-12);
+  EXPECT_GE(test::count_contrast_of(found).contrast, on.count_contrast.min_contrast);
+  EXPECT_GE(test::count_contrast_of(found).fill, on.count_contrast.min_fill);
+  EXPECT_NEAR(d.score, 1.0 - 1.0 / test::count_contrast_of(found).contrast, 1e-12);
   // Early against the late background: the ball's mean time is mid-window (0.5), the background's
   // ≈ 0.8 of it; by more than θ's margin c = 0.1 (static camera: ω = v = 0).
-  EXPECT_LT(found.count_cue_time_offset, -0.2);
+  EXPECT_LT(test::count_contrast_of(found).time_offset, -0.2);
   // At the ball's true centre at the detection's time, with the ball's size.
   EXPECT_LT((d.center_undistorted - s.blob_at(d.t)).norm(), 2.0)
       << d.center_undistorted.transpose() << " vs " << s.blob_at(d.t).transpose();
@@ -581,15 +582,15 @@ TEST_F(DetectorTest, CountContrastCueFindsAnEvenlyFiringBlobOnALateBackground) {
   no_ball.blob_rate_ev_s = 0;
   const DetectionResult background = detect(late_background_scene(cam, no_ball, false), on);
   EXPECT_FALSE(background.strongest()) << background.strongest()->center_undistorted.transpose();
-  EXPECT_TRUE(background.count_cue_ran);
-  EXPECT_LT(background.count_cue_contrast, on.count_contrast.min_contrast);
+  EXPECT_TRUE(test::ran(background, CountContrastSource::kName));
+  EXPECT_LT(test::count_contrast_of(background).contrast, on.count_contrast.min_contrast);
 
   // A dense, compact static spot that fires with the background: dense enough in I, but its
   // events follow the background's time profile, so the time test rejects it.
   const DetectionResult spot = detect(late_background_scene(cam, no_ball, true), on);
   EXPECT_FALSE(spot.strongest()) << spot.strongest()->center_undistorted.transpose();
-  EXPECT_GE(spot.count_cue_contrast, on.count_contrast.min_contrast);
-  EXPECT_LT(std::abs(spot.count_cue_time_offset), 0.1);
+  EXPECT_GE(test::count_contrast_of(spot).contrast, on.count_contrast.min_contrast);
+  EXPECT_LT(std::abs(test::count_contrast_of(spot).time_offset), 0.1);
 
   // Uniform density: every pixel fires evenly, ≈ 4 events each (a large, evenly textured
   // surface): the centre boxes are filled (P(I ≥ 2) ≈ 0.91), but none is denser than its
@@ -604,13 +605,13 @@ TEST_F(DetectorTest, CountContrastCueFindsAnEvenlyFiringBlobOnALateBackground) {
   Detector detector(on, cam);
   const DetectionResult flat = detector.detect(detector_input(w));
   EXPECT_FALSE(flat.strongest()) << to_string(flat.status);
-  EXPECT_TRUE(flat.count_cue_ran);
-  EXPECT_GE(flat.count_cue_fill, on.count_contrast.min_fill);
+  EXPECT_TRUE(test::ran(flat, CountContrastSource::kName));
+  EXPECT_GE(test::count_contrast_of(flat).fill, on.count_contrast.min_fill);
   // The best of ≈ 300 k centres: a 9x9 box's mean count fluctuates by ≈ 0.22 around 4.
-  EXPECT_LT(flat.count_cue_contrast, 2.0);
+  EXPECT_LT(test::count_contrast_of(flat).contrast, 2.0);
   SCOPED_TRACE("most centres filled: box sums from the whole image's table");
-  expect_count_cue_search_as_brute_force(flat, detector_input(w), on);
-  EXPECT_GT(flat.count_cue_filled_centres, 100'000);
+  expect_count_contrast_search_as_brute_force(flat, detector_input(w), on);
+  EXPECT_GT(test::count_contrast_of(flat).filled_centers, 100'000);
 }
 
 TEST_F(DetectorTest, CountContrastCueSkipsNoFilledCentreAtTheEdgesOfItsBlocks) {
@@ -642,10 +643,10 @@ TEST_F(DetectorTest, CountContrastCueSkipsNoFilledCentreAtTheEdgesOfItsBlocks) {
                                    .pixel = pixel, .t_s = t_s};
   Detector detector(o, lens());
   const DetectionResult r = detector.detect(view);
-  ASSERT_TRUE(r.count_cue_ran) << to_string(r.status);
-  EXPECT_EQ(r.count_cue_filled_centres, 2);
-  EXPECT_DOUBLE_EQ(r.count_cue_fill, 65.0 / 81.0);
-  expect_count_cue_search_as_brute_force(r, view, o);
+  ASSERT_TRUE(test::ran(r, CountContrastSource::kName)) << to_string(r.status);
+  EXPECT_EQ(test::count_contrast_of(r).filled_centers, 2);
+  EXPECT_DOUBLE_EQ(test::count_contrast_of(r).fill, 65.0 / 81.0);
+  expect_count_contrast_search_as_brute_force(r, view, o);
 }
 
 TEST_F(DetectorTest, CountContrastCueWaivesTheTimeTestOnlyInsideATrackGate) {
@@ -675,8 +676,8 @@ TEST_F(DetectorTest, CountContrastCueWaivesTheTimeTestOnlyInsideATrackGate) {
   o.count_contrast.still_motion = 0;
   const DetectionResult image_only = Detector(o, cam).detect(detector_input(w), std::span(&on_ball, 1));
   EXPECT_FALSE(image_only.strongest()) << to_string(image_only.strongest()->source);
-  EXPECT_GE(image_only.count_cue_contrast, o.count_contrast.min_contrast);
-  EXPECT_LT(std::abs(image_only.count_cue_time_offset), 0.1);
+  EXPECT_GE(test::count_contrast_of(image_only).contrast, o.count_contrast.min_contrast);
+  EXPECT_LT(std::abs(test::count_contrast_of(image_only).time_offset), 0.1);
   o.count_contrast.in_gates = true;
   const DetectionResult gated = Detector(o, cam).detect(detector_input(w), std::span(&on_ball, 1));
   ASSERT_TRUE(gated.strongest()) << to_string(gated.status);
@@ -688,7 +689,8 @@ TEST_F(DetectorTest, CountContrastCueWaivesTheTimeTestOnlyInsideATrackGate) {
   // With the still-camera test: the ball stands out from its surround and moves 1.8 px.
   o.count_contrast.still_motion = DetectorOptions{}.count_contrast.still_motion;
   const DetectionResult still = Detector(o, cam).detect(detector_input(w));
-  ASSERT_TRUE(still.strongest()) << "isolation " << still.count_cue_isolation << ", z " << still.count_cue_motion_z;
+  ASSERT_TRUE(still.strongest()) << "isolation " << test::count_contrast_of(still).isolation << ", z "
+                                 << test::count_contrast_of(still).motion_z;
   EXPECT_EQ(still.strongest()->source, DetectionSource::kCountContrast);
   EXPECT_FALSE(still.strongest()->track_aided);
   EXPECT_LT((still.strongest()->center_undistorted - s.blob_at(still.strongest()->t)).norm(), 2.0);
