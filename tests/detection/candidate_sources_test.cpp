@@ -143,7 +143,7 @@ TEST(TrackAidedSource, FindsTheBlobOnlyInsideAGateThatHoldsIt) {
   EXPECT_NEAR(c->center.x(), 60.0, 1e-3);
   EXPECT_NEAR(c->center.y(), 50.0, 1e-3);
 
-  // A tentative track's gate is left to the dense-motion cue.
+  // A tentative track's gate is left to the dense-motion source.
   w.tentative_gates = {w.gates.back()};
   w.gates.pop_back();
   SourceWindow tentative_in = w.build(o);

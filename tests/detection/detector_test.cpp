@@ -265,7 +265,7 @@ TEST_F(DetectorTest, BurstFarAboveTheNormalRate) {
   EXPECT_FALSE(late_paper.strongest());
   EXPECT_GT(late_paper.mean_normalized, 0.65);
   EXPECT_EQ(late_paper.status, DetectionStatus::kNothingSegmented);
-  // A late burst of background events is what the count-contrast cue is for: the blob fires
+  // A late burst of background events is what the count-contrast source is for: the blob fires
   // evenly over the window, so it is dense in I and early against all events.
   const DetectionResult late = run(late_burst, s.t0, s.t0 + s.duration);
   expect_on_blob(late, s, 2.0);
@@ -378,7 +378,7 @@ TEST_F(DetectorTest, TrackPriorAdmitsAWeakerPatternOnlyInsideItsGate) {
 
 // A far, spinning, textured ball: events all over its disk throughout the window (the scene's
 // blob), moving slowly (8 px per window). With N's cue switched off (min_peak = prior_min_peak = 1),
-// only the dense-motion cue can find it, and only inside a track's gate.
+// only the dense-motion source can find it, and only inside a track's gate.
 TEST_F(DetectorTest, DenseMotionCueFindsASlowDenseBlobInsideATrackGateOnly) {
   test::BlobScene s;
   s.radius_px = 9;
@@ -387,8 +387,8 @@ TEST_F(DetectorTest, DenseMotionCueFindsASlowDenseBlobInsideATrackGateOnly) {
   DetectorOptions o;
   o.gaussian_fit.min_peak = 1.0;
   o.track_aided.min_peak = 1.0;
-  // The count-contrast cue would find this dense blob too (inside a gate it asks no motion): this
-  // test is about the dense-motion cue alone.
+  // The count-contrast source would find this dense blob too (inside a gate it asks no motion): this
+  // test is about the dense-motion source alone.
   o.count_contrast.enabled = false;
   const PinholeCamera cam = lens();
   auto raw_of = [&](const Eigen::Vector2d& uv) {
@@ -435,7 +435,7 @@ TEST_F(DetectorTest, DenseMotionCueFindsASlowDenseBlobInsideATrackGateOnly) {
   EXPECT_LT(test::dense_motion_of(static_blob).r2, o.dense_motion.min_r2);
 }
 
-// The hovering camera's jerk (docs/DETECTION.md, "Count-contrast cue"): the textured background
+// The hovering camera's jerk (docs/DETECTION.md, "Count-contrast source"): the textured background
 // fires only in the window's last 40 %, so it is late in N; a slow ball fires evenly over the
 // window. Static camera, so `none` is the exact compensation. `spot` adds a static, dense,
 // compact spot of texture (radius 5 px, 4 events per pixel) that fires with the background.
@@ -475,7 +475,7 @@ std::vector<Event> late_background_scene(const PinholeCamera& cam, const test::B
   return ev;
 }
 
-/// The count-contrast cue's search done the obvious way, for comparison with the detector's pruned
+/// The count-contrast source's search done the obvious way, for comparison with the detector's pruned
 /// one: every centre whose surround lies in the image, raster order, box sums from a prefix-sum
 /// table in int64 of I saturated at 255 and of its active pixels.
 struct CountContrastSearch {

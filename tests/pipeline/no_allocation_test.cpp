@@ -208,8 +208,8 @@ TEST(NoAllocation, DetectorAfterWarmUp) {
 TEST(NoAllocation, DetectorRetrievalBlankingAndPriorsToo) {
   // The paths a clean blob does not take: a fit that never converges (one iteration) sends every
   // candidate to region retrieval, an unreachable event density fails them all (blanking and the
-  // next candidates), and a track's prior adds the track-aided look and the dense-motion cue; the
-  // count-contrast cue runs when all of them fail.
+  // next candidates), and a track's prior adds the track-aided look and the dense-motion source; the
+  // count-contrast source runs when all of them fail.
   DetectorOptions o;
   o.fit_max_iterations = 1;
   o.min_event_density = 1e3;

@@ -59,8 +59,8 @@ struct SourceWindow {
   double window_s = 0;      ///< the window's duration [s]
   /// The confirmed tracks' gates on the undistorted grid (priors with an inverse lens map only).
   std::span<const Box2D> gates;
-  /// Tentative tracks' gates (DetectionPrior::confirmed false), searched by the dense-motion cue and
-  /// the count-contrast cue's sparse search only.
+  /// Tentative tracks' gates (DetectionPrior::confirmed false), searched by the dense-motion source and
+  /// the count-contrast source's sparse search only.
   std::span<const Box2D> tentative_gates;
   /// Scratch of moving-region retrieval, shared by the sources that run it (it is large: a run
   /// list sized for the whole image).

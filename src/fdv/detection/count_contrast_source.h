@@ -1,5 +1,5 @@
 #pragma once
-/// Candidate source 4 (not in the paper; docs/DETECTION.md, "Count-contrast cue"): the filled centre
+/// Candidate source 4 (not in the paper; docs/DETECTION.md, "Count-contrast source"): the filled centre
 /// box of the count image I with the highest count contrast against its surround
 /// (CountContrastSourceOptions), its box from Algorithm 1 on I above the background level. First
 /// inside the tracks' gates without the time test (in_gates), then over the whole image with it: the

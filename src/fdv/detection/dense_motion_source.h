@@ -1,5 +1,5 @@
 #pragma once
-/// Candidate source 3 (not in the paper; docs/DETECTION.md, "Dense-motion cue"): inside each
+/// Candidate source 3 (not in the paper; docs/DETECTION.md, "Dense-motion source"): inside each
 /// confirmed track's gate, the densest patch of active pixels of I (I ≥ min_pixel_events), accepted
 /// when the mean-time image T rises across it as a plane (DenseMotionSourceOptions) and its box
 /// passes the event gates. Runs only when enabled (the registry makes none otherwise), with priors,

@@ -156,8 +156,8 @@ struct DetectionResult {
 struct DetectionPrior {
   Eigen::Vector2d center_raw = Eigen::Vector2d::Zero();
   Eigen::Vector2d box_size_px = Eigen::Vector2d::Zero();
-  /// False for a tentative track's prior: its gate is searched by the dense-motion cue, whose
-  /// time-plane test is the strictest of the gate sources, and by the count-contrast cue's sparse
+  /// False for a tentative track's prior: its gate is searched by the dense-motion source, whose
+  /// time-plane test is the strictest of the gate sources, and by the count-contrast source's sparse
   /// search with a still camera only (docs/DETECTION.md).
   bool confirmed = true;
 };

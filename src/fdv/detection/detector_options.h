@@ -79,7 +79,7 @@ void describe(V& v, TrackAidedSourceOptions& o) {
   v("prior_min_peak", o.min_peak, "-", "source 2: evidence threshold inside a confirmed track's gate (1 = off); tuned");
 }
 
-/// Source 3, not in the paper (docs/DETECTION.md, "Dense-motion cue"): inside the tracks' gates,
+/// Source 3, not in the paper (docs/DETECTION.md, "Dense-motion source"): inside the tracks' gates,
 /// the densest patch of active pixels of I, accepted when its mean-time image T rises across it as
 /// a plane T ≈ a + g·(x − x_c) (count-weighted least squares over the (2r+1)² square around it). A
 /// moving object fires late on its leading side, so T rises along its image velocity; compensated
@@ -119,7 +119,7 @@ void describe(V& v, DenseMotionSourceOptions& o) {
   v.removed("motion_cue_min_span", "renamed dense_motion_min_span");
 }
 
-/// Source 4, not in the paper (docs/DETECTION.md, "Count-contrast cue"): a compact blob of the count
+/// Source 4, not in the paper (docs/DETECTION.md, "Count-contrast source"): a compact blob of the count
 /// image I much denser than its surroundings. A slow object that fires evenly over the window (a
 /// far head-on ball) is not late in N when the background's events came late (a jerk of the
 /// hovering camera), but it is the densest compact blob of I. Centre: the box_px² box (k); contrast
@@ -144,7 +144,7 @@ struct CountContrastSourceOptions {
   /// that the blob moves. YAML `count_contrast_in_gates`
   bool in_gates = true;
   /// The still-camera test, which a blob may pass instead of the time test (docs/DETECTION.md,
-  /// "Count-contrast cue"): it applies while θ's motion term a‖ω‖ + b‖v‖ is at most this [-]
+  /// "Count-contrast source"): it applies while θ's motion term a‖ω‖ + b‖v‖ is at most this [-]
   /// (hovering ≈ 0.002-0.02, fast flight ≈ 0.2-0.3); 0 = off. YAML `count_contrast_still_motion`
   double still_motion = 0.05;
   /// ... the blob's events per pixel over those of its own-scale surround (its box grown by its own
@@ -155,7 +155,7 @@ struct CountContrastSourceOptions {
   /// (x and y regressed on t) at least this [-]; a flickering light does not move.
   /// YAML `count_contrast_still_motion_z`
   double still_min_motion_z = 2.0;
-  /// The sparse search (docs/DETECTION.md, "Count-contrast cue"): with the camera nearly still and
+  /// The sparse search (docs/DETECTION.md, "Count-contrast source"): with the camera nearly still and
   /// nothing found, a centre box is filled when so many of its pixels fired at all that, were the
   /// image's fired pixels scattered at random, this many boxes of the image would be expected to
   /// reach it per window [-]; 0 = off. YAML `count_contrast_sparse_chance`
