@@ -25,6 +25,7 @@
 #include "fdv/compensation/compensator.h"
 #include "fdv/compensation/reference_warp.h"
 #include "fdv/detection/detector.h"
+#include "fdv/detection/gaussian_fit_source.h"
 #include "fdv/detection/reference_time_images.h"
 #include "fdv/detection/segmentation.h"
 #include "fdv/pipeline/detector_input.h"
@@ -290,6 +291,7 @@ void BM_Detector(benchmark::State& state, bool noisy, int threads) {
   std::vector<double> ms, wall;
   bool found = true;
   DetectionTimings sum;
+  double fit_ms = 0;  // the paper's source: Algorithm 1 and region retrieval
   CompensatedEventsView view = detector_input(cw);
   view.threads = threads;
   for (auto _ : state) {
@@ -301,8 +303,7 @@ void BM_Detector(benchmark::State& state, bool noisy, int threads) {
     sum.time_images_ms += r.timings.time_images_ms;
     sum.segmentation_ms += r.timings.segmentation_ms;
     sum.preprocess_ms += r.timings.preprocess_ms;
-    sum.fit_ms += r.timings.fit_ms;
-    sum.retrieval_ms += r.timings.retrieval_ms;
+    fit_ms += r.timings.source_ms(GaussianFitSource::kName);
     sum.refine_ms += r.timings.refine_ms;
   }
   const double n = static_cast<double>(ms.size());
@@ -310,8 +311,7 @@ void BM_Detector(benchmark::State& state, bool noisy, int threads) {
   state.counters["detected"] = found ? 1 : 0;
   state.counters["ti_ms"] = sum.time_images_ms / n;
   state.counters["pre_ms"] = sum.preprocess_ms / n;
-  state.counters["fit_ms"] = sum.fit_ms / n;
-  state.counters["ret_ms"] = sum.retrieval_ms / n;
+  state.counters["fit_ms"] = fit_ms / n;
   state.counters["ref_ms"] = sum.refine_ms / n;
   report_distribution(state, ms, wall);
 }

@@ -199,6 +199,7 @@ int run(const Args& a) {
   double last_window_clock = 0, last_window_cpu = 0, lag = 0, max_lag = 0;
   const double window_ms = to_seconds(opt.windows.window_ns) * 1e3;
   PerceptionCallbacks cb;
+  const std::vector<RegisteredSource> sources = registered_sources();
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> windows_csv(nullptr, &std::fclose);
   if (!a.windows_csv.empty()) {
     windows_csv.reset(std::fopen(a.windows_csv.c_str(), "w"));
@@ -206,9 +207,9 @@ int run(const Args& a) {
       std::fprintf(stderr, "cannot write %s\n", a.windows_csv.c_str());
       return 2;
     }
-    std::fputs("window,events,status,detected,compensation,time_images,segmentation,preprocess,fit,retrieval,refine,"
-               "motion_cue,count_cue,detection,front_end\n",
-               windows_csv.get());
+    std::string header = "window,events,status,detected,compensation,time_images,segmentation,preprocess,";
+    for (const RegisteredSource& source : sources) header += std::string(source.name) + ",";
+    std::fputs((header + "refine,detection,front_end\n").c_str(), windows_csv.get());
   }
   cb.on_window = [&](const WindowResult& w) {
     const double now = pipeline_clock(), now_cpu = pipeline_cpu();
@@ -228,27 +229,29 @@ int run(const Args& a) {
     stage["time_images"].v.push_back(d.time_images_ms);
     stage["compensation+time_images"].v.push_back(w.timings.compensation_ms + d.time_images_ms);
     stage["segmentation+preprocess"].v.push_back(d.segmentation_ms + d.preprocess_ms);
-    stage["fit+retrieval"].v.push_back(d.fit_ms + d.retrieval_ms);
+    double sources_ms = 0;
+    for (const RegisteredSource& source : sources) {  // 0 in a window that did not try it
+      stage["source " + std::string(source.name)].v.push_back(d.source_ms(source.name));
+      sources_ms += d.source_ms(source.name);
+    }
     stage["refine"].v.push_back(d.refine_ms);
-    stage["motion cue"].v.push_back(d.motion_cue_ms);
-    stage["count cue"].v.push_back(d.count_cue_ms);
-    // What no stage timer covers: candidate search (maxima, blanking), gates, the detection's
-    // mapping to raw pixels.
-    stage["detection, other"].v.push_back(d.total_ms - d.time_images_ms - d.segmentation_ms -
-                                          d.preprocess_ms - d.fit_ms - d.retrieval_ms -
-                                          d.refine_ms - d.motion_cue_ms - d.count_cue_ms);
+    // What no stage timer covers: blanking between objects, the detection's mapping to raw pixels.
+    stage["detection, other"].v.push_back(d.total_ms - d.time_images_ms - d.segmentation_ms - d.preprocess_ms -
+                                          sources_ms - d.refine_ms);
     stage["detection (all)"].v.push_back(d.total_ms);
     stage["front end (comp+detection)"].v.push_back(w.timings.compensation_ms + d.total_ms);
     stage["tracking"].v.push_back(w.timings.tracking_ms);
     stage["window total"].v.push_back(w.timings.total_ms);
     work.v.push_back(work_ms);
     work_cpu.v.push_back(cpu_ms);
-    if (windows_csv)
-      std::fprintf(windows_csv.get(), "%llu,%zu,%s,%zu,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n",
-                   static_cast<unsigned long long>(w.index), w.events, std::string(to_string(w.status)).c_str(),
-                   w.detections.size(), w.timings.compensation_ms, d.time_images_ms, d.segmentation_ms,
-                   d.preprocess_ms, d.fit_ms, d.retrieval_ms, d.refine_ms, d.motion_cue_ms, d.count_cue_ms, d.total_ms,
+    if (windows_csv) {
+      std::fprintf(windows_csv.get(), "%llu,%zu,%s,%zu,%.4f,%.4f,%.4f,%.4f,", static_cast<unsigned long long>(w.index),
+                   w.events, std::string(to_string(w.status)).c_str(), w.detections.size(), w.timings.compensation_ms,
+                   d.time_images_ms, d.segmentation_ms, d.preprocess_ms);
+      for (const RegisteredSource& source : sources) std::fprintf(windows_csv.get(), "%.4f,", d.source_ms(source.name));
+      std::fprintf(windows_csv.get(), "%.4f,%.4f,%.4f\n", d.refine_ms, d.total_ms,
                    w.timings.compensation_ms + d.total_ms);
+    }
   };
   cb.on_depth = [&](const DepthResult& r) { depth_ms.v.push_back(r.ms); };
   cb.on_estimate = [&](const EstimateResult& r) { estimate_ms.v.push_back(r.ms); };

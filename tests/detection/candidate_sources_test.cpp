@@ -12,6 +12,7 @@
 #include "fdv/detection/event_refinement.h"
 #include "fdv/detection/gaussian_fit_source.h"
 #include "fdv/detection/track_aided_source.h"
+#include "synthetic_scene.h"
 
 namespace fdv {
 namespace {
@@ -142,7 +143,7 @@ TEST(TrackAidedSource, FindsTheBlobOnlyInsideAGateThatHoldsIt) {
   EXPECT_NEAR(c->center.x(), 60.0, 1e-3);
   EXPECT_NEAR(c->center.y(), 50.0, 1e-3);
 
-  // A tentative track's gate is left to the dense-motion cue.
+  // A tentative track's gate is left to the dense-motion source.
   w.tentative_gates = {w.gates.back()};
   w.gates.pop_back();
   SourceWindow tentative_in = w.build(o);
@@ -169,12 +170,12 @@ TEST(DenseMotionSource, ATimePlaneBlobIsFoundAtItsCentroid) {
   source.allocate(kWidth, kHeight);
   DetectionResult res;
   const std::optional<Candidate> c = source.find(in, res);
-  ASSERT_TRUE(c) << "R² " << res.motion_cue_r2 << ", span " << res.motion_cue_span;
-  EXPECT_TRUE(res.motion_cue_ran);
+  ASSERT_TRUE(c) << "R² " << test::dense_motion_of(res).r2 << ", span " << test::dense_motion_of(res).span;
+  EXPECT_TRUE(test::ran(res, DenseMotionSource::kName));
   EXPECT_TRUE(res.track_aided);
   EXPECT_EQ(c->source, DetectionSource::kDenseMotion);
-  EXPECT_NEAR(res.motion_cue_r2, 1.0, 1e-6);
-  EXPECT_NEAR(res.motion_cue_span, kSlopeS * (2 * o.dense_motion.radius_px + 1) / kWindowS, 1e-5);
+  EXPECT_NEAR(test::dense_motion_of(res).r2, 1.0, 1e-6);
+  EXPECT_NEAR(test::dense_motion_of(res).span, kSlopeS * (2 * o.dense_motion.radius_px + 1) / kWindowS, 1e-5);
   EXPECT_NEAR(c->center.x(), 80.0, 1e-9);
   EXPECT_NEAR(c->center.y(), 60.0, 1e-9);
   EXPECT_NEAR(c->t_mean_s, 0.0125, 1e-6);
@@ -195,8 +196,8 @@ TEST(DenseMotionSource, ATimePlaneBlobIsFoundAtItsCentroid) {
   SourceWindow flat_in = flat.build(o);
   DetectionResult flat_res;
   EXPECT_FALSE(source.find(flat_in, flat_res));
-  EXPECT_TRUE(flat_res.motion_cue_ran);
-  EXPECT_LT(flat_res.motion_cue_r2, 0.01);
+  EXPECT_TRUE(test::ran(flat_res, DenseMotionSource::kName));
+  EXPECT_LT(test::dense_motion_of(flat_res).r2, 0.01);
 }
 
 // A 9x9 blob of 10 events per pixel with an empty surround: its contrast is its density over the
@@ -217,24 +218,24 @@ TEST(CountContrastSource, ADenseBlobOnAnEmptySurroundIsFoundAtItsCentre) {
   source.allocate(kWidth, kHeight);
   DetectionResult res;
   const std::optional<Candidate> c = source.find(in, res);
-  ASSERT_TRUE(c) << "contrast " << res.count_cue_contrast << ", time offset " << res.count_cue_time_offset;
+  ASSERT_TRUE(c) << "contrast " << test::count_contrast_of(res).contrast << ", time offset "
+                 << test::count_contrast_of(res).time_offset;
   EXPECT_EQ(c->source, DetectionSource::kCountContrast);
   const double image_density = static_cast<double>(w.pixel.size()) / (kWidth * kHeight);
-  EXPECT_DOUBLE_EQ(res.count_cue_contrast, 10.0 / image_density);
-  EXPECT_DOUBLE_EQ(res.count_cue_fill, 1.0);
+  EXPECT_DOUBLE_EQ(test::count_contrast_of(res).contrast, 10.0 / image_density);
+  EXPECT_DOUBLE_EQ(test::count_contrast_of(res).fill, 1.0);
   EXPECT_NEAR(c->center.x(), 100.0, 1e-4);
   EXPECT_NEAR(c->center.y(), 70.0, 1e-4);
-  EXPECT_DOUBLE_EQ(c->score, 1.0 - 1.0 / res.count_cue_contrast);
-  EXPECT_LT(res.count_cue_time_offset, -(in.theta - w.ti.mean_normalized));
+  EXPECT_DOUBLE_EQ(c->score, 1.0 - 1.0 / test::count_contrast_of(res).contrast);
+  EXPECT_LT(test::count_contrast_of(res).time_offset, -(in.theta - w.ti.mean_normalized));
 
-  // Disabled: nothing runs.
+  // Disabled: the registry makes no such source.
   DetectorOptions off;
   off.count_contrast.enabled = false;
-  CountContrastSource disabled(off);
-  disabled.allocate(kWidth, kHeight);
-  DetectionResult off_res;
-  EXPECT_FALSE(disabled.find(in, off_res));
-  EXPECT_FALSE(off_res.count_cue_ran);
+  for (const RegisteredSource& registered : registered_sources())
+    if (registered.name == CountContrastSource::kName) {
+      EXPECT_EQ(registered.make(off), nullptr);
+    }
 }
 
 /// A 9x9 square centred on (100, 70) at the window's middle, moving at `speed_px_s` along x, whose
@@ -255,7 +256,7 @@ HandMadeWindow evenly_firing_square(double speed_px_s, int body_events = 0) {
   return w;
 }
 
-std::optional<Candidate> count_cue(const DetectorOptions& o, HandMadeWindow& w, DetectionResult& res) {
+std::optional<Candidate> count_contrast(const DetectorOptions& o, HandMadeWindow& w, DetectionResult& res) {
   SourceWindow in = w.build(o);
   CountContrastSource source(o);
   source.allocate(kWidth, kHeight);
@@ -272,40 +273,41 @@ TEST(CountContrastSource, AnEvenlyFiringMovingBlobIsFoundOnlyWithTheCameraStill)
   {
     HandMadeWindow w = evenly_firing_square(kSpeed);
     DetectionResult res;
-    const std::optional<Candidate> c = count_cue(o, w, res);
-    ASSERT_TRUE(c) << "isolation " << res.count_cue_isolation << ", z " << res.count_cue_motion_z;
-    EXPECT_LT(std::abs(res.count_cue_time_offset), o.threshold_c);  // the time test alone fails
-    EXPECT_GE(res.count_cue_isolation, o.count_contrast.still_min_isolation);
-    EXPECT_GE(res.count_cue_motion_z, o.count_contrast.still_min_motion_z);
+    const std::optional<Candidate> c = count_contrast(o, w, res);
+    ASSERT_TRUE(c) << "isolation " << test::count_contrast_of(res).isolation << ", z "
+                   << test::count_contrast_of(res).motion_z;
+    EXPECT_LT(std::abs(test::count_contrast_of(res).time_offset), o.threshold_c);  // the time test alone fails
+    EXPECT_GE(test::count_contrast_of(res).isolation, o.count_contrast.still_min_isolation);
+    EXPECT_GE(test::count_contrast_of(res).motion_z, o.count_contrast.still_min_motion_z);
     EXPECT_NEAR(c->center.x(), 100.0, 0.5);
     EXPECT_NEAR(c->center.y(), 70.0, 0.5);
     DetectorOptions off = o;
     off.count_contrast.still_motion = 0;
     DetectionResult off_res;
-    EXPECT_FALSE(count_cue(off, w, off_res));
+    EXPECT_FALSE(count_contrast(off, w, off_res));
   }
   {
     HandMadeWindow w = evenly_firing_square(0);
     DetectionResult res;
-    EXPECT_FALSE(count_cue(o, w, res));
-    EXPECT_GE(res.count_cue_isolation, o.count_contrast.still_min_isolation);
-    EXPECT_LT(res.count_cue_motion_z, 0.5);
+    EXPECT_FALSE(count_contrast(o, w, res));
+    EXPECT_GE(test::count_contrast_of(res).isolation, o.count_contrast.still_min_isolation);
+    EXPECT_LT(test::count_contrast_of(res).motion_z, 0.5);
   }
   {
     HandMadeWindow w = evenly_firing_square(kSpeed);
     w.speed_m_s = 6;  // b‖v‖ = 0.24 > still_motion
     DetectionResult res;
-    EXPECT_FALSE(count_cue(o, w, res));
-    EXPECT_EQ(res.count_cue_isolation, 0.0);  // the still-camera test did not run
+    EXPECT_FALSE(count_contrast(o, w, res));
+    EXPECT_EQ(test::count_contrast_of(res).isolation, 0.0);  // the still-camera test did not run
     // Inside a confirmed track's gate there is no time test; a tentative track's gate is not searched.
     const Box2D gate{85, 55, 115, 85};
     w.tentative_gates = {gate};
     DetectionResult tentative_res;
-    EXPECT_FALSE(count_cue(o, w, tentative_res));
+    EXPECT_FALSE(count_contrast(o, w, tentative_res));
     w.tentative_gates.clear();
     w.gates = {gate};
     DetectionResult gated_res;
-    const std::optional<Candidate> c = count_cue(o, w, gated_res);
+    const std::optional<Candidate> c = count_contrast(o, w, gated_res);
     ASSERT_TRUE(c);
     EXPECT_TRUE(gated_res.track_aided);
     EXPECT_NEAR(c->center.x(), 100.0, 0.5);
@@ -313,10 +315,10 @@ TEST(CountContrastSource, AnEvenlyFiringMovingBlobIsFoundOnlyWithTheCameraStill)
   {
     HandMadeWindow w = evenly_firing_square(kSpeed, 2);
     DetectionResult res;
-    EXPECT_FALSE(count_cue(o, w, res));
-    EXPECT_GT(res.count_cue_contrast, o.count_contrast.min_contrast);  // dense enough for the cue
-    EXPECT_GT(res.count_cue_isolation, 1.0);
-    EXPECT_LT(res.count_cue_isolation, o.count_contrast.still_min_isolation);
+    EXPECT_FALSE(count_contrast(o, w, res));
+    EXPECT_GT(test::count_contrast_of(res).contrast, o.count_contrast.min_contrast);  // dense enough for the cue
+    EXPECT_GT(test::count_contrast_of(res).isolation, 1.0);
+    EXPECT_LT(test::count_contrast_of(res).isolation, o.count_contrast.still_min_isolation);
   }
 }
 
@@ -351,10 +353,11 @@ HandMadeWindow quiet_window() {
 }
 
 /// The count cue with `gate` as a tentative track's only gate; what it finds there is track-aided.
-std::optional<Candidate> count_cue_in_tentative_gate(const DetectorOptions& o, HandMadeWindow& w, const Box2D& gate) {
+std::optional<Candidate> count_contrast_in_tentative_gate(const DetectorOptions& o, HandMadeWindow& w,
+                                                          const Box2D& gate) {
   w.tentative_gates = {gate};
   DetectionResult res;
-  std::optional<Candidate> c = count_cue(o, w, res);
+  std::optional<Candidate> c = count_contrast(o, w, res);
   EXPECT_EQ(res.track_aided, c.has_value());
   return c;
 }
@@ -371,35 +374,36 @@ TEST(CountContrastSource, ALoneSparseMovingBlobIsFoundWithTheCameraStill) {
     HandMadeWindow w = quiet_window();
     add_sparse_square(w, 100, kSpeed);
     DetectionResult res;
-    const std::optional<Candidate> c = count_cue(o, w, res);
-    ASSERT_TRUE(c) << "contrast " << res.count_cue_contrast << ", fill " << res.count_cue_fill << ", isolation "
-                   << res.count_cue_isolation << ", z " << res.count_cue_motion_z;
-    EXPECT_GT(res.count_cue_sparse_min_active, 0);                       // the sparse search found it
-    EXPECT_LT(c->event_density, o.min_event_density);                    // below the dense gate
-    EXPECT_GE(res.count_cue_motion_z, o.count_contrast.still_min_motion_z);
+    const std::optional<Candidate> c = count_contrast(o, w, res);
+    const CountContrastDiagnostics cc = test::count_contrast_of(res);
+    ASSERT_TRUE(c) << "contrast " << cc.contrast << ", fill " << cc.fill << ", isolation " << cc.isolation << ", z "
+                   << cc.motion_z;
+    EXPECT_GT(cc.sparse_min_active, 0);                 // the sparse search found it
+    EXPECT_LT(c->event_density, o.min_event_density);  // below the dense gate
+    EXPECT_GE(cc.motion_z, o.count_contrast.still_min_motion_z);
     EXPECT_NEAR(c->center.x(), 100.0, 1.0);
     EXPECT_NEAR(c->center.y(), 70.0, 1.0);
     EXPECT_FALSE(res.track_aided);
     DetectorOptions off = o;
     off.count_contrast.sparse_chance = 0;
     DetectionResult off_res;
-    EXPECT_FALSE(count_cue(off, w, off_res));
-    EXPECT_EQ(off_res.count_cue_sparse_min_active, 0);
+    EXPECT_FALSE(count_contrast(off, w, off_res));
+    EXPECT_EQ(test::count_contrast_of(off_res).sparse_min_active, 0);
 
     w.speed_m_s = 6;  // b‖v‖ = 0.24 > still_motion
     DetectionResult moving_res;
-    EXPECT_FALSE(count_cue(o, w, moving_res));
-    EXPECT_EQ(moving_res.count_cue_sparse_min_active, 0);
+    EXPECT_FALSE(count_contrast(o, w, moving_res));
+    EXPECT_EQ(test::count_contrast_of(moving_res).sparse_min_active, 0);
   }
   {
     HandMadeWindow w = quiet_window();
     add_sparse_square(w, 100, kSpeed);
     add_sparse_square(w, 60, kSpeed);
     DetectionResult res;
-    EXPECT_FALSE(count_cue(o, w, res));
-    EXPECT_GT(res.count_cue_sparse_min_active, 0);
+    EXPECT_FALSE(count_contrast(o, w, res));
+    EXPECT_GT(test::count_contrast_of(res).sparse_min_active, 0);
     // A track's gate holding both is searched for its best blob all the same.
-    const std::optional<Candidate> c = count_cue_in_tentative_gate(o, w, Box2D{45, 55, 115, 85});
+    const std::optional<Candidate> c = count_contrast_in_tentative_gate(o, w, Box2D{45, 55, 115, 85});
     ASSERT_TRUE(c);
     EXPECT_NEAR(c->center.y(), 70.0, 1.0);
     EXPECT_LT(std::min(std::abs(c->center.x() - 100.0), std::abs(c->center.x() - 60.0)), 1.0) << c->center.x();
@@ -408,10 +412,10 @@ TEST(CountContrastSource, ALoneSparseMovingBlobIsFoundWithTheCameraStill) {
     HandMadeWindow w = quiet_window();
     add_sparse_square(w, 100, 0);
     DetectionResult res;
-    EXPECT_FALSE(count_cue(o, w, res));
-    EXPECT_GE(res.count_cue_isolation, o.count_contrast.still_min_isolation);
-    EXPECT_LT(res.count_cue_motion_z, o.count_contrast.still_min_motion_z);
-    const std::optional<Candidate> c = count_cue_in_tentative_gate(o, w, Box2D{85, 55, 115, 85});
+    EXPECT_FALSE(count_contrast(o, w, res));
+    EXPECT_GE(test::count_contrast_of(res).isolation, o.count_contrast.still_min_isolation);
+    EXPECT_LT(test::count_contrast_of(res).motion_z, o.count_contrast.still_min_motion_z);
+    const std::optional<Candidate> c = count_contrast_in_tentative_gate(o, w, Box2D{85, 55, 115, 85});
     ASSERT_TRUE(c);
     EXPECT_NEAR(c->center.x(), 100.0, 1.0);
   }

@@ -40,7 +40,7 @@ class DetectorTest : public ::testing::Test {
 
 // The blob's true position at the detection's own time, on the undistorted grid and in raw pixels.
 void expect_on_blob(const DetectionResult& r, const test::BlobScene& s, double tol_px) {
-  ASSERT_TRUE(r.strongest()) << to_string(r.status) << ", fit rejected: " << r.fit_rejected;
+  ASSERT_TRUE(r.strongest()) << to_string(r.status) << ", fit rejected: " << test::fit_rejected(r);
   const Detection2D& d = *r.strongest();
   EXPECT_GT(d.t, s.t0);
   EXPECT_LT(d.t, s.t0 + s.duration);
@@ -156,7 +156,7 @@ TEST_F(DetectorTest, CentreForTheCameraAtTheDetectionTimeGoesThroughObservedAt) 
 // Residual background around a fast object's path (imperfect compensation leaves texture events
 // there) pulls a centroid taken over a region centred on the box - which sits on the object's
 // latest sweep, ahead of it - forwards along the motion; the re-centred region
-// (refine_recentre_passes) settles on the object's own events.
+// (refine_recenter_passes) settles on the object's own events.
 TEST(DetectorRefine, RecentredRegionRemovesTheClutterPullAlongTheMotion) {
   test::BlobScene s;
   s.t0 = 2 * kNsPerS;
@@ -185,13 +185,13 @@ TEST(DetectorRefine, RecentredRegionRemovesTheClutterPullAlongTheMotion) {
   const CompensatedWindow& w = comp->compensate({.events = ev, .t_start = s.t0, .t_end = s.t0 + s.duration});
   auto along_error = [&](int passes) {
     DetectorOptions o;
-    o.refine_recentre_passes = passes;
+    o.refine_recenter_passes = passes;
     Detector d(o, lens());
     const DetectionResult r = d.detect(detector_input(w));
     EXPECT_TRUE(r.strongest()) << to_string(r.status);
     return r.strongest() ? r.strongest()->center_undistorted.x() - s.blob_at(r.strongest()->t).x() : 1e9;
   };
-  const double single = along_error(0), recentred = along_error(DetectorOptions{}.refine_recentre_passes);
+  const double single = along_error(0), recentred = along_error(DetectorOptions{}.refine_recenter_passes);
   EXPECT_GT(single, 2.0) << "the set-up must show the pull";
   EXPECT_LT(std::abs(recentred), 1.0);
 
@@ -266,12 +266,12 @@ TEST_F(DetectorTest, BurstFarAboveTheNormalRate) {
   EXPECT_FALSE(late_paper.strongest());
   EXPECT_GT(late_paper.mean_normalized, 0.65);
   EXPECT_EQ(late_paper.status, DetectionStatus::kNothingSegmented);
-  // A late burst of background events is what the count-contrast cue is for: the blob fires
+  // A late burst of background events is what the count-contrast source is for: the blob fires
   // evenly over the window, so it is dense in I and early against all events.
   const DetectionResult late = run(late_burst, s.t0, s.t0 + s.duration);
   expect_on_blob(late, s, 2.0);
   EXPECT_EQ(late.strongest()->source, DetectionSource::kCountContrast);
-  EXPECT_LT(late.count_cue_time_offset, -late.theta + late.mean_normalized);
+  EXPECT_LT(test::count_contrast_of(late).time_offset, -late.theta + late.mean_normalized);
   // With c = 0 the burst passes θ and floods the segmentation: reported as such.
   DetectorOptions o;
   o.threshold_c = 0;
@@ -379,7 +379,7 @@ TEST_F(DetectorTest, TrackPriorAdmitsAWeakerPatternOnlyInsideItsGate) {
 
 // A far, spinning, textured ball: events all over its disk throughout the window (the scene's
 // blob), moving slowly (8 px per window). With N's cue switched off (min_peak = prior_min_peak = 1),
-// only the dense-motion cue can find it, and only inside a track's gate.
+// only the dense-motion source can find it, and only inside a track's gate.
 TEST_F(DetectorTest, DenseMotionCueFindsASlowDenseBlobInsideATrackGateOnly) {
   test::BlobScene s;
   s.radius_px = 9;
@@ -388,8 +388,8 @@ TEST_F(DetectorTest, DenseMotionCueFindsASlowDenseBlobInsideATrackGateOnly) {
   DetectorOptions o;
   o.gaussian_fit.min_peak = 1.0;
   o.track_aided.min_peak = 1.0;
-  // The count-contrast cue would find this dense blob too (inside a gate it asks no motion): this
-  // test is about the dense-motion cue alone.
+  // The count-contrast source would find this dense blob too (inside a gate it asks no motion): this
+  // test is about the dense-motion source alone.
   o.count_contrast.enabled = false;
   const PinholeCamera cam = lens();
   auto raw_of = [&](const Eigen::Vector2d& uv) {
@@ -410,11 +410,11 @@ TEST_F(DetectorTest, DenseMotionCueFindsASlowDenseBlobInsideATrackGateOnly) {
   const Detection2D& d = *found.strongest();
   EXPECT_EQ(d.source, DetectionSource::kDenseMotion);
   EXPECT_TRUE(d.track_aided);
-  EXPECT_GE(found.motion_cue_r2, o.dense_motion.min_r2);
-  EXPECT_DOUBLE_EQ(d.score, found.motion_cue_r2);
+  EXPECT_GE(test::dense_motion_of(found).r2, o.dense_motion.min_r2);
+  EXPECT_DOUBLE_EQ(d.score, test::dense_motion_of(found).r2);
   // T rises by 8 px per window along −y: across the 21 px square that is ≈ 2.6 windows on an
   // infinite edge; the finite disk gives less, but well above the gate.
-  EXPECT_GT(found.motion_cue_span, 0.3);
+  EXPECT_GT(test::dense_motion_of(found).span, 0.3);
   EXPECT_LT((d.center_undistorted - s.blob_at(d.t)).norm(), 2.0)
       << d.center_undistorted.transpose() << " vs " << s.blob_at(d.t).transpose();
   EXPECT_LT(d.box_undistorted.width(), 4 * s.radius_px);
@@ -422,7 +422,7 @@ TEST_F(DetectorTest, DenseMotionCueFindsASlowDenseBlobInsideATrackGateOnly) {
   // Without a gate the cue does not run (it would report any dense moving thing, e.g. a person).
   const DetectionResult no_prior = detect(s, o, {});
   EXPECT_FALSE(no_prior.strongest());
-  EXPECT_FALSE(no_prior.motion_cue_ran);
+  EXPECT_FALSE(test::ran(no_prior, DenseMotionSource::kName));
   // Switched off.
   DetectorOptions off = o;
   off.dense_motion.enabled = false;
@@ -432,11 +432,11 @@ TEST_F(DetectorTest, DenseMotionCueFindsASlowDenseBlobInsideATrackGateOnly) {
   still.velocity_px_s = {0, 0};
   const DetectionResult static_blob = detect(still, o, std::span(&on_blob, 1));
   EXPECT_FALSE(static_blob.strongest());
-  EXPECT_TRUE(static_blob.motion_cue_ran);
-  EXPECT_LT(static_blob.motion_cue_r2, o.dense_motion.min_r2);
+  EXPECT_TRUE(test::ran(static_blob, DenseMotionSource::kName));
+  EXPECT_LT(test::dense_motion_of(static_blob).r2, o.dense_motion.min_r2);
 }
 
-// The hovering camera's jerk (docs/DETECTION.md, "Count-contrast cue"): the textured background
+// The hovering camera's jerk (docs/DETECTION.md, "Count-contrast source"): the textured background
 // fires only in the window's last 40 %, so it is late in N; a slow ball fires evenly over the
 // window. Static camera, so `none` is the exact compensation. `spot` adds a static, dense,
 // compact spot of texture (radius 5 px, 4 events per pixel) that fires with the background.
@@ -476,14 +476,14 @@ std::vector<Event> late_background_scene(const PinholeCamera& cam, const test::B
   return ev;
 }
 
-/// The count-contrast cue's search done the obvious way, for comparison with the detector's pruned
+/// The count-contrast source's search done the obvious way, for comparison with the detector's pruned
 /// one: every centre whose surround lies in the image, raster order, box sums from a prefix-sum
 /// table in int64 of I saturated at 255 and of its active pixels.
-struct CountCueSearch {
+struct CountContrastSearch {
   double best_contrast = 0, best_fill = 0;
   int filled_centres = 0;
 };
-CountCueSearch count_cue_by_brute_force(const CompensatedEventsView& view, const DetectorOptions& o) {
+CountContrastSearch count_contrast_by_brute_force(const CompensatedEventsView& view, const DetectorOptions& o) {
   TimeImages ti;
   build_time_images(view, ti);
   const int w = ti.count.cols, h = ti.count.rows, k = o.count_contrast.box_px, hk = k / 2;
@@ -503,7 +503,7 @@ CountCueSearch count_cue_by_brute_force(const CompensatedEventsView& view, const
   const double center_area = static_cast<double>(k) * k;
   const double ring_area = static_cast<double>(2 * hs + 1) * (2 * hs + 1) - center_area;
   const double image_density = static_cast<double>(ti.events) / (static_cast<double>(w) * h);
-  CountCueSearch r;
+  CountContrastSearch r;
   for (int y = hs; y < h - hs; ++y)
     for (int x = hs; x < w - hs; ++x) {
       const double fill = sum(active, x - hk, y - hk, k) / center_area;
@@ -517,12 +517,12 @@ CountCueSearch count_cue_by_brute_force(const CompensatedEventsView& view, const
   return r;
 }
 
-void expect_count_cue_search_as_brute_force(const DetectionResult& r, const CompensatedEventsView& view,
+void expect_count_contrast_search_as_brute_force(const DetectionResult& r, const CompensatedEventsView& view,
                                             const DetectorOptions& o) {
-  const CountCueSearch expected = count_cue_by_brute_force(view, o);
-  EXPECT_EQ(r.count_cue_filled_centres, expected.filled_centres);
-  EXPECT_DOUBLE_EQ(r.count_cue_contrast, expected.best_contrast);
-  EXPECT_DOUBLE_EQ(r.count_cue_fill, expected.best_fill);
+  const CountContrastSearch expected = count_contrast_by_brute_force(view, o);
+  EXPECT_EQ(test::count_contrast_of(r).filled_centers, expected.filled_centres);
+  EXPECT_DOUBLE_EQ(test::count_contrast_of(r).contrast, expected.best_contrast);
+  EXPECT_DOUBLE_EQ(test::count_contrast_of(r).fill, expected.best_fill);
 }
 
 TEST_F(DetectorTest, CountContrastCueFindsAnEvenlyFiringBlobOnALateBackground) {
@@ -548,28 +548,29 @@ TEST_F(DetectorTest, CountContrastCueFindsAnEvenlyFiringBlobOnALateBackground) {
   const DetectionResult paper = detect(scene, off);
   EXPECT_TRUE(!paper.strongest() || (paper.strongest()->center_undistorted - s.blob_at(paper.strongest()->t)).norm() > 10)
       << paper.strongest()->center_undistorted.transpose();
-  EXPECT_FALSE(paper.count_cue_ran);
+  EXPECT_FALSE(test::ran(paper, CountContrastSource::kName));
 
   const DetectionResult found = detect(scene, on);
   {
     SCOPED_TRACE("few filled centres: their box sums taken directly");
     const CompensatedWindow& w =
         compensator_->compensate({.events = scene, .t_start = s.t0, .t_end = s.t0 + s.duration});
-    expect_count_cue_search_as_brute_force(found, detector_input(w), on);
-    EXPECT_GT(found.count_cue_filled_centres, 0);
-    EXPECT_LT(found.count_cue_filled_centres, 1000);
+    expect_count_contrast_search_as_brute_force(found, detector_input(w), on);
+    EXPECT_GT(test::count_contrast_of(found).filled_centers, 0);
+    EXPECT_LT(test::count_contrast_of(found).filled_centers, 1000);
   }
-  ASSERT_TRUE(found.strongest()) << to_string(found.status) << ", contrast " << found.count_cue_contrast << ", fill "
-                               << found.count_cue_fill << ", time offset " << found.count_cue_time_offset;
+  const CountContrastDiagnostics cc = test::count_contrast_of(found);
+  ASSERT_TRUE(found.strongest()) << to_string(found.status) << ", contrast " << cc.contrast << ", fill " << cc.fill
+                                 << ", time offset " << cc.time_offset;
   const Detection2D& d = *found.strongest();
   EXPECT_EQ(d.source, DetectionSource::kCountContrast);
   EXPECT_FALSE(d.track_aided);
-  EXPECT_GE(found.count_cue_contrast, on.count_contrast.min_contrast);
-  EXPECT_GE(found.count_cue_fill, on.count_contrast.min_fill);
-  EXPECT_NEAR(d.score, 1.0 - 1.0 / found.count_cue_contrast, 1e-12);
+  EXPECT_GE(test::count_contrast_of(found).contrast, on.count_contrast.min_contrast);
+  EXPECT_GE(test::count_contrast_of(found).fill, on.count_contrast.min_fill);
+  EXPECT_NEAR(d.score, 1.0 - 1.0 / test::count_contrast_of(found).contrast, 1e-12);
   // Early against the late background: the ball's mean time is mid-window (0.5), the background's
   // ≈ 0.8 of it; by more than θ's margin c = 0.1 (static camera: ω = v = 0).
-  EXPECT_LT(found.count_cue_time_offset, -0.2);
+  EXPECT_LT(test::count_contrast_of(found).time_offset, -0.2);
   // At the ball's true centre at the detection's time, with the ball's size.
   EXPECT_LT((d.center_undistorted - s.blob_at(d.t)).norm(), 2.0)
       << d.center_undistorted.transpose() << " vs " << s.blob_at(d.t).transpose();
@@ -582,15 +583,15 @@ TEST_F(DetectorTest, CountContrastCueFindsAnEvenlyFiringBlobOnALateBackground) {
   no_ball.blob_rate_ev_s = 0;
   const DetectionResult background = detect(late_background_scene(cam, no_ball, false), on);
   EXPECT_FALSE(background.strongest()) << background.strongest()->center_undistorted.transpose();
-  EXPECT_TRUE(background.count_cue_ran);
-  EXPECT_LT(background.count_cue_contrast, on.count_contrast.min_contrast);
+  EXPECT_TRUE(test::ran(background, CountContrastSource::kName));
+  EXPECT_LT(test::count_contrast_of(background).contrast, on.count_contrast.min_contrast);
 
   // A dense, compact static spot that fires with the background: dense enough in I, but its
   // events follow the background's time profile, so the time test rejects it.
   const DetectionResult spot = detect(late_background_scene(cam, no_ball, true), on);
   EXPECT_FALSE(spot.strongest()) << spot.strongest()->center_undistorted.transpose();
-  EXPECT_GE(spot.count_cue_contrast, on.count_contrast.min_contrast);
-  EXPECT_LT(std::abs(spot.count_cue_time_offset), 0.1);
+  EXPECT_GE(test::count_contrast_of(spot).contrast, on.count_contrast.min_contrast);
+  EXPECT_LT(std::abs(test::count_contrast_of(spot).time_offset), 0.1);
 
   // Uniform density: every pixel fires evenly, ≈ 4 events each (a large, evenly textured
   // surface): the centre boxes are filled (P(I ≥ 2) ≈ 0.91), but none is denser than its
@@ -605,13 +606,13 @@ TEST_F(DetectorTest, CountContrastCueFindsAnEvenlyFiringBlobOnALateBackground) {
   Detector detector(on, cam);
   const DetectionResult flat = detector.detect(detector_input(w));
   EXPECT_FALSE(flat.strongest()) << to_string(flat.status);
-  EXPECT_TRUE(flat.count_cue_ran);
-  EXPECT_GE(flat.count_cue_fill, on.count_contrast.min_fill);
+  EXPECT_TRUE(test::ran(flat, CountContrastSource::kName));
+  EXPECT_GE(test::count_contrast_of(flat).fill, on.count_contrast.min_fill);
   // The best of ≈ 300 k centres: a 9x9 box's mean count fluctuates by ≈ 0.22 around 4.
-  EXPECT_LT(flat.count_cue_contrast, 2.0);
+  EXPECT_LT(test::count_contrast_of(flat).contrast, 2.0);
   SCOPED_TRACE("most centres filled: box sums from the whole image's table");
-  expect_count_cue_search_as_brute_force(flat, detector_input(w), on);
-  EXPECT_GT(flat.count_cue_filled_centres, 100'000);
+  expect_count_contrast_search_as_brute_force(flat, detector_input(w), on);
+  EXPECT_GT(test::count_contrast_of(flat).filled_centers, 100'000);
 }
 
 TEST_F(DetectorTest, CountContrastCueSkipsNoFilledCentreAtTheEdgesOfItsBlocks) {
@@ -643,15 +644,15 @@ TEST_F(DetectorTest, CountContrastCueSkipsNoFilledCentreAtTheEdgesOfItsBlocks) {
                                    .pixel = pixel, .t_s = t_s};
   Detector detector(o, lens());
   const DetectionResult r = detector.detect(view);
-  ASSERT_TRUE(r.count_cue_ran) << to_string(r.status);
-  EXPECT_EQ(r.count_cue_filled_centres, 2);
-  EXPECT_DOUBLE_EQ(r.count_cue_fill, 65.0 / 81.0);
-  expect_count_cue_search_as_brute_force(r, view, o);
+  ASSERT_TRUE(test::ran(r, CountContrastSource::kName)) << to_string(r.status);
+  EXPECT_EQ(test::count_contrast_of(r).filled_centers, 2);
+  EXPECT_DOUBLE_EQ(test::count_contrast_of(r).fill, 65.0 / 81.0);
+  expect_count_contrast_search_as_brute_force(r, view, o);
 }
 
 TEST_F(DetectorTest, CountContrastCueWaivesTheTimeTestOnlyInsideATrackGate) {
   // An evenly firing ball on an evenly firing background: its mean time is the image's, so over
-  // the image the time test rejects it; inside a confirmed track's gate (count_cue_in_gates) the
+  // the image the time test rejects it; inside a confirmed track's gate (count_contrast_in_gates) the
   // track is the evidence that it moves. The camera is still, so the still-camera test, off until
   // the end, finds it over the image too.
   test::BlobScene s;
@@ -676,8 +677,8 @@ TEST_F(DetectorTest, CountContrastCueWaivesTheTimeTestOnlyInsideATrackGate) {
   o.count_contrast.still_motion = 0;
   const DetectionResult image_only = Detector(o, cam).detect(detector_input(w), std::span(&on_ball, 1));
   EXPECT_FALSE(image_only.strongest()) << to_string(image_only.strongest()->source);
-  EXPECT_GE(image_only.count_cue_contrast, o.count_contrast.min_contrast);
-  EXPECT_LT(std::abs(image_only.count_cue_time_offset), 0.1);
+  EXPECT_GE(test::count_contrast_of(image_only).contrast, o.count_contrast.min_contrast);
+  EXPECT_LT(std::abs(test::count_contrast_of(image_only).time_offset), 0.1);
   o.count_contrast.in_gates = true;
   const DetectionResult gated = Detector(o, cam).detect(detector_input(w), std::span(&on_ball, 1));
   ASSERT_TRUE(gated.strongest()) << to_string(gated.status);
@@ -689,7 +690,8 @@ TEST_F(DetectorTest, CountContrastCueWaivesTheTimeTestOnlyInsideATrackGate) {
   // With the still-camera test: the ball stands out from its surround and moves 1.8 px.
   o.count_contrast.still_motion = DetectorOptions{}.count_contrast.still_motion;
   const DetectionResult still = Detector(o, cam).detect(detector_input(w));
-  ASSERT_TRUE(still.strongest()) << "isolation " << still.count_cue_isolation << ", z " << still.count_cue_motion_z;
+  ASSERT_TRUE(still.strongest()) << "isolation " << test::count_contrast_of(still).isolation << ", z "
+                                 << test::count_contrast_of(still).motion_z;
   EXPECT_EQ(still.strongest()->source, DetectionSource::kCountContrast);
   EXPECT_FALSE(still.strongest()->track_aided);
   EXPECT_LT((still.strongest()->center_undistorted - s.blob_at(still.strongest()->t)).norm(), 2.0);
@@ -743,23 +745,23 @@ TEST_F(DetectorTest, InvalidOptionsAreRejected) {
       {"min_pixel_events", [](DetectorOptions& x) { x.min_pixel_events = 0; }},
       {"min_event_density", [](DetectorOptions& x) { x.min_event_density = -1; }},
       {"gate_focal_px must be 0 (off) or in [10, 1e5], got 5", [](DetectorOptions& x) { x.gate_focal_px = 5; }},
-      {"motion_cue_density_px", [](DetectorOptions& x) { x.dense_motion.density_px = 4; }},
-      {"motion_cue_min_r2", [](DetectorOptions& x) { x.dense_motion.min_r2 = 1.5; }},
-      {"refine_recentre_passes", [](DetectorOptions& x) { x.refine_recentre_passes = -1; }},
+      {"dense_motion_density_px", [](DetectorOptions& x) { x.dense_motion.density_px = 4; }},
+      {"dense_motion_min_r2", [](DetectorOptions& x) { x.dense_motion.min_r2 = 1.5; }},
+      {"refine_recenter_passes", [](DetectorOptions& x) { x.refine_recenter_passes = -1; }},
       {"refine_grow_density must be in [0, 1], got 2", [](DetectorOptions& x) { x.refine_grow_density = 2; }},
       {"refine_grow_contrast", [](DetectorOptions& x) { x.refine_grow_contrast = -1; }},
-      {"motion_cue_min_pixels", [](DetectorOptions& x) { x.dense_motion.min_pixels = 2; }},
+      {"dense_motion_min_pixels", [](DetectorOptions& x) { x.dense_motion.min_pixels = 2; }},
       {"refit_min_roi_px", [](DetectorOptions& x) { x.gaussian_fit.refit_min_roi_px = 0.5; }},
       {"refit_local_scale", [](DetectorOptions& x) { x.gaussian_fit.refit_local_scale = -1; }},
-      {"count_cue_box_px", [](DetectorOptions& x) { x.count_contrast.box_px = 8; }},
-      {"count_cue_surround_scale", [](DetectorOptions& x) { x.count_contrast.surround_scale = 1; }},
-      {"count_cue_min_contrast", [](DetectorOptions& x) { x.count_contrast.min_contrast = 0.5; }},
-      {"count_cue_min_fill", [](DetectorOptions& x) { x.count_contrast.min_fill = 1.2; }},
-      {"count_cue_still_motion", [](DetectorOptions& x) { x.count_contrast.still_motion = -0.1; }},
-      {"count_cue_still_isolation", [](DetectorOptions& x) { x.count_contrast.still_min_isolation = 0.5; }},
-      {"count_cue_still_motion_z", [](DetectorOptions& x) { x.count_contrast.still_min_motion_z = NAN; }},
-      {"count_cue_sparse_chance", [](DetectorOptions& x) { x.count_contrast.sparse_chance = 1; }},
-      {"count_cue_sparse_chance", [](DetectorOptions& x) { x.count_contrast.sparse_chance = NAN; }},
+      {"count_contrast_box_px", [](DetectorOptions& x) { x.count_contrast.box_px = 8; }},
+      {"count_contrast_surround_scale", [](DetectorOptions& x) { x.count_contrast.surround_scale = 1; }},
+      {"count_contrast_min_contrast", [](DetectorOptions& x) { x.count_contrast.min_contrast = 0.5; }},
+      {"count_contrast_min_fill", [](DetectorOptions& x) { x.count_contrast.min_fill = 1.2; }},
+      {"count_contrast_still_motion", [](DetectorOptions& x) { x.count_contrast.still_motion = -0.1; }},
+      {"count_contrast_still_isolation", [](DetectorOptions& x) { x.count_contrast.still_min_isolation = 0.5; }},
+      {"count_contrast_still_motion_z", [](DetectorOptions& x) { x.count_contrast.still_min_motion_z = NAN; }},
+      {"count_contrast_sparse_chance", [](DetectorOptions& x) { x.count_contrast.sparse_chance = 1; }},
+      {"count_contrast_sparse_chance", [](DetectorOptions& x) { x.count_contrast.sparse_chance = NAN; }},
   };
   for (const auto& [name, make_bad] : cases) {
     DetectorOptions bad;

@@ -11,6 +11,7 @@
 #include "fdv/compensation/compensator.h"
 #include "fdv/detection/detector.h"
 #include "fdv/pipeline/detector_input.h"
+#include "synthetic_scene.h"
 
 namespace fdv {
 namespace {
@@ -81,7 +82,7 @@ TEST(EndToEnd, FlyingCameraFindsTheMovingObject) {
   const CompensatedWindow& w = comp->compensate({s.events, 0, dt, imu, odo, &s.depth});
   ASSERT_EQ(w.report.used, CompensationMethod::kRotationTranslation) << w.report.brief();
   const DetectionResult r = detector.detect(detector_input(w));
-  ASSERT_TRUE(r.strongest()) << to_string(r.status) << " " << r.fit_rejected;
+  ASSERT_TRUE(r.strongest()) << to_string(r.status) << " " << test::fit_rejected(r);
   // Truth: the object's centre at the detection's time, seen from the camera at t0.
   const Eigen::Vector3d c = s.object_p0 + s.object_v * to_seconds(r.strongest()->t);
   const Eigen::Vector2d truth(400.0 * c.x() / c.z() + 320.0, 400.0 * c.y() / c.z() + 240.0);

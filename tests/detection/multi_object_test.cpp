@@ -165,7 +165,7 @@ TEST_F(MultiObjectTest, LargeObjectIsDetectedUpToHalfTheShorterSide) {
   s.blob_rate_ev_s = 3'000'000;
   s.seed = 3;
   const DetectionResult r = detect(test::make_scene(lens(), s));
-  ASSERT_EQ(r.status, DetectionStatus::kDetected) << "fit: " << r.fit_rejected;
+  ASSERT_EQ(r.status, DetectionStatus::kDetected) << "fit: " << test::fit_rejected(r);
   const Detection2D* d = nearest(r, s);
   ASSERT_TRUE(d);
   EXPECT_LT((d->center_undistorted - s.blob_at(d->t)).norm(), 0.05 * 120);

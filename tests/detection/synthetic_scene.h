@@ -12,8 +12,36 @@
 
 #include "fdv/core/camera.h"
 #include "fdv/core/sensor_data.h"
+#include "fdv/detection/count_contrast_source.h"
+#include "fdv/detection/dense_motion_source.h"
+#include "fdv/detection/detection_result.h"
+#include "fdv/detection/gaussian_fit_source.h"
 
 namespace fdv::test {
+
+/// Whether `source` wrote diagnostics in `r` (it ran as far as them).
+inline bool ran(const DetectionResult& r, std::string_view source) {
+  return std::any_of(r.source_diagnostics().begin(), r.source_diagnostics().end(),
+                     [&](const SourceDiagnostics& d) { return d.source() == source && !d.empty(); });
+}
+/// The diagnostics `source` wrote in `r`, or D's zeros when it wrote none.
+template <class D>
+D diagnostics_or_zero(const DetectionResult& r, std::string_view source) {
+  const D* d = r.diagnostics<D>(source);
+  return d ? *d : D{};
+}
+inline DenseMotionDiagnostics dense_motion_of(const DetectionResult& r) {
+  return diagnostics_or_zero<DenseMotionDiagnostics>(r, DenseMotionSource::kName);
+}
+inline CountContrastDiagnostics count_contrast_of(const DetectionResult& r) {
+  return diagnostics_or_zero<CountContrastDiagnostics>(r, CountContrastSource::kName);
+}
+
+/// Why the paper's source did not use its last fit ("" when it did), for failure messages.
+inline std::string_view fit_rejected(const DetectionResult& r) {
+  const auto* fit = r.diagnostics<PatternFitDiagnostics>(GaussianFitSource::kName);
+  return fit ? fit->fit_rejected : "no pattern fitted";
+}
 
 struct BlobScene {
   Eigen::Vector2d start_uv{200, 150};      // undistorted grid at t0 [px]

@@ -12,6 +12,7 @@
 #include "fdv/compensation/compensator.h"
 #include "fdv/detection/detector.h"
 #include "fdv/detection/time_images.h"
+#include "fdv/detection/track_aided_source.h"
 #include "fdv/pipeline/event_windower.h"
 
 namespace {
@@ -144,9 +145,12 @@ Counts run(const char* method, std::size_t max_events_per_window, const Detector
       ++c.windows;
       c.candidates += r.candidates;
       c.detected += !r.detections.empty();
-      c.retrievals += r.timings.retrieval_ms > 0;
-      c.motion_cues += r.motion_cue_ran;
-      c.count_cues += r.count_cue_ran;
+      // Retrieval runs when a pattern's fit is rejected.
+      for (const std::string_view pattern_source : {GaussianFitSource::kName, TrackAidedSource::kName})
+        if (const auto* fit = r.diagnostics<PatternFitDiagnostics>(pattern_source))
+          c.retrievals += !fit->fit_rejected.empty();
+      c.motion_cues += test::ran(r, DenseMotionSource::kName);
+      c.count_cues += test::ran(r, CountContrastSource::kName);
     }
   };
   const std::span<const Event> all(s.events);
@@ -204,8 +208,8 @@ TEST(NoAllocation, DetectorAfterWarmUp) {
 TEST(NoAllocation, DetectorRetrievalBlankingAndPriorsToo) {
   // The paths a clean blob does not take: a fit that never converges (one iteration) sends every
   // candidate to region retrieval, an unreachable event density fails them all (blanking and the
-  // next candidates), and a track's prior adds the track-aided look and the dense-motion cue; the
-  // count-contrast cue runs when all of them fail.
+  // next candidates), and a track's prior adds the track-aided look and the dense-motion source; the
+  // count-contrast source runs when all of them fail.
   DetectorOptions o;
   o.fit_max_iterations = 1;
   o.min_event_density = 1e3;

@@ -331,24 +331,24 @@ detector:
   opening_px: 7
   min_peak: 0.3
   refine_box_scale: 0
-  refine_recentre_passes: 2
+  refine_recenter_passes: 2
   square_box: false
   fit_max_iterations: 12
   roi_min_events: 11
   prior_min_peak: 0.5
-  motion_cue: false
-  motion_cue_radius_px: 7
-  motion_cue_min_pixels: 9
-  motion_cue_min_r2: 0.35
-  count_cue: false
-  count_cue_box_px: 7
-  count_cue_surround_scale: 2.5
-  count_cue_min_contrast: 4
-  count_cue_min_fill: 0.7
-  count_cue_in_gates: false
-  count_cue_still_motion: 0.02
-  count_cue_still_isolation: 6
-  count_cue_still_motion_z: 3
+  dense_motion: false
+  dense_motion_radius_px: 7
+  dense_motion_min_pixels: 9
+  dense_motion_min_r2: 0.35
+  count_contrast: false
+  count_contrast_box_px: 7
+  count_contrast_surround_scale: 2.5
+  count_contrast_min_contrast: 4
+  count_contrast_min_fill: 0.7
+  count_contrast_in_gates: false
+  count_contrast_still_motion: 0.02
+  count_contrast_still_isolation: 6
+  count_contrast_still_motion_z: 3
 )").detection;
   EXPECT_DOUBLE_EQ(d.threshold_a_s_per_rad, 0.03);
   EXPECT_DOUBLE_EQ(d.threshold_b_s_per_m, 0.05);
@@ -356,7 +356,7 @@ detector:
   EXPECT_EQ(d.opening_px, 7);
   EXPECT_DOUBLE_EQ(d.gaussian_fit.min_peak, 0.3);
   EXPECT_DOUBLE_EQ(d.refine_box_scale, 0.0);
-  EXPECT_EQ(d.refine_recentre_passes, 2);
+  EXPECT_EQ(d.refine_recenter_passes, 2);
   EXPECT_FALSE(d.square_box);
   EXPECT_EQ(d.fit_max_iterations, 12);
   EXPECT_EQ(d.roi_min_events, 11);
@@ -453,11 +453,11 @@ TEST(Options, DetectorInUseHoldsTheGatesScaledToTheCamera) {
   camera.cy = 130;
   const nlohmann::json in_use = detector_in_use(o, camera);
   EXPECT_DOUBLE_EQ(in_use.at("min_event_density").get<double>(), 0.75);
-  EXPECT_EQ(in_use.at("count_cue_box_px"), 5);
+  EXPECT_EQ(in_use.at("count_contrast_box_px"), 5);
   nlohmann::json as_given = to_json(o).at("detector");
   EXPECT_DOUBLE_EQ(as_given.at("min_event_density").get<double>(), 1.5);
   as_given["min_event_density"] = 0.75;
-  as_given["count_cue_box_px"] = 5;
+  as_given["count_contrast_box_px"] = 5;
   EXPECT_EQ(in_use, as_given);
 }
 
@@ -474,6 +474,18 @@ TEST(Options, MovedKeysSayWhereTheOptionWent) {
   EXPECT_EQ(error_of("estimation: {mode: monocular}"),
             "key estimation.mode | not configurable: the pipeline runs fusion, and the monocular "
             "baseline beside it when monocular_baseline is true");
+}
+
+// The detector's keys took their source's name (and "center"): an old key names its new one.
+TEST(Options, RenamedDetectorKeysNameTheNewKey) {
+  EXPECT_EQ(error_of("detector: {motion_cue: false}"), "key detector.motion_cue | renamed dense_motion");
+  EXPECT_EQ(error_of("detector: {motion_cue_min_r2: 0.3}"),
+            "key detector.motion_cue_min_r2 | renamed dense_motion_min_r2");
+  EXPECT_EQ(error_of("detector: {count_cue: false}"), "key detector.count_cue | renamed count_contrast");
+  EXPECT_EQ(error_of("detector: {count_cue_still_motion_z: 3}"),
+            "key detector.count_cue_still_motion_z | renamed count_contrast_still_motion_z");
+  EXPECT_EQ(error_of("detector: {refine_recentre_passes: 2}"),
+            "key detector.refine_recentre_passes | renamed refine_recenter_passes");
 }
 
 TEST(Options, UnknownKeysNameTheKey) {

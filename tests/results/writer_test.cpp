@@ -362,7 +362,7 @@ TEST(ResultsWriter, TumFilesHoldTheFinalUsableEstimateOfEachTrackEvery5Ms) {
 TEST(ResultsWriter, TimingCsvHoldsEachWindowsStageTimesAsWritten) {
   const std::string dir = test::scratch_dir("results_timing");
   // Three windows (index 4 after two skipped ones) with times of their own, a third of a ms apart so
-  // the text must round-trip; region retrieval ran only in the second.
+  // the text must round-trip; the count-contrast source was tried only in the second.
   std::vector<WindowResult> windows(3);
   const std::uint64_t indices[] = {0, 1, 4};
   for (std::size_t i = 0; i < windows.size(); ++i) {
@@ -373,12 +373,15 @@ TEST(ResultsWriter, TimingCsvHoldsEachWindowsStageTimesAsWritten) {
     w.t_end = w.t_start + 25 * kNsPerMs;
     WindowTimings& t = w.timings;
     t.compensation_ms = (k + 1) / 3.0;
-    t.detection = {.time_images_ms = 0.5 + k, .segmentation_ms = 0.25, .preprocess_ms = 0.125,
-                   .fit_ms = 2.0 / 3.0, .total_ms = 4.0 + k};
+    t.detection.time_images_ms = 0.5 + k;
+    t.detection.segmentation_ms = 0.25;
+    t.detection.preprocess_ms = 0.125;
+    t.detection.add_source_ms("gaussian_fit", 2.0 / 3.0);
+    t.detection.total_ms = 4.0 + k;
     t.tracking_ms = 0.0625;
     t.total_ms = 5.0 + k / 7.0;
   }
-  windows[1].timings.detection.retrieval_ms = 1.75;
+  windows[1].timings.detection.add_source_ms("count_contrast", 1.75);
   {
     ResultsWriter out(dir);
     for (const WindowResult& w : windows) out.window(w);
@@ -400,15 +403,15 @@ TEST(ResultsWriter, TimingCsvHoldsEachWindowsStageTimesAsWritten) {
     EXPECT_EQ(rows[i].stage_ms.at("detection_total"), 4.0 + k);
     EXPECT_EQ(rows[i].stage_ms.at("tracking"), 0.0625);
     EXPECT_EQ(rows[i].stage_ms.at("window_total"), t.total_ms);
-    EXPECT_EQ(rows[i].stage_ms.count("count_cue"), 0u);  // ran in no window: an empty cell
-    EXPECT_EQ(rows[i].stage_ms.count("region_retrieval"), i == 1 ? 1u : 0u);
+    EXPECT_EQ(rows[i].stage_ms.count("dense_motion"), 0u);  // tried in no window: an empty cell
+    EXPECT_EQ(rows[i].stage_ms.count("count_contrast"), i == 1 ? 1u : 0u);
   }
-  EXPECT_EQ(rows[1].stage_ms.at("region_retrieval"), 1.75);
+  EXPECT_EQ(rows[1].stage_ms.at("count_contrast"), 1.75);
   std::ifstream in(dir + "/timing.csv");
   std::string header;
   std::getline(in, header);
-  EXPECT_EQ(header, "window,t_start,compensation,time_images,segmentation,preprocess,gaussian_fit,"
-                    "region_retrieval,count_cue,detection_total,tracking,window_total");
+  EXPECT_EQ(header, "window,t_start,compensation,time_images,segmentation,preprocess,gaussian_fit,track_aided,"
+                    "dense_motion,count_contrast,detection_total,tracking,window_total");
 }
 
 TEST(ResultsReader, MalformedLinesAreErrorsNamingFileAndLine) {

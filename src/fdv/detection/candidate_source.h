@@ -1,23 +1,33 @@
 #pragma once
-/// The interface of the detector's candidate sources (detector.h runs them in a fixed order until
-/// one finds a candidate) and the window they all look at.
+/// The interface of the detector's candidate sources, the window they all look at, and their
+/// registry: a Detector makes one of each registered source and tries them in the registry's order
+/// until one finds a candidate (detector.h).
 ///
 ///   SourceWindow in{.events = view, .ti = ti, .S = S, .P = P, .P_support = support, ...,
 ///                   .region_scratch = scratch};
 ///   DetectionResult res;
 ///   if (std::optional<Candidate> c = source.find(in, res)) use(*c);  // else in.why_not says why
 ///
-/// A source writes its own diagnostic fields and timings of `res` and may lower `in.why_not`'s
-/// verdict. Sources keep their scratch buffers between windows: allocate(width, height) sizes them
-/// and find() then does not allocate. Not thread-safe: one per Detector.
+/// A source writes its own diagnostics into `res` under its name (res.diagnostics_of(kName)) and
+/// may lower `in.why_not`'s verdict; the Detector times its find() calls under the same name. Sources
+/// keep their scratch buffers between windows: allocate(width, height) sizes them and find() then
+/// does not allocate. Not thread-safe: one per Detector.
+///
+/// A new source (docs/DETECTION.md, "Adding a candidate source"): a class with a `kName`, its
+/// diagnostics struct, a constructor from DetectorOptions, and one line in the list of built-in
+/// sources (candidate_source.cpp), or a register_candidate_source call from the user's program.
 #include <Eigen/Core>
-#include <chrono>
+#include <functional>
+#include <memory>
 #include <opencv2/core.hpp>
 #include <optional>
 #include <span>
+#include <string_view>
+#include <vector>
 
 #include "fdv/detection/detection2d.h"
 #include "fdv/detection/detection_result.h"
+#include "fdv/detection/detector_options.h"
 #include "fdv/detection/gaussian_fit.h"
 #include "fdv/detection/segmentation.h"
 #include "fdv/detection/time_images.h"
@@ -33,6 +43,7 @@ struct Candidate {
   double score = 0;          ///< Detection2D::score
   double event_density = 0;  ///< events per pixel of the box
   double t_mean_s = 0;       ///< mean event time in the box [s since t_start]
+  int fit_iterations = 0;    ///< Algorithm 1's iterations for the box (0: not a fit's)
 };
 
 /// One window as every source sees it, built by Detector::detect once the window passed its
@@ -48,8 +59,8 @@ struct SourceWindow {
   double window_s = 0;      ///< the window's duration [s]
   /// The confirmed tracks' gates on the undistorted grid (priors with an inverse lens map only).
   std::span<const Box2D> gates;
-  /// Tentative tracks' gates (DetectionPrior::confirmed false), searched by the dense-motion cue and
-  /// the count-contrast cue's sparse search only.
+  /// Tentative tracks' gates (DetectionPrior::confirmed false), searched by the dense-motion source and
+  /// the count-contrast source's sparse search only.
   std::span<const Box2D> tentative_gates;
   /// Scratch of moving-region retrieval, shared by the sources that run it (it is large: a run
   /// list sized for the whole image).
@@ -64,20 +75,42 @@ struct SourceWindow {
   DetectionStatus why_not = DetectionStatus::kRemovedAsNoise;
 };
 
-namespace detection_internal {
-/// Wall-clock milliseconds since t0, for DetectionTimings.
-inline double ms_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
-}  // namespace detection_internal
-
 class CandidateSource {
  public:
   virtual ~CandidateSource() = default;
   /// Sizes the buffers for width × height images.
   virtual void allocate(int width, int height) = 0;
-  /// The source's candidate in this window, or nothing.
+  /// The source's candidate in this window, or nothing. Writes its diagnostics to
+  /// res.diagnostics_of(its name); may add to res.candidates and set res.track_aided.
   virtual std::optional<Candidate> find(SourceWindow& in, DetectionResult& res) = 0;
 };
+
+/// Makes a registered source for a detector's options (valid ones: DetectorOptions::validate);
+/// nullptr when these options switch it off.
+using CandidateSourceFactory = std::function<std::unique_ptr<CandidateSource>(const DetectorOptions&)>;
+
+struct RegisteredSource {
+  /// Its name: the key of its diagnostics and time in DetectionResult, and its timing.csv column.
+  std::string_view name;
+  CandidateSourceFactory make;
+};
+
+/// Every registered source, in the order a Detector tries them: the built-in ones (listed in
+/// candidate_source.cpp), then those added by register_candidate_source in the order added.
+std::vector<RegisteredSource> registered_sources();
+
+/// Adds a source after the registered ones, for the Detectors constructed from now on. `name`:
+/// letters, digits and '_' (a timing.csv column), new, and of static storage duration (a string
+/// literal: results keep a view of it). Throws ConfigError otherwise, or beyond
+/// kMaxCandidateSources. Thread-safe.
+void register_candidate_source(std::string_view name, CandidateSourceFactory make);
+/// Removes a source register_candidate_source added; false when there is none of that name.
+bool unregister_candidate_source(std::string_view name);
+
+/// The factory of a source constructed from the options.
+template <class S>
+std::unique_ptr<CandidateSource> make_source(const DetectorOptions& options) {
+  return std::make_unique<S>(options);
+}
 
 }  // namespace fdv

@@ -7,26 +7,25 @@
 #include <sstream>
 
 namespace fdv {
-using detection_internal::ms_since;
 
 std::string CountContrastSourceOptions::validate() const {
   for (double v : {surround_scale, min_contrast, min_fill})
     if (!std::isfinite(v)) return "non-finite detector parameter";
   std::ostringstream why;
   if (!(box_px >= 1 && box_px % 2 == 1 && box_px <= 31))
-    why << "count_cue_box_px must be odd in [1, 31], got " << box_px;
+    why << "count_contrast_box_px must be odd in [1, 31], got " << box_px;
   else if (!(surround_scale > 1 && surround_scale <= 10))
-    why << "count_cue_surround_scale must be in (1, 10], got " << surround_scale;
-  else if (!(min_contrast >= 1)) why << "count_cue_min_contrast must be at least 1, got " << min_contrast;
-  else if (!(min_fill >= 0 && min_fill <= 1)) why << "count_cue_min_fill must be in [0, 1], got " << min_fill;
+    why << "count_contrast_surround_scale must be in (1, 10], got " << surround_scale;
+  else if (!(min_contrast >= 1)) why << "count_contrast_min_contrast must be at least 1, got " << min_contrast;
+  else if (!(min_fill >= 0 && min_fill <= 1)) why << "count_contrast_min_fill must be in [0, 1], got " << min_fill;
   else if (!(still_motion >= 0 && std::isfinite(still_motion)))
-    why << "count_cue_still_motion must be finite and at least 0, got " << still_motion;
+    why << "count_contrast_still_motion must be finite and at least 0, got " << still_motion;
   else if (!(still_min_isolation >= 1 && std::isfinite(still_min_isolation)))
-    why << "count_cue_still_isolation must be finite and at least 1, got " << still_min_isolation;
+    why << "count_contrast_still_isolation must be finite and at least 1, got " << still_min_isolation;
   else if (!(still_min_motion_z >= 0 && std::isfinite(still_min_motion_z)))
-    why << "count_cue_still_motion_z must be finite and at least 0, got " << still_min_motion_z;
+    why << "count_contrast_still_motion_z must be finite and at least 0, got " << still_min_motion_z;
   else if (!(sparse_chance >= 0 && sparse_chance < 1))
-    why << "count_cue_sparse_chance must be in [0, 1), got " << sparse_chance;
+    why << "count_contrast_sparse_chance must be in [0, 1), got " << sparse_chance;
   return why.str();
 }
 
@@ -128,8 +127,7 @@ void CountContrastSource::allocate(int width, int height) {
 
 std::optional<Candidate> CountContrastSource::find(SourceWindow& in, DetectionResult& res) {
   const CountContrastSourceOptions& cc = options_.count_contrast;
-  if (!cc.enabled) return std::nullopt;
-  const auto t = std::chrono::steady_clock::now();
+  SourceDiagnostics& diagnostics = res.diagnostics_of(kName);
   tables_.reset(in.ti, options_.min_pixel_events);
   // The tracks' gates (where the track is the evidence of motion), then the whole image. The sparse
   // search also looks in the gates of tentative tracks: a far ball's sparse blob passes the motion
@@ -137,7 +135,7 @@ std::optional<Candidate> CountContrastSource::find(SourceWindow& in, DetectionRe
   auto search = [&](Activity activity) -> std::optional<Candidate> {
     auto in_gates = [&](std::span<const Box2D> gates) -> std::optional<Candidate> {
       for (const Box2D& gate : gates) {
-        auto found = find_in(in, box_pixels(gate, in.events.width, in.events.height), true, activity, res);
+        auto found = find_in(in, box_pixels(gate, in.events.width, in.events.height), true, activity, diagnostics);
         if (found && gate.contains(found->center)) {
           res.track_aided = true;
           return found;
@@ -148,17 +146,18 @@ std::optional<Candidate> CountContrastSource::find(SourceWindow& in, DetectionRe
     std::optional<Candidate> found;
     if (cc.in_gates) found = in_gates(in.gates);
     if (!found && activity.sparse) found = in_gates(in.tentative_gates);
-    if (!found && in.first_object) found = find_in(in, {0, 0, in.events.width, in.events.height}, false, activity, res);
+    if (!found && in.first_object)
+      found = find_in(in, {0, 0, in.events.width, in.events.height}, false, activity, diagnostics);
     return found;
   };
   std::optional<Candidate> found = search({.sparse = false, .min_fill = cc.min_fill});
   const bool sparse_has_place = in.first_object || !in.tentative_gates.empty() || (cc.in_gates && !in.gates.empty());
   if (!found && cc.sparse_chance > 0 && sparse_has_place && camera_still(in)) {
-    res.count_cue_sparse_min_active = sparse_min_active(in.ti);
+    const int min_active = sparse_min_active(in.ti);
+    diagnostics.write<CountContrastDiagnostics>().sparse_min_active = min_active;
     const double centre_box_pixels = static_cast<double>(cc.box_px) * cc.box_px;
-    found = search({.sparse = true, .min_fill = res.count_cue_sparse_min_active / centre_box_pixels});
+    found = search({.sparse = true, .min_fill = min_active / centre_box_pixels});
   }
-  res.timings.count_cue_ms = ms_since(t);
   return found;
 }
 
@@ -177,7 +176,7 @@ int CountContrastSource::sparse_min_active(const TimeImages& ti) {
 }
 
 std::optional<Candidate> CountContrastSource::find_in(const SourceWindow& in, const cv::Rect& search, bool in_gate,
-                                                      Activity activity, DetectionResult& res) {
+                                                      Activity activity, SourceDiagnostics& out) {
   const DetectorOptions& o = options_;
   const CountContrastSourceOptions& cc = o.count_contrast;
   const TimeImages& ti = in.ti;
@@ -188,7 +187,7 @@ std::optional<Candidate> CountContrastSource::find_in(const SourceWindow& in, co
   // image's border is where compensation is worst: content enters and leaves there).
   const cv::Rect area = search & cv::Rect(hs, hs, w - 2 * hs, h - 2 * hs);
   if (area.area() <= 0 || ti.events <= 0 || !(ti.t_max_s > ti.t_min_s)) return std::nullopt;
-  res.count_cue_ran = true;
+  CountContrastDiagnostics& diagnostics = out.write<CountContrastDiagnostics>();
   // The active pixels' table covers the whole image: the surround of a centre near the search
   // area's border reaches outside it.
   const bool sparse = activity.sparse;
@@ -263,9 +262,9 @@ std::optional<Candidate> CountContrastSource::find_in(const SourceWindow& in, co
     }
   }
   if (!sparse) {  // the diagnostics are the dense search's
-    res.count_cue_contrast = best;
-    res.count_cue_fill = best_fill;
-    res.count_cue_filled_centres = filled;
+    diagnostics.contrast = best;
+    diagnostics.fill = best_fill;
+    diagnostics.filled_centers = filled;
   }
   if (at.x < 0 || best < cc.min_contrast) return std::nullopt;
   // The blob's box: Algorithm 1 on the events above the surround's level, I − max(surround, mean),
@@ -300,17 +299,18 @@ std::optional<Candidate> CountContrastSource::find_in(const SourceWindow& in, co
   // moves the image's mean time, not the object's.
   cand.t_mean_s = cv::sum(ti.sum_time_s(box))[0] / cand.events;
   const double image_t_mean_s = cv::sum(ti.sum_time_s)[0] / ti.events;
-  res.count_cue_time_offset = (cand.t_mean_s - image_t_mean_s) / (ti.t_max_s - ti.t_min_s);
-  const bool passes = sparse ? still_camera_object(in, cand, box, image_density, in_gate, res)
-                              : in_gate || std::abs(res.count_cue_time_offset) >= in.theta - ti.mean_normalized ||
-                                    still_camera_object(in, cand, box, image_density, false, res);
+  diagnostics.time_offset = (cand.t_mean_s - image_t_mean_s) / (ti.t_max_s - ti.t_min_s);
+  const bool passes = sparse ? still_camera_object(in, cand, box, image_density, in_gate, diagnostics)
+                              : in_gate || std::abs(diagnostics.time_offset) >= in.theta - ti.mean_normalized ||
+                                    still_camera_object(in, cand, box, image_density, false, diagnostics);
   if (!passes) return std::nullopt;
   cand.score = 1.0 - 1.0 / best;  // the fraction of the centre's events above the background level
   return cand;
 }
 
 bool CountContrastSource::still_camera_object(const SourceWindow& in, const Candidate& cand, const cv::Rect& box,
-                                              double image_density, bool in_gate, DetectionResult& res) const {
+                                              double image_density, bool in_gate,
+                                              CountContrastDiagnostics& diagnostics) const {
   const CountContrastSourceOptions& cc = options_.count_contrast;
   if (!camera_still(in)) return false;
   const cv::Mat& count = in.ti.count;
@@ -318,11 +318,11 @@ bool CountContrastSource::still_camera_object(const SourceWindow& in, const Cand
       cv::Rect(box.x - box.width, box.y - box.height, 3 * box.width, 3 * box.height) & cv::Rect(0, 0, count.cols, count.rows);
   const double surround_pixels = static_cast<double>(surround.area() - box.area());
   const double surround_density = surround_pixels > 0 ? (cv::sum(count(surround))[0] - cand.events) / surround_pixels : 0;
-  res.count_cue_isolation = cand.event_density / std::max(surround_density, image_density);
-  if (!(res.count_cue_isolation >= cc.still_min_isolation)) return false;
+  diagnostics.isolation = cand.event_density / std::max(surround_density, image_density);
+  if (!(diagnostics.isolation >= cc.still_min_isolation)) return false;
   if (in_gate) return true;  // a track's gate: its track is the evidence of motion
-  res.count_cue_motion_z = motion_z(in.events, box);
-  return res.count_cue_motion_z >= cc.still_min_motion_z;
+  diagnostics.motion_z = motion_z(in.events, box);
+  return diagnostics.motion_z >= cc.still_min_motion_z;
 }
 
 }  // namespace fdv

@@ -1,5 +1,5 @@
 #pragma once
-/// Candidate source 4 (not in the paper; docs/DETECTION.md, "Count-contrast cue"): the filled centre
+/// Candidate source 4 (not in the paper; docs/DETECTION.md, "Count-contrast source"): the filled centre
 /// box of the count image I with the highest count contrast against its surround
 /// (CountContrastSourceOptions), its box from Algorithm 1 on I above the background level. First
 /// inside the tracks' gates without the time test (in_gates), then over the whole image with it: the
@@ -9,14 +9,32 @@
 /// a far object that fires an event on a fraction of its pixels per window.
 ///
 ///   CountContrastSource source(options);   // once; allocate(width, height) before the first find()
-///   std::optional<Candidate> c = source.find(in, res);   // res.count_cue_* say how close
+///   std::optional<Candidate> c = source.find(in, res);
+///   res.diagnostics<CountContrastDiagnostics>(CountContrastSource::kName)   // how close; nullptr: no search
 #include <optional>
+#include <string_view>
 #include <vector>
 
 #include "fdv/detection/candidate_source.h"
 #include "fdv/detection/detector_options.h"
 
 namespace fdv {
+
+/// What the source saw, once it searched (its last dense search: the gates' come first, then the
+/// image's).
+struct CountContrastDiagnostics {
+  /// The highest contrast among centers that fill min_fill (0: none did), that center's fill, and
+  /// how many centers filled it.
+  double contrast = 0, fill = 0;
+  int filled_centers = 0;
+  /// (the blob's mean event time − all events') / (max T − min T), when its box passed the event gates.
+  double time_offset = 0;
+  /// The still-camera test, when it ran (the time test failed with the camera nearly still): the
+  /// blob's isolation and, if that passed, the Wald z of its motion (0: not reached).
+  double isolation = 0, motion_z = 0;
+  /// The sparse search's active pixels per center box, when it ran (0: it did not).
+  int sparse_min_active = 0;
+};
 
 /// Summed-area tables (CV_32S) of one window's count image I over the whole image, each built on
 /// its first use after reset() (the gates' searches and the image's share them): I's active pixels
@@ -46,6 +64,7 @@ int fewest_unlikely_active(int n, double p, double centres, double chance);
 
 class CountContrastSource final : public CandidateSource {
  public:
+  static constexpr std::string_view kName = "count_contrast";
   /// `options` must be valid (DetectorOptions::validate).
   explicit CountContrastSource(const DetectorOptions& options) : options_(options) {}
   void allocate(int width, int height) override;
@@ -64,9 +83,9 @@ class CountContrastSource final : public CandidateSource {
   };
   /// The candidate among centres within `search`. Over the image (not `in_gate`), a dense blob's
   /// mean event time must stand out from all events' by θ's margin, or the blob pass the
-  /// still-camera test. Sets res.count_cue_*.
+  /// still-camera test. Writes the diagnostics to `out`.
   std::optional<Candidate> find_in(const SourceWindow& in, const cv::Rect& search, bool in_gate, Activity activity,
-                                   DetectionResult& res);
+                                   SourceDiagnostics& out);
   /// θ's motion term a‖ω‖ + b‖v‖ at most CountContrastSourceOptions::still_motion.
   bool camera_still(const SourceWindow& in) const;
   /// kSparse's active pixels per centre box: the fewest that the image's fired pixels, scattered at
@@ -76,10 +95,10 @@ class CountContrastSource final : public CandidateSource {
   /// its compensated background is sparse, so a blob that stands out from its own-scale surround and
   /// moves within the window is an object even when its events fire evenly over the window (a
   /// spinning ball coming head-on), which the time test cannot see. In a track's gate the motion
-  /// within the window is not asked: the track is its evidence. Sets res.count_cue_isolation and
-  /// count_cue_motion_z.
+  /// within the window is not asked: the track is its evidence. Writes diagnostics.isolation and
+  /// motion_z.
   bool still_camera_object(const SourceWindow& in, const Candidate& cand, const cv::Rect& box,
-                           double image_density, bool in_gate, DetectionResult& res) const;
+                           double image_density, bool in_gate, CountContrastDiagnostics& diagnostics) const;
   DetectorOptions options_;
   CountTables tables_;
   std::vector<int> live_blocks_;  ///< the scan's blocks in one band that it cannot skip

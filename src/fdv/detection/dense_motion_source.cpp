@@ -7,18 +7,17 @@
 #include <sstream>
 
 namespace fdv {
-using detection_internal::ms_since;
 
 std::string DenseMotionSourceOptions::validate() const {
   for (double v : {min_r2, min_span})
     if (!std::isfinite(v)) return "non-finite detector parameter";
   std::ostringstream why;
   if (!(density_px >= 1 && density_px % 2 == 1 && density_px <= 31))
-    why << "motion_cue_density_px must be odd in [1, 31], got " << density_px;
-  else if (radius_px < 1 || radius_px > 100) why << "motion_cue_radius_px must be in [1, 100], got " << radius_px;
-  else if (!(min_r2 >= 0 && min_r2 <= 1)) why << "motion_cue_min_r2 must be in [0, 1], got " << min_r2;
-  else if (min_pixels < 3) why << "motion_cue_min_pixels must be at least 3, got " << min_pixels;
-  else if (!(min_span >= 0)) why << "motion_cue_min_span must be >= 0, got " << min_span;
+    why << "dense_motion_density_px must be odd in [1, 31], got " << density_px;
+  else if (radius_px < 1 || radius_px > 100) why << "dense_motion_radius_px must be in [1, 100], got " << radius_px;
+  else if (!(min_r2 >= 0 && min_r2 <= 1)) why << "dense_motion_min_r2 must be in [0, 1], got " << min_r2;
+  else if (min_pixels < 3) why << "dense_motion_min_pixels must be at least 3, got " << min_pixels;
+  else if (!(min_span >= 0)) why << "dense_motion_min_span must be >= 0, got " << min_span;
   return why.str();
 }
 
@@ -28,12 +27,10 @@ void DenseMotionSource::allocate(int width, int height) {
 }
 
 std::optional<Candidate> DenseMotionSource::find(SourceWindow& in, DetectionResult& res) {
-  if (!options_.dense_motion.enabled || !(in.window_s > 0)) return std::nullopt;
+  if (!(in.window_s > 0)) return std::nullopt;
   for (const std::span<const Box2D> gates : {in.gates, in.tentative_gates}) {
     for (const Box2D& gate : gates) {
-      const auto t = std::chrono::steady_clock::now();
       std::optional<Candidate> found = find_in(in, box_pixels(gate, in.events.width, in.events.height), res);
-      res.timings.motion_cue_ms += ms_since(t);
       if (found && gate.contains(found->center)) {
         res.track_aided = true;
         return found;
@@ -51,7 +48,7 @@ std::optional<Candidate> DenseMotionSource::find_in(const SourceWindow& in, cons
   const int w = ti.count.cols, h = ti.count.rows;
   const cv::Rect area = search & cv::Rect(0, 0, w, h);
   if (area.area() == 0) return std::nullopt;
-  res.motion_cue_ran = true;
+  DenseMotionDiagnostics& diagnostics = res.diagnostics_of(kName).write<DenseMotionDiagnostics>();
   // The box with the most active pixels (I ≥ min_pixel_events) in the search area (its centre
   // pixel; boxes are clipped at the area's border). Counting pixels, not events, keeps a hot pixel
   // from being "dense".
@@ -108,9 +105,9 @@ std::optional<Candidate> DenseMotionSource::find_in(const SourceWindow& in, cons
   if (!(total_ss > 0)) return std::nullopt;
   const Eigen::Vector3d plane = A.ldlt().solve(b);
   const double residual_ss = tt_sum - 2.0 * plane.dot(b) + plane.dot(A * plane);
-  res.motion_cue_r2 = 1.0 - residual_ss / total_ss;
-  res.motion_cue_span = std::hypot(plane.y(), plane.z()) * square.width / in.window_s;
-  if (!(res.motion_cue_r2 >= m.min_r2) || !(res.motion_cue_span >= m.min_span)) return std::nullopt;
+  diagnostics.r2 = 1.0 - residual_ss / total_ss;
+  diagnostics.span = std::hypot(plane.y(), plane.z()) * square.width / in.window_s;
+  if (!(diagnostics.r2 >= m.min_r2) || !(diagnostics.span >= m.min_span)) return std::nullopt;
   // The box: centroid ± 2σ of I over the square (Algorithm 1's L = 4σ), inside the square.
   const Eigen::Vector2d mean(A(0, 1) / n_sum, A(0, 2) / n_sum);
   const Eigen::Vector2d sigma(std::sqrt(std::max(0.0, xx_sum / n_sum - mean.x() * mean.x())),
@@ -128,7 +125,7 @@ std::optional<Candidate> DenseMotionSource::find_in(const SourceWindow& in, cons
   cand.events = static_cast<int>(cv::sum(ti.count(box))[0]);
   cand.event_density = static_cast<double>(cand.events) / box.area();
   if (cand.events < o.roi_min_events || cand.event_density < o.min_event_density) return std::nullopt;
-  cand.score = std::clamp(res.motion_cue_r2, 0.0, 1.0);
+  cand.score = std::clamp(diagnostics.r2, 0.0, 1.0);
   cand.t_mean_s = cv::sum(ti.sum_time_s(box))[0] / cand.events;
   return cand;
 }

@@ -23,8 +23,8 @@ struct Box2D {
 enum class DetectionSource {
   kGaussianFit,      ///< Algorithm 1 converged to a plausible ROI
   kRegionRetrieval,  ///< connected component chosen after the fit failed (paper §IV-B.3)
-  kDenseMotion,      ///< the dense-motion cue (DetectorOptions::dense_motion), when N had no pattern
-  kCountContrast,    ///< the count-contrast cue (DetectorOptions::count_contrast), when nothing else passed
+  kDenseMotion,      ///< the dense-motion source (DetectorOptions::dense_motion), when N had no pattern
+  kCountContrast,    ///< the count-contrast source (DetectorOptions::count_contrast), when nothing else passed
 };
 std::string_view to_string(DetectionSource s);
 

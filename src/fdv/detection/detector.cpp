@@ -4,12 +4,16 @@
 #include <chrono>
 #include <cmath>
 #include <sstream>
+#include <utility>
 
 #include "fdv/core/error.h"
 
 namespace fdv {
-using detection_internal::ms_since;
 namespace {
+
+double ms_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
 
 /// A remaining track gate that no found object's box overlaps: another object is predicted there,
 /// so neither the blanking nor the duplicate test around a nearby found object covers it.
@@ -89,8 +93,8 @@ std::string DetectorOptions::validate() const {
   else if (!(refine_grow_density >= 0 && refine_grow_density <= 1))
     why << "refine_grow_density must be in [0, 1], got " << refine_grow_density;
   else if (!(refine_grow_contrast >= 0)) why << "refine_grow_contrast must be >= 0, got " << refine_grow_contrast;
-  else if (refine_recentre_passes < 0 || refine_recentre_passes > 20)
-    why << "refine_recentre_passes must be in [0, 20], got " << refine_recentre_passes;
+  else if (refine_recenter_passes < 0 || refine_recenter_passes > 20)
+    why << "refine_recenter_passes must be in [0, 20], got " << refine_recenter_passes;
   else if (min_window_events < 1) why << "min_window_events must be positive, got " << min_window_events;
   else if (!(max_segmented_fraction > 0 && max_segmented_fraction <= 1))
     why << "max_segmented_fraction must be in (0, 1], got " << max_segmented_fraction;
@@ -117,12 +121,11 @@ Detector::Detector(const DetectorOptions& options, const PinholeCamera& event_ca
     : options_(scaled_to_camera((validate_or_throw(options), options), event_camera)),
       camera_(event_camera),
       pre_(options_),
-      gaussian_fit_(options_),
-      track_aided_(options_),
-      dense_motion_(options_),
-      count_contrast_(options_),
       refiner_(options_) {
   if (const auto why = event_camera.validate(); !why.empty()) throw ConfigError("detector: event camera: " + why);
+  for (const RegisteredSource& registered : registered_sources())
+    if (std::unique_ptr<CandidateSource> source = registered.make(options_))
+      sources_.push_back({registered.name, std::move(source)});
   allocate(camera_.width, camera_.height);
   gates_.reserve(8);
   tentative_gates_.reserve(8);
@@ -136,7 +139,7 @@ void Detector::allocate(int width, int height) {
   rest_bounds_ = {};
   pre_.allocate({width, height});
   region_.reserve(width, height);
-  for (CandidateSource* source : sources()) source->allocate(width, height);
+  for (const Source& s : sources_) s.source->allocate(width, height);
   refiner_.allocate(width, height);
 }
 
@@ -238,9 +241,7 @@ DetectionResult Detector::detect(const CompensatedEventsView& window, std::span<
     // The diagnostics are the first object's; a later pass adds its candidates and times.
     DetectionResult later;
     DetectionResult& out = pass == 0 ? res : later;
-    std::optional<Candidate> found;
-    for (CandidateSource* source : sources())
-      if ((found = source->find(in, out))) break;
+    const std::optional<Candidate> found = find_candidate(in, out);
     std::optional<Detection2D> d;
     if (found && !already_found(res.detections, found->center)) d = to_detection(window, *found, out);
     if (pass == 0) why_not = in.fills_view ? DetectionStatus::kFillsView : in.why_not;
@@ -275,15 +276,20 @@ DetectionResult Detector::detect(const CompensatedEventsView& window, std::span<
   return finish(fills_view ? DetectionStatus::kFillsView : why_not);
 }
 
+std::optional<Candidate> Detector::find_candidate(SourceWindow& in, DetectionResult& res) {
+  for (const Source& s : sources_) {
+    const auto t = std::chrono::steady_clock::now();
+    std::optional<Candidate> found = s.source->find(in, res);
+    res.timings.add_source_ms(s.name, ms_since(t));
+    if (found) return found;
+  }
+  return std::nullopt;
+}
+
 void Detector::add_later_pass(const DetectionResult& later, DetectionResult& res) {
   res.candidates += later.candidates;
-  DetectionTimings& t = res.timings;
-  const DetectionTimings& l = later.timings;
-  t.fit_ms += l.fit_ms;
-  t.retrieval_ms += l.retrieval_ms;
-  t.refine_ms += l.refine_ms;
-  t.motion_cue_ms += l.motion_cue_ms;
-  t.count_cue_ms += l.count_cue_ms;
+  res.timings.refine_ms += later.timings.refine_ms;
+  for (const SourceTime& s : later.timings.sources()) res.timings.add_source_ms(s.source, s.ms);
 }
 
 Box2D Detector::blanked_region(const Box2D& box) const {
@@ -346,7 +352,7 @@ Detection2D Detector::to_detection(const CompensatedEventsView& window, const Ca
   d.score = found.score;
   d.event_density = found.event_density;
   d.source = found.source;
-  d.fit_iterations = res.fit.iterations;
+  d.fit_iterations = found.fit_iterations;
   d.track_aided = res.track_aided;
   return d;
 }

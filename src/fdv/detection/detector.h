@@ -1,13 +1,15 @@
 #pragma once
 /// The detection front end of one compensated window (paper §IV-B): time images, adaptive
-/// threshold θ, segmentation S, pre-processing P, then the candidate sources in a fixed order until
-/// one finds a candidate that passes its gates, then the centre and time from the events.
+/// threshold θ, segmentation S, pre-processing P, then the registered candidate sources in their
+/// order until one finds a candidate that passes its gates, then the centre and time from the
+/// events. The built-in sources (candidate_source.cpp registers them):
 ///   1. GaussianFitSource: Algorithm 1 + moving-region retrieval on P's strongest patterns (the paper);
 ///   2. TrackAidedSource: the same inside confirmed tracks' gates, at a lower evidence threshold;
 ///   3. DenseMotionSource: a dense patch of I whose mean time rises as a plane, in the gates of
 ///      confirmed tracks and of tentative ones detected in the last window;
 ///   4. CountContrastSource: a compact blob of I much denser than its surround, gates then image.
-/// Each has its own unit, options sub-struct (DetectorOptions) and buffers (candidate_source.h).
+/// Each has its own unit, options sub-struct (DetectorOptions), buffers and diagnostics; a program
+/// may register more (candidate_source.h). The detector times each under its registered name.
 ///
 ///   Detector detector(options, calibration.event_camera);
 ///   CompensatedEventsView view{w.t_start, w.t_end, w.width, w.height, w.pixel(), w.t_s(),
@@ -20,32 +22,27 @@
 /// The images live on the undistorted grid K·xn of `event_camera` (the compensators' output
 /// grid); detections are reported there and in raw sensor pixels through the lens model.
 /// A Detector keeps its image buffers between calls. Not thread-safe: one per thread.
-#include <array>
+#include <memory>
 #include <optional>
 #include <span>
-#include <utility>
 #include <string_view>
 #include <vector>
 
 #include "fdv/core/camera.h"
 #include "fdv/detection/border_cut.h"
 #include "fdv/detection/candidate_source.h"
-#include "fdv/detection/count_contrast_source.h"
-#include "fdv/detection/dense_motion_source.h"
 #include "fdv/detection/detection2d.h"
 #include "fdv/detection/detection_result.h"
 #include "fdv/detection/detector_options.h"
 #include "fdv/detection/event_refinement.h"
 #include "fdv/detection/gaussian_fit.h"
-#include "fdv/detection/gaussian_fit_source.h"
 #include "fdv/detection/segmentation.h"
 #include "fdv/detection/time_images.h"
-#include "fdv/detection/track_aided_source.h"
 
 namespace fdv {
 
 /// `options` with the gates stated at DetectorOptions::gate_focal_px scaled to `camera`'s fx when
-/// it is shorter: min_event_density × fx / gate_focal_px, count_cue_box_px × the same (odd, ≥ 3).
+/// it is shorter: min_event_density × fx / gate_focal_px, count_contrast_box_px × the same (odd, ≥ 3).
 DetectorOptions scaled_to_camera(const DetectorOptions& options, const PinholeCamera& camera);
 
 class Detector {
@@ -71,6 +68,8 @@ class Detector {
   /// The winning candidate as a detection: centre and time from the events (EventRefiner), the
   /// reported box, and both seen by the camera at the detection's time, in raw pixels too.
   Detection2D to_detection(const CompensatedEventsView& window, const Candidate& found, DetectionResult& res);
+  /// The first registered source whose candidate passes its gates, each timed under its name.
+  std::optional<Candidate> find_candidate(SourceWindow& in, DetectionResult& res);
   /// What a found object's box blanks of P for the next pass, and whether a candidate centre lies
   /// in an object found before (the sources that read I rather than P can find it again). detect()
   /// restores P, and already_found() answers no, inside a confirmed track's gate that no found box
@@ -94,17 +93,15 @@ class Detector {
   Preprocessor pre_;
   cv::Mat rest_;          ///< P with the window's objects found so far blanked, zero outside rest_bounds_
   cv::Rect rest_bounds_;
-  RegionScratch region_;      ///< retrieval's scratch, shared by the two pattern sources
+  RegionScratch region_;      ///< retrieval's scratch, shared by the sources that run it
   std::vector<Box2D> gates_;            ///< this window's confirmed tracks' gates
   std::vector<Box2D> tentative_gates_;  ///< and its tentative tracks' (DetectionPrior::confirmed)
-  // The candidate sources, tried in this order (sources()).
-  GaussianFitSource gaussian_fit_;
-  TrackAidedSource track_aided_;
-  DenseMotionSource dense_motion_;
-  CountContrastSource count_contrast_;
-  std::array<CandidateSource*, 4> sources() {
-    return {&gaussian_fit_, &track_aided_, &dense_motion_, &count_contrast_};
-  }
+  /// The registered sources these options switch on, in the registry's order.
+  struct Source {
+    std::string_view name;
+    std::unique_ptr<CandidateSource> source;
+  };
+  std::vector<Source> sources_;
   EventRefiner refiner_;
 };
 

@@ -5,11 +5,11 @@
 /// seeds 1-4 (docs/DETECTION.md, "Tuning").
 ///
 ///   DetectorOptions o;
-///   o.dense_motion.enabled = false;   // YAML: detector.motion_cue
+///   o.dense_motion.enabled = false;   // YAML: detector.dense_motion
 ///   if (const std::string why = o.validate(); !why.empty()) fail(why);
 ///
 /// The `detector:` YAML keys are flat: each source's field list (describe() below) gives its
-/// fields their YAML names (e.g. `motion_cue_radius_px` fills dense_motion.radius_px), and
+/// fields their YAML names (e.g. `dense_motion_radius_px` fills dense_motion.radius_px), and
 /// describe(v, DetectorOptions&) lists the sources' keys beside the shared ones, so files written
 /// before the split still load. validate()'s messages name those keys.
 #include <string>
@@ -79,40 +79,47 @@ void describe(V& v, TrackAidedSourceOptions& o) {
   v("prior_min_peak", o.min_peak, "-", "source 2: evidence threshold inside a confirmed track's gate (1 = off); tuned");
 }
 
-/// Source 3, not in the paper (docs/DETECTION.md, "Dense-motion cue"): inside the tracks' gates,
+/// Source 3, not in the paper (docs/DETECTION.md, "Dense-motion source"): inside the tracks' gates,
 /// the densest patch of active pixels of I, accepted when its mean-time image T rises across it as
 /// a plane T ≈ a + g·(x − x_c) (count-weighted least squares over the (2r+1)² square around it). A
 /// moving object fires late on its leading side, so T rises along its image velocity; compensated
 /// background has no such trend. It finds what N misses: a far, spinning, textured object whose
 /// events spread over the whole window (mean time mid-window, below θ).
 struct DenseMotionSourceOptions {
-  bool enabled = true;  ///< false = the paper. YAML `motion_cue`
-  /// Side of the box whose active-pixel count is the density [px] (odd). YAML `motion_cue_density_px`
+  bool enabled = true;  ///< false = the paper. YAML `dense_motion`
+  /// Side of the box whose active-pixel count is the density [px] (odd). YAML `dense_motion_density_px`
   int density_px = 5;
-  int radius_px = 10;  ///< r: half-side of the plane fit's square [px]. YAML `motion_cue_radius_px`
+  int radius_px = 10;  ///< r: half-side of the plane fit's square [px]. YAML `dense_motion_radius_px`
   /// Active pixels (I ≥ min_pixel_events) the square must hold [px]: a plane through a few pixels
-  /// (a hot pixel and its neighbours) explains anything. YAML `motion_cue_min_pixels`
+  /// (a hot pixel and its neighbours) explains anything. YAML `dense_motion_min_pixels`
   int min_pixels = 20;
   /// Fraction of T's variance the plane must explain [-]; from the training seeds' measurement
-  /// (docs/DETECTION.md). YAML `motion_cue_min_r2`
+  /// (docs/DETECTION.md). YAML `dense_motion_min_r2`
   double min_r2 = 0.2;
   /// The plane's rise across the square, |g|·(2r+1), as a fraction of the window [-]: a static blob
-  /// with a chance trend rises little. YAML `motion_cue_min_span`
+  /// with a chance trend rises little. YAML `dense_motion_min_span`
   double min_span = 0.1;
   std::string validate() const;
 };
 
 template <class V>
 void describe(V& v, DenseMotionSourceOptions& o) {
-  v("motion_cue", o.enabled, "-", "source 3, dense moving blob inside track gates (false = the paper)");
-  v("motion_cue_density_px", o.density_px, "px", "side of the box whose active pixels are the density (odd)");
-  v("motion_cue_radius_px", o.radius_px, "px", "r: half-side of the plane fit's square");
-  v("motion_cue_min_pixels", o.min_pixels, "px", "active pixels the square must hold");
-  v("motion_cue_min_r2", o.min_r2, "-", "fraction of T's variance the plane must explain");
-  v("motion_cue_min_span", o.min_span, "-", "the plane's rise across the square / Δt");
+  v("dense_motion", o.enabled, "-", "source 3, dense moving blob inside track gates (false = the paper)");
+  v("dense_motion_density_px", o.density_px, "px", "side of the box whose active pixels are the density (odd)");
+  v("dense_motion_radius_px", o.radius_px, "px", "r: half-side of the plane fit's square");
+  v("dense_motion_min_pixels", o.min_pixels, "px", "active pixels the square must hold");
+  v("dense_motion_min_r2", o.min_r2, "-", "fraction of T's variance the plane must explain");
+  v("dense_motion_min_span", o.min_span, "-", "the plane's rise across the square / Δt");
+  // The keys' names before they took the source's name.
+  v.removed("motion_cue", "renamed dense_motion");
+  v.removed("motion_cue_density_px", "renamed dense_motion_density_px");
+  v.removed("motion_cue_radius_px", "renamed dense_motion_radius_px");
+  v.removed("motion_cue_min_pixels", "renamed dense_motion_min_pixels");
+  v.removed("motion_cue_min_r2", "renamed dense_motion_min_r2");
+  v.removed("motion_cue_min_span", "renamed dense_motion_min_span");
 }
 
-/// Source 4, not in the paper (docs/DETECTION.md, "Count-contrast cue"): a compact blob of the count
+/// Source 4, not in the paper (docs/DETECTION.md, "Count-contrast source"): a compact blob of the count
 /// image I much denser than its surroundings. A slow object that fires evenly over the window (a
 /// far head-on ball) is not late in N when the background's events came late (a jerk of the
 /// hovering camera), but it is the densest compact blob of I. Centre: the box_px² box (k); contrast
@@ -122,52 +129,63 @@ void describe(V& v, DenseMotionSourceOptions& o) {
 /// N's units), early or late: the background's events follow the camera's motion over the window,
 /// an independently moving object's do not.
 struct CountContrastSourceOptions {
-  bool enabled = true;  ///< false = the paper. YAML `count_cue`
+  bool enabled = true;  ///< false = the paper. YAML `count_contrast`
   /// k [px] (odd): about the smallest eligible ball (8 px across), at DetectorOptions::gate_focal_px.
-  /// YAML `count_cue_box_px`
+  /// YAML `count_contrast_box_px`
   int box_px = 9;
-  double surround_scale = 3.0;  ///< the surround box's side / k [-] (> 1). YAML `count_cue_surround_scale`
-  /// Accepted at this contrast or more [-] (the ball measured 3.9-6.3). YAML `count_cue_min_contrast`
+  double surround_scale = 3.0;  ///< the surround box's side / k [-] (> 1). YAML `count_contrast_surround_scale`
+  /// Accepted at this contrast or more [-] (the ball measured 3.9-6.3). YAML `count_contrast_min_contrast`
   double min_contrast = 3.0;
   /// Fraction of the centre box's pixels with I ≥ min_pixel_events [-]: a filled, compact blob; a
   /// thin edge or a hot pixel cannot fill it (ball 0.80-0.96, texture mostly 0.6-0.8 measured).
-  /// YAML `count_cue_min_fill`
+  /// YAML `count_contrast_min_fill`
   double min_fill = 0.8;
   /// Search confirmed tracks' gates first, without the time test: there the track is the evidence
-  /// that the blob moves. YAML `count_cue_in_gates`
+  /// that the blob moves. YAML `count_contrast_in_gates`
   bool in_gates = true;
   /// The still-camera test, which a blob may pass instead of the time test (docs/DETECTION.md,
-  /// "Count-contrast cue"): it applies while θ's motion term a‖ω‖ + b‖v‖ is at most this [-]
-  /// (hovering ≈ 0.002-0.02, fast flight ≈ 0.2-0.3); 0 = off. YAML `count_cue_still_motion`
+  /// "Count-contrast source"): it applies while θ's motion term a‖ω‖ + b‖v‖ is at most this [-]
+  /// (hovering ≈ 0.002-0.02, fast flight ≈ 0.2-0.3); 0 = off. YAML `count_contrast_still_motion`
   double still_motion = 0.05;
   /// ... the blob's events per pixel over those of its own-scale surround (its box grown by its own
   /// sides on every side), or the image's mean if larger, at least this [-]: a part of a larger
-  /// moving body (a person) does not stand out from the rest of it. YAML `count_cue_still_isolation`
+  /// moving body (a person) does not stand out from the rest of it. YAML `count_contrast_still_isolation`
   double still_min_isolation = 8.0;
   /// ... and its events' pixel must move with their time: the Wald statistic of the two slopes
   /// (x and y regressed on t) at least this [-]; a flickering light does not move.
-  /// YAML `count_cue_still_motion_z`
+  /// YAML `count_contrast_still_motion_z`
   double still_min_motion_z = 2.0;
-  /// The sparse search (docs/DETECTION.md, "Count-contrast cue"): with the camera nearly still and
+  /// The sparse search (docs/DETECTION.md, "Count-contrast source"): with the camera nearly still and
   /// nothing found, a centre box is filled when so many of its pixels fired at all that, were the
   /// image's fired pixels scattered at random, this many boxes of the image would be expected to
-  /// reach it per window [-]; 0 = off. YAML `count_cue_sparse_chance`
+  /// reach it per window [-]; 0 = off. YAML `count_contrast_sparse_chance`
   double sparse_chance = 1e-3;
   std::string validate() const;
 };
 
 template <class V>
 void describe(V& v, CountContrastSourceOptions& o) {
-  v("count_cue", o.enabled, "-", "source 4, count-contrast blob (false = the paper)");
-  v("count_cue_box_px", o.box_px, "px", "k: side of the centre box (odd), at gate_focal_px; about the smallest eligible ball");
-  v("count_cue_surround_scale", o.surround_scale, "-", "the surround box's side / k (> 1)");
-  v("count_cue_min_contrast", o.min_contrast, "-", "centre density / max(surround density, image mean)");
-  v("count_cue_min_fill", o.min_fill, "-", "fraction of the centre box's pixels with I ≥ min_pixel_events");
-  v("count_cue_in_gates", o.in_gates, "-", "search confirmed tracks' gates first, without the time test");
-  v("count_cue_still_motion", o.still_motion, "-", "the still-camera test replaces the time test while a‖ω‖ + b‖v‖ ≤ this (0 = off); tuned");
-  v("count_cue_still_isolation", o.still_min_isolation, "-", "... the blob's density / its own-scale surround's (or the image mean's) ≥ this; tuned");
-  v("count_cue_still_motion_z", o.still_min_motion_z, "-", "... and the Wald z of its events' position-on-time slopes ≥ this; tuned");
-  v("count_cue_sparse_chance", o.sparse_chance, "-", "still camera, nothing found: boxes of scattered events expected per window to fill a sparse centre box (0 = off); tuned");
+  v("count_contrast", o.enabled, "-", "source 4, count-contrast blob (false = the paper)");
+  v("count_contrast_box_px", o.box_px, "px", "k: side of the centre box (odd), at gate_focal_px; about the smallest eligible ball");
+  v("count_contrast_surround_scale", o.surround_scale, "-", "the surround box's side / k (> 1)");
+  v("count_contrast_min_contrast", o.min_contrast, "-", "centre density / max(surround density, image mean)");
+  v("count_contrast_min_fill", o.min_fill, "-", "fraction of the centre box's pixels with I ≥ min_pixel_events");
+  v("count_contrast_in_gates", o.in_gates, "-", "search confirmed tracks' gates first, without the time test");
+  v("count_contrast_still_motion", o.still_motion, "-", "the still-camera test replaces the time test while a‖ω‖ + b‖v‖ ≤ this (0 = off); tuned");
+  v("count_contrast_still_isolation", o.still_min_isolation, "-", "... the blob's density / its own-scale surround's (or the image mean's) ≥ this; tuned");
+  v("count_contrast_still_motion_z", o.still_min_motion_z, "-", "... and the Wald z of its events' position-on-time slopes ≥ this; tuned");
+  v("count_contrast_sparse_chance", o.sparse_chance, "-", "still camera, nothing found: boxes of scattered events expected per window to fill a sparse centre box (0 = off); tuned");
+  // The keys' names before they took the source's name.
+  v.removed("count_cue", "renamed count_contrast");
+  v.removed("count_cue_box_px", "renamed count_contrast_box_px");
+  v.removed("count_cue_surround_scale", "renamed count_contrast_surround_scale");
+  v.removed("count_cue_min_contrast", "renamed count_contrast_min_contrast");
+  v.removed("count_cue_min_fill", "renamed count_contrast_min_fill");
+  v.removed("count_cue_in_gates", "renamed count_contrast_in_gates");
+  v.removed("count_cue_still_motion", "renamed count_contrast_still_motion");
+  v.removed("count_cue_still_isolation", "renamed count_contrast_still_isolation");
+  v.removed("count_cue_still_motion_z", "renamed count_contrast_still_motion_z");
+  v.removed("count_cue_sparse_chance", "renamed count_contrast_sparse_chance");
 }
 
 struct DetectorOptions {
@@ -204,7 +222,7 @@ struct DetectorOptions {
   /// A candidate box must hold at least this many compensated events per pixel: a moving object
   /// fires events all over its image, sparse late pixels of background texture do not.
   double min_event_density = 1.5;
-  /// The focal length [px] at which min_event_density and count_cue_box_px are stated (the 640x480
+  /// The focal length [px] at which min_event_density and count_contrast_box_px are stated (the 640x480
   /// simulated camera they were tuned on). A camera with a shorter fx has both scaled by fx / this:
   /// the same object's image, and the events per pixel it fires, shrink with the focal length in
   /// pixels (docs/DETECTION.md, "Any apparent size"). 0 = the values as given, at any resolution.
@@ -224,7 +242,7 @@ struct DetectorOptions {
   /// Mean-shift passes of that region (re-centred on the events' centroid, same size) after the
   /// first, while the centroid moves by ≥ 0.25 px: residual background events in a region centred
   /// ahead of the object pull the centroid forwards; 0 = the region stays on the box.
-  int refine_recentre_passes = 6;
+  int refine_recenter_passes = 6;
   /// The square grows (× 1.5) while a side of the band just outside it holds at least this × its
   /// own event density: the box was a fragment of a larger object, whose events go on past the
   /// square. The box then becomes a square of the extent the last two squares bracket
@@ -285,11 +303,12 @@ void describe(V& v, DetectorOptions& o) {
   v("roi_max_aspect", o.roi_max_aspect, "-", "a box's long side / short side above this is implausible");
   v("roi_min_events", o.roi_min_events, "events", "fewer compensated events in a box is implausible");
   v("min_event_density", o.min_event_density, "events/px", "evidence gate of a candidate box, at gate_focal_px; tuned");
-  v("gate_focal_px", o.gate_focal_px, "px", "focal length of min_event_density and count_cue_box_px; a shorter fx scales both by fx / this (0 = as given)");
+  v("gate_focal_px", o.gate_focal_px, "px", "focal length of min_event_density and count_contrast_box_px; a shorter fx scales both by fx / this (0 = as given)");
   v("prior_gate_scale", o.prior_gate_scale, "-", "a confirmed track's predicted box × this = its gate");
   v("prior_min_gate_px", o.prior_min_gate_px, "px", "smallest gate half-side");
   v("refine_box_scale", o.refine_box_scale, "-", "centre and time re-estimated from the events in the box × this (0 = off)");
-  v("refine_recentre_passes", o.refine_recentre_passes, "-", "mean-shift re-centring passes of that region (0 = stays on the box)");
+  v("refine_recenter_passes", o.refine_recenter_passes, "-", "mean-shift re-centring passes of that region (0 = stays on the box)");
+  v.removed("refine_recentre_passes", "renamed refine_recenter_passes");
   v("refine_grow_density", o.refine_grow_density, "-", "that region grows × 1.5 while a side of the band around it is this × as dense (0 = off)");
   v("refine_grow_contrast", o.refine_grow_contrast, "-", "... and this × as dense as the whole image's events in the slice");
   v("refine_fit_outline", o.refine_fit_outline, "-", "a grown square's centre is that of an ellipse fitted to its pixels with events");

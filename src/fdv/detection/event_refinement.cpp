@@ -160,7 +160,7 @@ std::optional<RefinedCenter> EventRefiner::refine(const CompensatedEventsView& w
     double sx = 0, sy = 0, st = 0;
     long n = 0;
     cv::Rect e;
-    for (int pass = 0; pass <= options_.refine_recentre_passes; ++pass) {
+    for (int pass = 0; pass <= options_.refine_recenter_passes; ++pass) {
       e = square(centre, half) & outer;
       if (e.area() == 0) return refined;
       sx = sy = st = 0;

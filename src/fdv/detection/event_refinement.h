@@ -8,7 +8,7 @@
 ///   EventRefiner refiner(options);      // once; allocate(width, height) before the first refine()
 ///   if (auto r = refiner.refine(view, box, t_mean_s)) { centre = r->center; t = r->t_mean_s; }
 ///
-/// Options: DetectorOptions::refine_box_scale, refine_recentre_passes, refine_grow_density,
+/// Options: DetectorOptions::refine_box_scale, refine_recenter_passes, refine_grow_density,
 /// refine_grow_contrast, fills_view_fraction, roi_min_events.
 /// Does not allocate once allocated. Not thread-safe.
 #include <Eigen/Core>

@@ -6,7 +6,6 @@
 #include <sstream>
 
 namespace fdv {
-using detection_internal::ms_since;
 
 std::string GaussianFitSourceOptions::validate() const {
   for (double v : {refit_min_roi_px, refit_local_scale, roi_max_fraction, large_region_min_contrast, min_peak,
@@ -37,28 +36,25 @@ bool spans_separate_tracks(const Box2D& box, std::span<const Box2D> gates) {
 }
 
 std::optional<Candidate> evaluate_pattern(const DetectorOptions& o, SourceWindow& in, const cv::Mat& P, cv::Point seed,
-                                          double min_peak, DetectionResult& res, Box2D& blank) {
-  using Clock = std::chrono::steady_clock;
+                                          double min_peak, PatternFitDiagnostics& diagnostics, Box2D& blank) {
   const GaussianFitSourceOptions& g = o.gaussian_fit;
   const int w = in.events.width, h = in.events.height;
   const double fit_max_w = g.roi_max_fraction * w, fit_max_h = g.roi_max_fraction * h;
   const double region_max_side = o.fills_view_fraction * std::min(w, h);
   // Algorithm 1 from the seed pattern, half-image initial ROI.
-  auto t = Clock::now();
   const Eigen::Vector2d c0(seed.x, seed.y), l0(0.5 * w, 0.5 * h);
   const Box2D initial{c0.x() - 0.5 * l0.x(), c0.y() - 0.5 * l0.y(), c0.x() + 0.5 * l0.x(), c0.y() + 0.5 * l0.y()};
-  res.fit = iterative_gaussian_fit(P, c0, l0, o);
-  const GaussianFit& fit = res.fit;
+  const GaussianFit fit = iterative_gaussian_fit(P, c0, l0, o);
   auto events_in = [&](const Box2D& box) {
     const cv::Rect r = box_pixels(box, w, h);
     return r.area() > 0 ? static_cast<int>(cv::sum(in.ti.count(r))[0]) : 0;
   };
-  res.fit_rejected = {};
-  if (!fit.converged) res.fit_rejected = fit.empty_roi ? "empty roi" : fit.diverged ? "diverged" : "not converged";
-  else if (fit.size.x() > fit_max_w || fit.size.y() > fit_max_h) res.fit_rejected = "too large";
-  else if (fit.size.maxCoeff() > o.roi_max_aspect * fit.size.minCoeff()) res.fit_rejected = "aspect ratio";
-  else if (events_in(fit.roi()) < o.roi_min_events) res.fit_rejected = "too few events";
-  res.timings.fit_ms += ms_since(t);
+  std::string_view rejected;
+  if (!fit.converged) rejected = fit.empty_roi ? "empty roi" : fit.diverged ? "diverged" : "not converged";
+  else if (fit.size.x() > fit_max_w || fit.size.y() > fit_max_h) rejected = "too large";
+  else if (fit.size.maxCoeff() > o.roi_max_aspect * fit.size.minCoeff()) rejected = "aspect ratio";
+  else if (events_in(fit.roi()) < o.roi_min_events) rejected = "too few events";
+  diagnostics = {.fit_iterations = fit.iterations, .fit_converged = fit.converged, .fit_rejected = rejected};
 
   // The evidence gates: events, the peak of P (score) and events per pixel in the box.
   auto passes_gates = [&](Candidate& k) {
@@ -79,14 +75,14 @@ std::optional<Candidate> evaluate_pattern(const DetectorOptions& o, SourceWindow
     return true;
   };
   Candidate c;
-  if (res.fit_rejected.empty()) {
+  c.fit_iterations = fit.iterations;
+  if (rejected.empty()) {
     c.box = fit.roi();
     c.center = fit.center;
     c.source = DetectionSource::kGaussianFit;
   } else {
     // Moving-region retrieval: components within the initial (half-image) ROI around the seed;
     // the heaviest one overlapping the failed ROI, else the heaviest overall.
-    t = Clock::now();
     const cv::Rect search = box_pixels(initial, w, h);
     const std::array<Box2D, 2> rois{fit.roi(), initial};
     const auto roi_list = std::span<const Box2D>(rois).subspan(fit.empty_roi ? 1 : 0);
@@ -99,7 +95,6 @@ std::optional<Candidate> evaluate_pattern(const DetectorOptions& o, SourceWindow
              (search.y + search.height < h && b.y1 >= search.y + search.height - 2);
     };
     if (region && cut_by_search(region->box)) region = retrieve_region(P, roi_list, {0, 0, w, h}, o, in.region_scratch);
-    res.timings.retrieval_ms += ms_since(t);
     // A region larger than a plausible fit must stand out from the rest of the image in density.
     auto denser_than_the_rest = [&](const Box2D& box) {
       const cv::Rect r = box_pixels(box, w, h);
@@ -173,9 +168,7 @@ std::optional<Candidate> evaluate_pattern(const DetectorOptions& o, SourceWindow
   };
   const DetectionStatus why_first = in.why_not;
   for (Eigen::Vector2d l = 0.5 * l0; l.minCoeff() >= g.refit_min_roi_px; l *= 0.5) {
-    t = Clock::now();
     const GaussianFit f = iterative_gaussian_fit(P, c0, l, o);
-    res.timings.fit_ms += ms_since(t);
     if (!f.converged || f.size.x() > fit_max_w || f.size.y() > fit_max_h ||
         f.size.maxCoeff() > o.roi_max_aspect * f.size.minCoeff() || spans_separate_tracks(f.roi(), in.gates))
       continue;
@@ -183,9 +176,9 @@ std::optional<Candidate> evaluate_pattern(const DetectorOptions& o, SourceWindow
     k.box = f.roi();
     k.center = f.center;
     k.source = DetectionSource::kGaussianFit;
+    k.fit_iterations = f.iterations;
     if (passes_gates(k) && stands_out(k.box)) {
-      res.fit = f;
-      res.fit_rejected = {};
+      diagnostics = {.fit_iterations = f.iterations, .fit_converged = true, .fit_rejected = {}};
       return k;
     }
   }
@@ -217,7 +210,8 @@ std::optional<Candidate> GaussianFitSource::find(SourceWindow& in, DetectionResu
     if (!(p_max > 0) || p_max < min_peak * min_peak) break;  // none left can pass
     ++res.candidates;
     Box2D blank;
-    if (auto found = evaluate_pattern(o, in, *image, arg_max, min_peak, res, blank)) return found;
+    PatternFitDiagnostics& diagnostics = res.diagnostics_of(kName).write<PatternFitDiagnostics>();
+    if (auto found = evaluate_pattern(o, in, *image, arg_max, min_peak, diagnostics, blank)) return found;
     if (image == &P) {
       // Only P's support is copied; blanked_ is kept 0 elsewhere.
       zero_rect(blanked_, blanked_bounds_);

@@ -5,16 +5,28 @@
 ///
 ///   GaussianFitSource source(options);   // once; allocate(width, height) before the first find()
 ///   std::optional<Candidate> c = source.find(in, res);
+///   res.diagnostics<PatternFitDiagnostics>(GaussianFitSource::kName)->fit_rejected   // why not
 ///
 /// evaluate_pattern() is one pattern's evaluation, which the track-aided source reuses inside the
 /// tracks' gates. Options: DetectorOptions::gaussian_fit and the shared fields.
 #include <optional>
 #include <span>
+#include <string_view>
 
 #include "fdv/detection/candidate_source.h"
 #include "fdv/detection/detector_options.h"
 
 namespace fdv {
+
+/// What the pattern sources (this one and the track-aided one) report: Algorithm 1's outcome for
+/// the last pattern evaluated.
+struct PatternFitDiagnostics {
+  int fit_iterations = 0;
+  bool fit_converged = false;
+  /// Why the fitted ROI was not used ("" when it was): "not converged", "diverged", "empty roi",
+  /// "too large", "aspect ratio", "too few events".
+  std::string_view fit_rejected;
+};
 
 /// True when `box` holds the predicted centres of two confirmed tracks whose gates do not overlap:
 /// a fit or region that merged two objects the tracks keep apart (docs/DETECTION.md, "Several
@@ -23,14 +35,15 @@ bool spans_separate_tracks(const Box2D& box, std::span<const Box2D> gates);
 
 /// Algorithm 1 from `seed` on `P` with the half-image initial ROI, else moving-region retrieval;
 /// then the evidence gates (roi_min_events, `min_peak` on the box's peak of P, min_event_density),
-/// then smaller initial ROIs (GaussianFitSourceOptions::refit_min_roi_px). Writes res.fit,
-/// res.fit_rejected and the fit / retrieval timings. On failure sets in.why_not and `blank`, the
-/// area to blank before the next attempt.
+/// then smaller initial ROIs (GaussianFitSourceOptions::refit_min_roi_px). Writes the fit's
+/// outcome to `fit`. On failure sets in.why_not and `blank`, the area to blank before the next
+/// attempt.
 std::optional<Candidate> evaluate_pattern(const DetectorOptions& o, SourceWindow& in, const cv::Mat& P, cv::Point seed,
-                                          double min_peak, DetectionResult& res, Box2D& blank);
+                                          double min_peak, PatternFitDiagnostics& fit, Box2D& blank);
 
 class GaussianFitSource final : public CandidateSource {
  public:
+  static constexpr std::string_view kName = "gaussian_fit";
   /// `options` must be valid (DetectorOptions::validate).
   explicit GaussianFitSource(const DetectorOptions& options) : options_(options) {}
   void allocate(int width, int height) override;

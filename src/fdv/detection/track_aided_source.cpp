@@ -24,7 +24,8 @@ std::optional<Candidate> TrackAidedSource::find(SourceWindow& in, DetectionResul
     if (!(p_max > 0) || p_max < min_peak * min_peak) continue;
     ++res.candidates;
     Box2D blank;
-    std::optional<Candidate> found = evaluate_pattern(options_, in, in.P, peak.at, min_peak, res, blank);
+    PatternFitDiagnostics& diagnostics = res.diagnostics_of(kName).write<PatternFitDiagnostics>();
+    std::optional<Candidate> found = evaluate_pattern(options_, in, in.P, peak.at, min_peak, diagnostics, blank);
     if (found && gate.contains(found->center)) {
       res.track_aided = true;
       return found;

@@ -5,17 +5,21 @@
 ///
 ///   TrackAidedSource source(options);
 ///   std::optional<Candidate> c = source.find(in, res);   // res.track_aided when found
+///   res.diagnostics<PatternFitDiagnostics>(TrackAidedSource::kName)   // the last pattern's fit
 ///
 /// It has no buffers of its own: the patterns are evaluated on P itself (no blanking).
 #include <optional>
+#include <string_view>
 
 #include "fdv/detection/candidate_source.h"
+#include "fdv/detection/gaussian_fit_source.h"
 #include "fdv/detection/detector_options.h"
 
 namespace fdv {
 
 class TrackAidedSource final : public CandidateSource {
  public:
+  static constexpr std::string_view kName = "track_aided";
   /// `options` must be valid (DetectorOptions::validate).
   explicit TrackAidedSource(const DetectorOptions& options) : options_(options) {}
   void allocate(int, int) override {}

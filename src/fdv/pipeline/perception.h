@@ -91,7 +91,7 @@ struct PerceptionOptions {
   /// and its 3D history go on instead of a new track starting from nothing (Tracker, ExternalGate).
   bool estimate_aided_association = true;
   /// A tentative track detected in the last window also lends the detector its gate, for the
-  /// dense-motion cue and the count-contrast cue's sparse search only: the windows before
+  /// dense-motion source and the count-contrast source's sparse search only: the windows before
   /// confirmation are where a fast ball is most often missed (docs/DETECTION.md, "Gates of
   /// tentative tracks").
   bool tentative_track_priors = true;
@@ -122,7 +122,7 @@ struct PerceptionOptions {
 
 /// Whether `track` lends the detector its gate (a DetectionPrior) in the next window: when
 /// confirmed, or, with PerceptionOptions::tentative_track_priors, when tentative and detected in the
-/// last window (DetectionPrior::confirmed false: the dense-motion cue and the sparse search only).
+/// last window (DetectionPrior::confirmed false: the dense-motion source and the sparse search only).
 bool lends_detector_gate(const Track& track, const PerceptionOptions& options);
 
 /// An object cut by the frame's border (`found.partial`; docs/DETECTION.md, "Objects cut by the

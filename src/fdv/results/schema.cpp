@@ -3,6 +3,8 @@
 #include <cmath>
 #include <limits>
 
+#include "fdv/detection/candidate_source.h"
+
 namespace fdv {
 namespace {
 
@@ -480,6 +482,13 @@ DodgeRow dodge_row(const DodgeDecision& d) {
   return r;
 }
 
+std::vector<std::string> window_timing_stages() {
+  std::vector<std::string> stages{"compensation", "time_images", "segmentation", "preprocess"};
+  for (const RegisteredSource& s : registered_sources()) stages.emplace_back(s.name);
+  for (const char* stage : {"detection_total", "tracking", "window_total"}) stages.emplace_back(stage);
+  return stages;
+}
+
 WindowTimingRow window_timing_row(const WindowResult& w) {
   WindowTimingRow r;
   r.window = w.index;
@@ -487,11 +496,10 @@ WindowTimingRow window_timing_row(const WindowResult& w) {
   const WindowTimings& t = w.timings;
   r.stage_ms = {{"compensation", t.compensation_ms},       {"time_images", t.detection.time_images_ms},
                 {"segmentation", t.detection.segmentation_ms}, {"preprocess", t.detection.preprocess_ms},
-                {"gaussian_fit", t.detection.fit_ms},        {"detection_total", t.detection.total_ms},
-                {"tracking", t.tracking_ms},                 {"window_total", t.total_ms}};
-  // Stages that run only in some windows: a time where they ran (summary "count": in how many).
-  if (t.detection.retrieval_ms > 0) r.stage_ms["region_retrieval"] = t.detection.retrieval_ms;
-  if (t.detection.count_cue_ms > 0) r.stage_ms["count_cue"] = t.detection.count_cue_ms;
+                {"detection_total", t.detection.total_ms},   {"tracking", t.tracking_ms},
+                {"window_total", t.total_ms}};
+  // The candidate sources tried in this window (summary "count": in how many windows).
+  for (const SourceTime& s : t.detection.sources()) r.stage_ms[std::string(s.source)] = s.ms;
   return r;
 }
 

@@ -42,9 +42,9 @@ inline constexpr const char* kTimingFile = "timing.csv";
 
 /// timing.csv's stage columns in order: the stages of summary.json's "timing_ms" that run per event
 /// window (depth segmentation and estimation run per frame and per solve: in the summary only).
-inline constexpr std::array<const char*, 10> kWindowTimingStages = {
-    "compensation",     "time_images", "segmentation",    "preprocess", "gaussian_fit",
-    "region_retrieval", "count_cue",   "detection_total", "tracking",   "window_total"};
+/// Each registered candidate source is a stage of its name (candidate_source.h), between the
+/// detector's own stages and "detection_total".
+std::vector<std::string> window_timing_stages();
 
 /// One detection of a window (an element of WindowRow::detections).
 struct DetectionRow {
@@ -165,9 +165,9 @@ struct TumPose {
 };
 
 /// A line of timing.csv: one event window's wall-clock time per stage [ms] (steady clock; not
-/// deterministic). CSV with the header "window,t_start," then kWindowTimingStages; numbers in the
-/// shortest form that reads back to the same double. A stage that did not run in the window
-/// (region_retrieval, count_cue) is an empty cell.
+/// deterministic). CSV with the header "window,t_start," then window_timing_stages(); numbers in the
+/// shortest form that reads back to the same double. A stage that did not run in the window (a
+/// candidate source the detector did not try) is an empty cell.
 struct WindowTimingRow {
   std::uint64_t window = 0;  ///< "window": the windower's index (as in window_INDEX.png)
   double t_start_s = 0;      ///< "t_start" [s], as detections.jsonl's line of the window

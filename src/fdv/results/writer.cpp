@@ -6,14 +6,14 @@
 
 namespace fdv {
 
-ResultsWriter::ResultsWriter(const std::filesystem::path& dir) : dir_(dir) {
+ResultsWriter::ResultsWriter(const std::filesystem::path& dir) : dir_(dir), timing_stages_(window_timing_stages()) {
   std::filesystem::create_directories(dir);
   for (auto [name, stream] : row_files()) {
     stream->open(dir / name);
     if (!*stream) throw InputError((dir / name).string(), "", "cannot create output file");
   }
   timing_csv_ << "window,t_start";
-  for (const char* stage : kWindowTimingStages) timing_csv_ << "," << stage;
+  for (const std::string& stage : timing_stages_) timing_csv_ << "," << stage;
   timing_csv_ << "\n";
 }
 
@@ -35,7 +35,7 @@ void ResultsWriter::write(const DodgeRow& row) { dodge_ << nlohmann::json(row).d
 void ResultsWriter::write(const WindowTimingRow& row) {
   // fmt's "{}" is the shortest text that reads back to the same double.
   timing_csv_ << fmt::format("{},{}", row.window, row.t_start_s);
-  for (const char* stage : kWindowTimingStages) {
+  for (const std::string& stage : timing_stages_) {
     const auto it = row.stage_ms.find(stage);
     timing_csv_ << (it == row.stage_ms.end() ? "," : fmt::format(",{}", it->second));
   }

@@ -56,6 +56,7 @@ class ResultsWriter {
 
   std::filesystem::path dir_;
   std::ofstream detections_, depth_, trajectories_, predictions_, dodge_, timing_csv_;
+  std::vector<std::string> timing_stages_;  ///< timing.csv's stage columns (window_timing_stages)
   std::map<std::string, std::vector<double>> timing_;
   std::map<int, TrajectoryEstimate> final_fusion_, final_mono_;
 };
