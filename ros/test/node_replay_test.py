@@ -7,7 +7,7 @@
 Simulates a scene, exports it as a ROS 1 bag (`fdv export --to ros1-bag`), runs `fdv run` on that
 bag for the reference, then starts roscore on a free loopback port, the node and `rosbag record`,
 plays the bag with `rosbag play -r R`, and compares what the node published with the reference:
-the same windows (times, status, boxes, centres) and the same trajectory estimates. At rate 1
+the same windows (times, status, boxes, centers) and the same trajectory estimates. At rate 1
 (real time) it checks only that no input message was dropped and reports the event rate and the
 latency; the node then does not await depth (its default), so the latency is the live one.
 Everything it starts runs in its own process group and is stopped on exit; each step is bounded.

@@ -130,7 +130,7 @@ TEST(Warp, RotationTranslationLandsEveryEventOnItsPointAtT0) {
 // Events that sit exactly on pixel centres: each event gets its own static point, placed at depth
 // Z on the ray of its pixel at its time t (X_t = Z·[x; 1], P = R(t)·X_t + v·t in E0). With no
 // rounding in the data, the warp must put every event on K·(P/z) to float precision.
-TEST(Warp, RotationTranslationIsExactOnPixelCentres) {
+TEST(Warp, RotationTranslationIsExactOnPixelCenters) {
   const Calibration calib = test_rig();
   const PinholeCamera& cam = calib.event_camera;
   const Eigen::Vector3d omega_E(-0.6, 1.4, -2.2), v_E(-1.2, 0.9, 3.0);

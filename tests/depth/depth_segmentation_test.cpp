@@ -88,7 +88,7 @@ const Sphere kBall{{0.3, -0.1, 4.0}, 0.1};
 
 // A ball in front of a wall: the observation is the centre's z (not the surface's), with the
 // noise model's sigma; the estimated radius (unknown-radius mode) is close to the true one.
-TEST(DepthSegmentation, BallInFrontOfWallGivesCentreDepth) {
+TEST(DepthSegmentation, BallInFrontOfWallGivesCenterDepth) {
   Scene s;
   s.spheres = {kBall};
   const Frame f = render(s);
@@ -244,7 +244,7 @@ TEST(DepthSegmentation, SpreadGateComparesTheDepthsSpreadWithASpheresCapPlusNois
 
 // The ROI is the track's box scaled ×2 about its centre (paper §IV-C.2): (2·w)² pixels for a box
 // of side w, here the ball's 27 px silhouette, so that it holds the ball and the wall around it.
-TEST(DepthSegmentation, RoiIsTheBoxScaledTwiceAboutItsCentre) {
+TEST(DepthSegmentation, RoiIsTheBoxScaledTwiceAboutItsCenter) {
   Scene s;
   s.spheres = {kBall};
   s.hole_fraction = 0;
@@ -290,7 +290,7 @@ TEST(DepthSegmentation, InvalidInputIsReportedNotThrown) {
 // The ROI holds the pixels whose centres lie inside the box x2: a 4 x 6 px box about (10.5, 20)
 // covers x in [6.5, 14.5] and y in [14, 26], so columns 7-14 and rows 14-26 (a centre on the
 // border counts); it is clipped at the image's edges and empty when the box is outside.
-TEST(DepthSegmentationPhases, RoiIsTheScaledBoxsPixelCentresClippedToTheImage) {
+TEST(DepthSegmentationPhases, RoiIsTheScaledBoxsPixelCentersClippedToTheImage) {
   DepthQuery q;
   q.center_px = {10.5, 20};
   q.box_size_px = {4, 6};
@@ -340,7 +340,7 @@ TEST(DepthSegmentationPhases, HistogramCountsTheRoisValidDepthsPerBin) {
 // and 50 in bin 40, threshold 20: bin 10 is the first whose 3-bin sum (0 + 5 + 20) reaches it,
 // the peak is the fullest of bins 9-11, bin 11, and m₀ = (5 c10 + 20 c11 + 3 c12) / 28
 // = 0.3 + 0.1·320/28. Searching from beyond it finds bin 40 alone, m₀ = c40.
-TEST(DepthSegmentationPhases, NearestSignificantPeakIsTheWeightedCentreOfItsThreeBins) {
+TEST(DepthSegmentationPhases, NearestSignificantPeakIsTheWeightedCenterOfItsThreeBins) {
   DepthHistogram h;
   h.min_depth_m = 0.3;
   h.bin_width_m = 0.1;

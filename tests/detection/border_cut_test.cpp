@@ -53,7 +53,7 @@ TEST(BorderCut, ClearOfTheBorderIsNotCut) {
   EXPECT_TRUE(border_cut(square_on({21.5, 100}, 20), kWidth, kHeight));
 }
 
-TEST(BorderCut, WholeCentreAndFractionFromTheVisibleCentroid) {
+TEST(BorderCut, WholeCenterAndFractionFromTheVisibleCentroid) {
   // Discs cut by the left, bottom, right and top borders, centre inside and outside the frame.
   const double r = 30;
   const Eigen::Vector2d centers[] = {{-0.5 + 12, 120}, {-0.5 - 14, 90}, {150, kHeight - 0.5 + 9},

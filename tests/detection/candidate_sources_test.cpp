@@ -82,7 +82,7 @@ HandMadeWindow late_blob(int cx, int cy) {
 
 // The blob is symmetric about its centre, and so are S, P and Algorithm 1's weights: the fit's
 // centre is the blob's.
-TEST(GaussianFitSource, ALateSymmetricBlobIsFoundAtItsCentre) {
+TEST(GaussianFitSource, ALateSymmetricBlobIsFoundAtItsCenter) {
   const DetectorOptions o;
   HandMadeWindow w = late_blob(100, 70);
   SourceWindow in = w.build(o);
@@ -203,7 +203,7 @@ TEST(DenseMotionSource, ATimePlaneBlobIsFoundAtItsCentroid) {
 // A 9x9 blob of 10 events per pixel with an empty surround: its contrast is its density over the
 // image's mean, its fill 1, and Algorithm 1 on the uniform excess is centred on it. The blob fires
 // evenly (mean time mid-window) while the background fires late, so it passes the time test.
-TEST(CountContrastSource, ADenseBlobOnAnEmptySurroundIsFoundAtItsCentre) {
+TEST(CountContrastSource, ADenseBlobOnAnEmptySurroundIsFoundAtItsCenter) {
   const DetectorOptions o;
   HandMadeWindow w;
   for (int x = 0; x < kWidth; x += 2) {  // 160 single late events, far from the blob
@@ -486,7 +486,7 @@ TEST(EventRefiner, ABoxOnAFragmentGrowsToHoldTheWholeObject) {
 // (3 - 2) / 5 · 2r/π ≈ 1.8 px right of the centre (2r/π = 8.9 px, a half ring's mean offset at
 // r = 14), the fitted outline's centre on it. (At 2:1 the square stops growing before it holds the
 // left half: the band's density test compares it with the denser right half.)
-TEST(EventRefiner, AGrownSquaresCentreIsItsOutlinesNotItsEventsCentroid) {
+TEST(EventRefiner, AGrownSquaresCenterIsItsOutlinesNotItsEventsCentroid) {
   HandMadeWindow w;
   add_ring_on_sparse_background(w, 3, 2);
   const Box2D fragment{91, 57, 97, 63};

@@ -124,7 +124,7 @@ TEST(DetectorBox, SquareBoxHoldsTheWholeFastBallNotJustItsLatestSweep) {
 // The box and centre on the compensated grid stay where the events are; the camera-at-t fields
 // (center_raw, center_normalized, box_raw) go through the view's observed_at at the detection's
 // time: here a made-up ego-motion that moves the image by (800, −500) px/s.
-TEST_F(DetectorTest, CentreForTheCameraAtTheDetectionTimeGoesThroughObservedAt) {
+TEST_F(DetectorTest, CenterForTheCameraAtTheDetectionTimeGoesThroughObservedAt) {
   test::BlobScene s;
   s.t0 = 5 * kNsPerS;
   s.start_uv = {250.0, 200.0};
@@ -157,7 +157,7 @@ TEST_F(DetectorTest, CentreForTheCameraAtTheDetectionTimeGoesThroughObservedAt) 
 // there) pulls a centroid taken over a region centred on the box - which sits on the object's
 // latest sweep, ahead of it - forwards along the motion; the re-centred region
 // (refine_recenter_passes) settles on the object's own events.
-TEST(DetectorRefine, RecentredRegionRemovesTheClutterPullAlongTheMotion) {
+TEST(DetectorRefine, RecenterdRegionRemovesTheClutterPullAlongTheMotion) {
   test::BlobScene s;
   s.t0 = 2 * kNsPerS;
   s.start_uv = {180, 240};
@@ -191,9 +191,9 @@ TEST(DetectorRefine, RecentredRegionRemovesTheClutterPullAlongTheMotion) {
     EXPECT_TRUE(r.strongest()) << to_string(r.status);
     return r.strongest() ? r.strongest()->center_undistorted.x() - s.blob_at(r.strongest()->t).x() : 1e9;
   };
-  const double single = along_error(0), recentred = along_error(DetectorOptions{}.refine_recenter_passes);
+  const double single = along_error(0), recenterd = along_error(DetectorOptions{}.refine_recenter_passes);
   EXPECT_GT(single, 2.0) << "the set-up must show the pull";
-  EXPECT_LT(std::abs(recentred), 1.0);
+  EXPECT_LT(std::abs(recenterd), 1.0);
 
   // The refinement's time slice found by binary search (time-sorted window) and by testing every
   // event's time (a window not known to be sorted) bins the same events: the same detection.
@@ -481,7 +481,7 @@ std::vector<Event> late_background_scene(const PinholeCamera& cam, const test::B
 /// table in int64 of I saturated at 255 and of its active pixels.
 struct CountContrastSearch {
   double best_contrast = 0, best_fill = 0;
-  int filled_centres = 0;
+  int filled_centers = 0;
 };
 CountContrastSearch count_contrast_by_brute_force(const CompensatedEventsView& view, const DetectorOptions& o) {
   TimeImages ti;
@@ -508,7 +508,7 @@ CountContrastSearch count_contrast_by_brute_force(const CompensatedEventsView& v
     for (int x = hs; x < w - hs; ++x) {
       const double fill = sum(active, x - hk, y - hk, k) / center_area;
       if (fill < o.count_contrast.min_fill) continue;
-      ++r.filled_centres;
+      ++r.filled_centers;
       const double in = sum(count, x - hk, y - hk, k);
       const double surround = (sum(count, x - hs, y - hs, 2 * hs + 1) - in) / ring_area;
       const double contrast = in / center_area / std::max(surround, image_density);
@@ -520,7 +520,7 @@ CountContrastSearch count_contrast_by_brute_force(const CompensatedEventsView& v
 void expect_count_contrast_search_as_brute_force(const DetectionResult& r, const CompensatedEventsView& view,
                                             const DetectorOptions& o) {
   const CountContrastSearch expected = count_contrast_by_brute_force(view, o);
-  EXPECT_EQ(test::count_contrast_of(r).filled_centers, expected.filled_centres);
+  EXPECT_EQ(test::count_contrast_of(r).filled_centers, expected.filled_centers);
   EXPECT_DOUBLE_EQ(test::count_contrast_of(r).contrast, expected.best_contrast);
   EXPECT_DOUBLE_EQ(test::count_contrast_of(r).fill, expected.best_fill);
 }
@@ -615,7 +615,7 @@ TEST_F(DetectorTest, CountContrastCueFindsAnEvenlyFiringBlobOnALateBackground) {
   EXPECT_GT(test::count_contrast_of(flat).filled_centers, 100'000);
 }
 
-TEST_F(DetectorTest, CountContrastCueSkipsNoFilledCentreAtTheEdgesOfItsBlocks) {
+TEST_F(DetectorTest, CountContrastCueSkipsNoFilledCenterAtTheEdgesOfItsBlocks) {
   // The search skips blocks of 8x8 centres whose boxes together hold too few active pixels. Two
   // 9x9 boxes filled exactly at the threshold (65 of 81 active: a 4x4 hole in the middle, so that
   // no shifted box is filled), centred on the first and on the last centre of a block: a union

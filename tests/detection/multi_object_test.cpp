@@ -212,7 +212,7 @@ TEST_F(MultiObjectTest, ObjectFillingTheViewGetsItsOwnStatus) {
   EXPECT_EQ(r.status, DetectionStatus::kFillsView);
 }
 
-TEST_F(MultiObjectTest, ObjectCutByTheBorderIsPartialWithItsWholeCentre) {
+TEST_F(MultiObjectTest, ObjectCutByTheBorderIsPartialWithItsWholeCenter) {
   // A 40 px blob leaving through the left border: its centre 30 px inside at the window's start,
   // 7 px outside at its end, about 70 % in view at the detection's time.
   test::BlobScene s;

@@ -14,7 +14,7 @@ namespace {
 
 // Centred isotropic Gaussian: |x|²/σ² is χ²₂, so P(|x| <= R) = 1 - exp(-R²/2σ²) (Rayleigh CDF) and
 // E|x| = σ sqrt(π/2) (Rayleigh mean); rotating or shifting nothing changes it.
-TEST(GaussianDisc, CentredIsotropicIsRayleigh) {
+TEST(GaussianDisc, CenterdIsotropicIsRayleigh) {
   for (double sigma : {0.01, 0.3, 1.0, 7.0}) {
     for (double R : {0.0, 0.1, 0.5, 2.0, 30.0}) {
       const double expected = 1 - std::exp(-R * R / (2 * sigma * sigma));

@@ -90,7 +90,7 @@ DatasetTruth along_the_border(double u_center) {
   return test::straight_flight({x, -0.2, 5}, {0, 2, 0});
 }
 
-TEST(AnySizeMetrics, PartialWindowsScoreTheVisibleCentreAndTheWholeCentreApart) {
+TEST(AnySizeMetrics, PartialWindowsScoreTheVisibleCenterAndTheWholeCenterApart) {
   const DatasetTruth truth = along_the_border(-0.5);  // centre on the border: half in view
   auto visible_center = [&](TimeNs t) {
     return visible_silhouette(truth.objects, 1, 0.25, truth.body, truth.calibration, t)

@@ -44,7 +44,7 @@ TEST(GroundTruthBox, SphereStraightAheadMatchesTheTangentCone) {
   EXPECT_GT(half - kF * r / z, 0.01);
 }
 
-TEST(GroundTruthBox, OffAxisSphereUsesTheConeNotTheCentre) {
+TEST(GroundTruthBox, OffAxisSphereUsesTheConeNotTheCenter) {
   // Centre at angle θ = atan(X / Z) from the axis; the silhouette's horizontal extremes are the
   // rays at θ ± asin(r / L): u = cx + f tan(θ ± α). Much wider than f X/Z ± f r/Z off-axis.
   const double X = 0.8, Z = 2.5, r = 0.3, L = std::hypot(X, Z);
@@ -191,7 +191,7 @@ TEST(GroundTruthBox, DistortedLensMatchesABruteForceRaster) {
   EXPECT_NEAR(box.v_max, v1, 0.02);
 }
 
-TEST(VisibleSilhouette, ACutBallsCentreIsItsInViewAreasCentroid) {
+TEST(VisibleSilhouette, ACutBallsCenterIsItsInViewAreasCentroid) {
   // Independent route: a 0.1 px raster of the image's pixels whose ray lies in the tangent cone;
   // the mean of those in view is the visible part's centroid, their extent its clipped box.
   const double z = 4.0, r = 0.3, x = (10.5 - kCx) / kF * z;  // centre 11 px inside the left border
@@ -223,7 +223,7 @@ TEST(VisibleSilhouette, ACutBallsCentreIsItsInViewAreasCentroid) {
   EXPECT_GT(s.visible_center_px.x(), 10.5 + 1);  // the cut part lies left of the centre
 }
 
-TEST(VisibleSilhouette, AWholeBallsCentreIsItsProjectedCentre) {
+TEST(VisibleSilhouette, AWholeBallsCenterIsItsProjectedCenter) {
   const Eigen::Vector3d center(0.3, -0.2, 3);
   const auto s = visible_silhouette(ball_at(center), 1, 0.1, still_body(), camera(), kNsPerMs);
   ASSERT_TRUE(s.visible);

@@ -115,7 +115,7 @@ Collected run(TimeNs lag_ns, const SimulatedThrow& s = simulated_throw(), const 
 
 // A ball cut by the border is observed at its whole centre where the detector estimated
 // one, and weighs less the less of it is in view (its centre's noise σ / visible fraction).
-TEST(Perception, AnObjectCutByTheBorderIsObservedAtItsWholeCentreWithItsNoiseGrown) {
+TEST(Perception, AnObjectCutByTheBorderIsObservedAtItsWholeCenterWithItsNoiseGrown) {
   const PinholeCamera camera{640, 480, 500.0, 400.0, 320.0, 240.0, {}};
   const double sigma_n = 0.002;
   Detection2D cut;

@@ -37,7 +37,7 @@ const char* to_string(DepthRejection r) {
       return "depth spread too large";
     case DepthRejection::kFootprintTooLarge:
       return "footprint too large";
-    case DepthRejection::kOffCentre:
+    case DepthRejection::kOffCenter:
       return "segment off the track's centre";
     case DepthRejection::kSizeInconsistent:
       return "size inconsistent with the object";
@@ -258,7 +258,7 @@ std::optional<GateFailure> failed_gate(const WindowStats& s, const ObjectGeometr
         DepthRejection::kFootprintTooLarge,
         fmt::format("{} pixels > {:.2f} x box ellipse {:.0f} px", s.count, o.max_fill_ratio, ellipse_area)};
   if (off.norm() > o.max_centroid_offset)
-    return GateFailure{DepthRejection::kOffCentre,
+    return GateFailure{DepthRejection::kOffCenter,
                        fmt::format("centroid {:.2f} box half-sizes from the track's centre", off.norm())};
   if (o.object_radius_m > 0 &&
       (g.r_box > o.radius_ratio_gate * g.r || g.r_box * o.radius_ratio_gate < g.r))

@@ -153,7 +153,7 @@ enum class DepthRejection {
   kNoSignificantPeak,  ///< no histogram peak reaches the significance threshold
   kSpreadTooLarge,     ///< variance gate
   kFootprintTooLarge,  ///< more pixels than the object can cover (wall, large occluder)
-  kOffCentre,          ///< segmented blob not where the event track says the object is
+  kOffCenter,          ///< segmented blob not where the event track says the object is
   kSizeInconsistent,   ///< the box at this depth implies a radius unlike the known one
   kDepthInconsistent,  ///< far from the depth the trajectory estimate expects
 };

@@ -10,7 +10,7 @@ namespace {
 /// The disc's centre offset c from the border (positive: inside) whose visible part, the segment
 /// of depth R + c, has its centroid `centroid` from the border: c + g(R + c) rises monotonically
 /// from 0 (c = −R) to R (c = R), so bisection finds it.
-double centre_offset(double centroid, double radius) {
+double center_offset(double centroid, double radius) {
   if (centroid >= radius) return centroid;  // the whole disc in view: its centroid is its centre
   double lo = -radius, hi = radius;
   for (int i = 0; i < 60; ++i) {
@@ -50,8 +50,8 @@ std::optional<BorderCut> border_cut(const Box2D& square, int width, int height) 
   if (!(radius > 0)) return cut;
   const Eigen::Vector2d centroid = square.center();
   // Per cut axis: the centroid's distance from that border, and the disc's centre offset from it.
-  auto offset_x = [&] { return centre_offset(left ? centroid.x() - lo : hi_x - centroid.x(), radius); };
-  auto offset_y = [&] { return centre_offset(top ? centroid.y() - lo : hi_y - centroid.y(), radius); };
+  auto offset_x = [&] { return center_offset(left ? centroid.x() - lo : hi_x - centroid.x(), radius); };
+  auto offset_y = [&] { return center_offset(top ? centroid.y() - lo : hi_y - centroid.y(), radius); };
   const bool cut_x = left || right, cut_y = top || bottom;
   if (cut_x && cut_y) {  // a corner: the two cuts taken as independent
     cut.visible_fraction =

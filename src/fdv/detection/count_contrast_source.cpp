@@ -62,7 +62,7 @@ double motion_z(const CompensatedEventsView& events, const cv::Rect& box) {
 
 }  // namespace
 
-int fewest_unlikely_active(int n, double p, double centres, double chance) {
+int fewest_unlikely_active(int n, double p, double centers, double chance) {
   if (!(p > 0)) return 1;
   if (!(p < 1)) return n + 1;
   // The tail from the top down, each term from its log (n ≤ 961: no overflow, no underflow that matters).
@@ -71,7 +71,7 @@ int fewest_unlikely_active(int n, double p, double centres, double chance) {
   for (int m = n; m >= 1; --m) {
     tail += std::exp(std::lgamma(n + 1.0) - std::lgamma(m + 1.0) - std::lgamma(n - m + 1.0) + m * log_p +
                      (n - m) * log_q);
-    if (centres * tail > chance) return m + 1;
+    if (centers * tail > chance) return m + 1;
   }
   return 1;
 }
@@ -155,8 +155,8 @@ std::optional<Candidate> CountContrastSource::find(SourceWindow& in, DetectionRe
   if (!found && cc.sparse_chance > 0 && sparse_has_place && camera_still(in)) {
     const int min_active = sparse_min_active(in.ti);
     diagnostics.write<CountContrastDiagnostics>().sparse_min_active = min_active;
-    const double centre_box_pixels = static_cast<double>(cc.box_px) * cc.box_px;
-    found = search({.sparse = true, .min_fill = min_active / centre_box_pixels});
+    const double center_box_pixels = static_cast<double>(cc.box_px) * cc.box_px;
+    found = search({.sparse = true, .min_fill = min_active / center_box_pixels});
   }
   return found;
 }

@@ -60,7 +60,7 @@ class CountTables {
 /// scattered independently with the image's fraction p, the expected number of `centres` boxes
 /// reaching it is at most `chance`: the least m with centres · P(Binomial(n, p) ≥ m) ≤ chance
 /// (n + 1 when no count is that unlikely).
-int fewest_unlikely_active(int n, double p, double centres, double chance);
+int fewest_unlikely_active(int n, double p, double centers, double chance);
 
 class CountContrastSource final : public CandidateSource {
  public:

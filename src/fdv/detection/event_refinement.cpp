@@ -72,7 +72,7 @@ void EventRefiner::allocate(int width, int height) { acc_.create(height, width, 
 // counts once for the ellipse (cv::fitEllipseDirect, least squares on the conic), so the outline's
 // shape, not its event rate, places the centre. Kept when it is a plausible outline of the object:
 // its centre within half the extent of the centroid's, its longer axis within [0.5, 2] × the extent.
-std::optional<Eigen::Vector2d> EventRefiner::outline_centre(const cv::Rect& square, const Eigen::Vector2d& centroid,
+std::optional<Eigen::Vector2d> EventRefiner::outline_center(const cv::Rect& square, const Eigen::Vector2d& centroid,
                                                             double extent) const {
   std::vector<cv::Point2f> lit;
   for (int y = square.y; y < square.y + square.height; ++y) {
@@ -82,11 +82,11 @@ std::optional<Eigen::Vector2d> EventRefiner::outline_centre(const cv::Rect& squa
   }
   if (lit.size() < 6) return std::nullopt;  // fewer points than a conic needs, with one to spare
   const cv::RotatedRect ellipse = cv::fitEllipseDirect(lit);
-  const Eigen::Vector2d centre(ellipse.center.x, ellipse.center.y);
+  const Eigen::Vector2d center(ellipse.center.x, ellipse.center.y);
   const double axis = std::max(ellipse.size.width, ellipse.size.height);
-  if (!centre.allFinite() || (centre - centroid).norm() > 0.5 * extent || !(axis > 0.5 * extent && axis < 2 * extent))
+  if (!center.allFinite() || (center - centroid).norm() > 0.5 * extent || !(axis > 0.5 * extent && axis < 2 * extent))
     return std::nullopt;
-  return centre;
+  return center;
 }
 
 std::optional<RefinedCenter> EventRefiner::refine(const CompensatedEventsView& window, const Box2D& box,
@@ -139,7 +139,7 @@ std::optional<RefinedCenter> EventRefiner::refine(const CompensatedEventsView& w
     return sum;
   };
   std::optional<RefinedCenter> refined;
-  Eigen::Vector2d centre = c;
+  Eigen::Vector2d center = c;
   for (;;) {
     // The clutter guard below keeps the centre within the object's size (one box size, or the
     // grown square's) of the box's centre: the squares of all passes, and the band around the
@@ -161,7 +161,7 @@ std::optional<RefinedCenter> EventRefiner::refine(const CompensatedEventsView& w
     long n = 0;
     cv::Rect e;
     for (int pass = 0; pass <= options_.refine_recenter_passes; ++pass) {
-      e = square(centre, half) & outer;
+      e = square(center, half) & outer;
       if (e.area() == 0) return refined;
       sx = sy = st = 0;
       n = 0;
@@ -179,27 +179,27 @@ std::optional<RefinedCenter> EventRefiner::refine(const CompensatedEventsView& w
       }
       if (n < options_.roi_min_events) return refined;
       const Eigen::Vector2d next = Eigen::Vector2d(sx, sy) / static_cast<double>(n);
-      const bool settled = (next - centre).norm() < 0.25;
-      centre = next;
+      const bool settled = (next - center).norm() < 0.25;
+      center = next;
       // Clutter guard: the object was inside the box at the end of its sweep, so within the slice
       // its centre is at most about its size away; a centroid further off is background.
-      if ((centre - c).norm() > reach) return refined;
+      if ((center - c).norm() > reach) return refined;
       if (settled) break;
     }
     // Grown, the object's radius lies between the previous half-side (its band was dense) and this
     // one (its band is not): the extent is their geometric mean, doubled.
     const double extent = half > initial_half ? 2 * half / std::sqrt(kGrowth) : longer_side;
-    refined = RefinedCenter{centre, st / static_cast<double>(n), extent};
+    refined = RefinedCenter{center, st / static_cast<double>(n), extent};
     // Not for an object cut by the border: its centre is the visible part's, which the outline's
     // ellipse is not.
-    const bool in_view = centre.x() - half >= 0 && centre.y() - half >= 0 && centre.x() + half <= window.width &&
-                         centre.y() + half <= window.height;
+    const bool in_view = center.x() - half >= 0 && center.y() - half >= 0 && center.x() + half <= window.width &&
+                         center.y() + half <= window.height;
     if (half > initial_half && options_.refine_fit_outline && in_view)
-      if (const auto outline = outline_centre(e, centre, extent)) refined->center = *outline;
+      if (const auto outline = outline_center(e, center, extent)) refined->center = *outline;
     if (!(options_.refine_grow_density > 0) || kGrowth * half > max_half) return refined;
     // The band's four sides, each alone: the centroid lags towards the fragment, so the object's
     // far part shows in the side facing it.
-    const cv::Rect band = square(centre, band_half) & outer;
+    const cv::Rect band = square(center, band_half) & outer;
     const cv::Rect sides[] = {{band.x, band.y, e.x - band.x, band.height},
                               {e.x + e.width, band.y, band.x + band.width - e.x - e.width, band.height},
                               {e.x, band.y, e.width, e.y - band.y},

@@ -41,7 +41,7 @@ class EventRefiner {
  private:
   /// The centre of the ellipse fitted to `square`'s pixels with an event in acc_, when it is a
   /// plausible outline of an object of `extent` px whose events' centroid is `centroid`.
-  std::optional<Eigen::Vector2d> outline_centre(const cv::Rect& square, const Eigen::Vector2d& centroid,
+  std::optional<Eigen::Vector2d> outline_center(const cv::Rect& square, const Eigen::Vector2d& centroid,
                                                 double extent) const;
 
   DetectorOptions options_;
