@@ -3,6 +3,8 @@
 #include <pybind11/eigen.h>
 #include <pybind11/stl.h>
 
+#include <cmath>
+
 #include "fdv/core/calibration.h"
 #include "fdv/core/error.h"
 #include "fdv/pipeline/options_yaml.h"
@@ -109,6 +111,21 @@ nlohmann::json from_python(const py::handle& o) {
 
 namespace {
 
+/// The dotted key of the first number in `o` that is not finite ("" when none): JSON, and so the
+/// options' parser, has no NaN or infinity, and the error must name the key, not the parser's byte.
+std::string non_finite_key(const py::handle& o, const std::string& key) {
+  if (py::isinstance<py::float_>(o)) return std::isfinite(o.cast<double>()) ? "" : key;
+  if (py::isinstance<py::dict>(o))
+    for (const auto& [k, v] : o.cast<py::dict>()) {
+      const std::string name = py::str(k).cast<std::string>();
+      if (std::string found = non_finite_key(v, key.empty() ? name : key + "." + name); !found.empty()) return found;
+    }
+  if (py::isinstance<py::list>(o) || py::isinstance<py::tuple>(o))
+    for (const auto& v : o)
+      if (std::string found = non_finite_key(v, key); !found.empty()) return found;
+  return "";
+}
+
 py::array_t<double> matrix_array(const Eigen::Matrix4d& m) {
   py::array_t<double> a({4, 4});
   for (int r = 0; r < 4; ++r)
@@ -167,6 +184,8 @@ void register_options(py::module_& m) {
       .def_static("load", &load_perception_options_file, py::arg("path"))
       .def_static("from_dict",
                   [](const py::dict& d, const std::string& name) {
+                    if (const std::string key = non_finite_key(d, ""); !key.empty())
+                      throw InputError(name, "key " + key, "not a finite number");
                     // JSON is YAML: the dict goes through the same parser as a --config file.
                     return load_perception_options_text(from_python(d).dump(), name);
                   },

@@ -46,6 +46,15 @@ def test_config_error():
         fdv.PerceptionOptions.from_dict({"window_ms": -1})
 
 
+@pytest.mark.parametrize("value", [float("nan"), float("inf"), -float("inf")])
+def test_a_non_finite_option_names_its_key(value):
+    # It used to surface as the JSON parser's "parse_error.101" at a byte, with no key.
+    with pytest.raises(fdv.InputError, match=r"<dict>:key window_ms: not a finite number"):
+        fdv.PerceptionOptions.from_dict({"window_ms": value})
+    with pytest.raises(fdv.InputError, match=r"key tracking\.filter\.measurement_sigma_px: not a finite number"):
+        fdv.PerceptionOptions.from_dict({"tracking": {"filter": {"measurement_sigma_px": value}}})
+
+
 def test_wrong_dtype(perception):
     with pytest.raises(TypeError, match="push_events: expected an array of dtype"):
         perception.push_events(np.zeros(4, dtype=np.float64))
