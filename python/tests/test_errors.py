@@ -1,4 +1,6 @@
 """Bad input: a Python exception with a clear message, never a crash; the C++ messages kept."""
+import os
+import shutil
 import subprocess
 
 import numpy as np
@@ -132,3 +134,31 @@ def test_fdv_info_into_a_full_disk_fails(dataset):
     with open("/dev/full", "w") as full:
         done = subprocess.run([FDV_CLI, "info", str(dataset)], stdout=full, stderr=subprocess.PIPE, text=True)
     assert done.returncode == 1 and "cannot write to standard output" in done.stderr
+
+
+@pytest.mark.parametrize("name", ["imu.csv", "dataset.yaml", "calibration.yaml", "events.bin"])
+def test_a_fifo_in_a_dataset_is_an_error_not_a_hang(dataset, workdir, name):
+    copy = workdir / f"fifo_{name}"
+    shutil.rmtree(copy, ignore_errors=True)
+    shutil.copytree(dataset, copy)
+    (copy / name).unlink()
+    os.mkfifo(copy / name)
+    done = subprocess.run([FDV_CLI, "info", str(copy)], capture_output=True, text=True, timeout=60)
+    assert done.returncode == 1 and f"{copy / name}: not a regular file" in done.stderr, done.stderr
+    with pytest.raises(fdv.InputError, match="not a regular file"):
+        fdv.open(str(copy))
+
+
+def test_a_fifo_or_a_folder_given_as_a_file_is_named(dataset, workdir):
+    fifo = workdir / "a_fifo.aedat4"
+    if not fifo.exists():
+        os.mkfifo(fifo)
+    done = subprocess.run([FDV_CLI, "info", str(fifo)], capture_output=True, text=True, timeout=60)
+    assert done.returncode == 1 and "not a regular file" in done.stderr, done.stderr
+    copy = workdir / "events_bin_folder"
+    shutil.rmtree(copy, ignore_errors=True)
+    shutil.copytree(dataset, copy)
+    (copy / "events.bin").unlink()
+    (copy / "events.bin").mkdir()
+    with pytest.raises(fdv.InputError, match="events.bin: is a folder, not a file"):
+        fdv.open(str(copy))

@@ -23,6 +23,9 @@ std::unique_ptr<RecordingReader> open_recording(const std::string& path,
     throw InputError(path, "", "folder is not a recognised dataset (no " +
                                    std::string(kDatasetManifest) + ")");
   }
+  // Opening a FIFO blocks until a writer comes, and a device never ends.
+  if (!fs::is_regular_file(path))
+    throw InputError(path, "", "not a regular file (a FIFO or a device cannot be read as a recording)");
   std::ifstream in(path, std::ios::binary);
   std::string head(256, '\0');
   in.read(head.data(), static_cast<std::streamsize>(head.size()));

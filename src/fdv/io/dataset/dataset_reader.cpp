@@ -169,10 +169,26 @@ std::vector<T> read_all(CsvStream<T>&& stream, ReadReport& report) {
   return out;
 }
 
+/// `dir`, once each file of the dataset that is there is known to be a regular file: opening a
+/// FIFO blocks until a writer comes, a device never ends, and a folder is no table.
+const std::string& with_regular_files(const std::string& dir) {
+  for (const char* name : {kDatasetManifest, "calibration.yaml", "events.bin", "imu.csv", "odometry.csv",
+                           "depth.csv", "truth/objects.csv"}) {
+    const fs::path path = fs::path(dir) / name;
+    std::error_code ec;
+    const fs::file_status status = fs::status(path, ec);
+    if (fs::exists(status) && !fs::is_regular_file(status))
+      throw InputError(path.string(), "",
+                       fs::is_directory(status) ? "is a folder, not a file"
+                                                : "not a regular file (a FIFO or a device cannot be read)");
+  }
+  return dir;
+}
+
 class DatasetReader final : public RecordingReader {
  public:
   DatasetReader(const std::string& dir, const ReaderOptions& options)
-      : dir_(dir),
+      : dir_(with_regular_files(dir)),
         options_(options),
         imu_(fs::path(dir) / "imu.csv", "imu", parse_imu),
         odometry_(fs::path(dir) / "odometry.csv", "odometry", parse_pose),
