@@ -5,14 +5,19 @@
 // closest-approach time as a function of the time since the track's first detection.
 #include <spdlog/spdlog.h>
 
+#include <fmt/format.h>
+
+#include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <iterator>
 #include <nlohmann/json.hpp>
 
 #include "apps/commands.h"
 #include "apps/evaluate.h"
 #include "fdv/core/error.h"
 #include "fdv/eval/statistics.h"
+#include "fdv/io/dataset/dataset_reader.h"
 #include "fdv/results/reader.h"
 #include "fdv/tables/experiment.h"
 
@@ -31,11 +36,32 @@ nlohmann::json relative_contrast_of(const DatasetTruth& truth, const std::string
       {"method", method}, {"windows", s.count}, {"min", s.min}, {"mean", s.mean}, {"max", s.max}};
 }
 
+/// The truth must be of the scene the results were run on: the same camera size, and the same
+/// dataset.yaml when the run's input is still there. Scoring another scene gives figures that
+/// look like results.
+void require_same_scene(const RunSummary& summary, const DatasetTruth& truth, const std::string& dataset) {
+  const PinholeCamera& camera = truth.calibration.event_camera;
+  if (summary.width != camera.width || summary.height != camera.height)
+    throw InputError(dataset, "",
+                     fmt::format("its camera is {}x{}, the results' {}x{}: not the scene the results were run on",
+                                 camera.width, camera.height, summary.width, summary.height));
+  namespace fs = std::filesystem;
+  const fs::path ran_on = fs::path(summary.input) / kDatasetManifest, given = fs::path(dataset) / kDatasetManifest;
+  auto text = [](const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  std::error_code ec;
+  if (fs::is_regular_file(ran_on, ec) && fs::is_regular_file(given, ec) && text(ran_on) != text(given))
+    throw InputError(dataset, "", "not the dataset the results were run on (" + summary.input + ")");
+}
+
 }  // namespace
 
 nlohmann::json evaluate(const std::string& results, const std::string& dataset) {
   const DatasetTruth truth = load_dataset_truth(dataset);
   const RunSummary summary = read_summary(results);
+  require_same_scene(summary, truth, dataset);
   nlohmann::json metrics;
   metrics["results"] = results;
   metrics["truth"] = dataset;

@@ -162,3 +162,18 @@ def test_a_fifo_or_a_folder_given_as_a_file_is_named(dataset, workdir):
     (copy / "events.bin").mkdir()
     with pytest.raises(fdv.InputError, match="events.bin: is a folder, not a file"):
         fdv.open(str(copy))
+
+
+def test_fdv_eval_refuses_the_truth_of_another_scene(dataset, cli_results, workdir):
+    other = workdir / "eval_another_scene"
+    if not other.exists():
+        fdv.simulate("scene1_no_object", seed=2, out=str(other), duration=0.1, resolution=(346, 260))
+    done = subprocess.run([FDV_CLI, "eval", str(cli_results), "--truth", str(other)], capture_output=True, text=True)
+    assert done.returncode == 1 and f"{other}: not the dataset the results were run on" in done.stderr, done.stderr
+    smaller = workdir / "eval_smaller_camera"
+    if not smaller.exists():
+        fdv.simulate("scene2_ball", seed=3, out=str(smaller), duration=0.1, resolution=(240, 180))
+    done = subprocess.run([FDV_CLI, "eval", str(cli_results), "--truth", str(smaller)], capture_output=True, text=True)
+    assert done.returncode == 1 and "its camera is 240x180, the results' 346x260" in done.stderr, done.stderr
+    assert subprocess.run([FDV_CLI, "eval", str(cli_results), "--truth", str(dataset)],
+                          capture_output=True).returncode == 0
