@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import fdv
-from conftest import FDV_CLI, cli
+from conftest import FDV_CLI, cli, cli_json
 
 
 @pytest.fixture(scope="module")
@@ -177,3 +177,19 @@ def test_fdv_eval_refuses_the_truth_of_another_scene(dataset, cli_results, workd
     assert done.returncode == 1 and "its camera is 240x180, the results' 346x260" in done.stderr, done.stderr
     assert subprocess.run([FDV_CLI, "eval", str(cli_results), "--truth", str(dataset)],
                           capture_output=True).returncode == 0
+
+
+def test_a_corrupt_polarity_or_padding_in_events_bin_is_dropped_where_it_is(dataset, workdir):
+    copy = workdir / "corrupt_records"
+    shutil.rmtree(copy, ignore_errors=True)
+    shutil.copytree(dataset, copy)
+    data = bytearray((copy / "events.bin").read_bytes())
+    header, record = 24, 16
+    data[header + 100 * record + 12] = 7      # polarity byte 7
+    data[header + 100010 * record + 14] = 1   # a padding byte set
+    (copy / "events.bin").write_bytes(bytes(data))
+    before = cli_json("info", dataset)
+    after = cli_json("info", copy)
+    assert after["events"] == before["events"] - 2
+    dropped = after["report"]["dropped"]["events.bin: polarity not 0 or 1, or padding not zero"]
+    assert dropped == {"count": 2, "first": f"byte {header + 100 * record}"}

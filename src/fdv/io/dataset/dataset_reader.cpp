@@ -136,14 +136,23 @@ class EventRecords {
     left_ -= got;
     read_ += got;
     raw_.resize(got);
+    std::size_t kept = 0;
     for (std::size_t i = 0; i < got; ++i) {  // field by field: the polarity byte may be corrupt
       const char* r = bytes_.data() + i * 16;
-      std::memcpy(&raw_[i].t, r, 8);
-      std::memcpy(&raw_[i].x, r + 8, 2);
-      std::memcpy(&raw_[i].y, r + 10, 2);
-      raw_[i].polarity = r[12] != 0;
+      // A polarity other than 0 or 1, or padding that is not zero, is damage: the record's other
+      // fields are not to be trusted either.
+      if (static_cast<unsigned char>(r[12]) > 1 || r[13] != 0 || r[14] != 0 || r[15] != 0) {
+        report.drop("events.bin: polarity not 0 or 1, or padding not zero", "byte " + std::to_string(offset + i * 16));
+        continue;
+      }
+      Event& e = raw_[kept++];
+      std::memcpy(&e.t, r, 8);
+      std::memcpy(&e.x, r + 8, 2);
+      std::memcpy(&e.y, r + 10, 2);
+      e.polarity = r[12] != 0;
     }
-    sanitizer_.append(raw_.data(), raw_.data() + got, out, report, "byte " + std::to_string(offset));
+    raw_.resize(kept);
+    sanitizer_.append(raw_.data(), raw_.data() + kept, out, report, "byte " + std::to_string(offset));
     if (!raw_.empty()) last_t_ = std::max(last_t_, raw_.back().t);
   }
 
