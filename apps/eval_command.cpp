@@ -10,11 +10,11 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
-#include <iterator>
 #include <nlohmann/json.hpp>
 
 #include "apps/commands.h"
 #include "apps/evaluate.h"
+#include "fdv/core/config_text.h"
 #include "fdv/core/error.h"
 #include "fdv/eval/statistics.h"
 #include "fdv/io/dataset/dataset_reader.h"
@@ -47,12 +47,9 @@ void require_same_scene(const RunSummary& summary, const DatasetTruth& truth, co
                                  camera.width, camera.height, summary.width, summary.height));
   namespace fs = std::filesystem;
   const fs::path ran_on = fs::path(summary.input) / kDatasetManifest, given = fs::path(dataset) / kDatasetManifest;
-  auto text = [](const fs::path& p) {
-    std::ifstream in(p, std::ios::binary);
-    return std::string(std::istreambuf_iterator<char>(in), {});
-  };
   std::error_code ec;
-  if (fs::is_regular_file(ran_on, ec) && fs::is_regular_file(given, ec) && text(ran_on) != text(given))
+  if (fs::is_regular_file(ran_on, ec) && fs::is_regular_file(given, ec) &&
+      read_config_file(ran_on.string()) != read_config_file(given.string()))
     throw InputError(dataset, "", "not the dataset the results were run on (" + summary.input + ")");
 }
 

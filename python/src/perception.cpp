@@ -13,7 +13,6 @@
 #include "fdv/io/recording.h"
 #include "fdv/pipeline/options_yaml.h"
 #include "fdv/pipeline/perception.h"
-#include "fdv/pipeline/sensor_policy.h"
 #include "fdv/results/schema.h"
 #include "fdv/results/run.h"
 
@@ -234,7 +233,6 @@ py::dict run(const std::string& path, std::optional<Calibration> calibration, co
              const PerceptionOptions& requested, const std::string& out, const ReaderOptions& reader_options) {
   RowQueue queue;
   RunOutcome outcome;
-  SensorPolicy policy;
   {
     py::gil_scoped_release release;
     RunRequest request;
@@ -244,7 +242,6 @@ py::dict run(const std::string& path, std::optional<Calibration> calibration, co
     request.calibration_source = calibration_name;
     request.options = requested;
     RecordingRun recording(std::move(request));
-    policy = recording.policy();
     PerceptionCallbacks callbacks = queue.callbacks();
     // Ctrl-C at each window's end: the run unwinds, its partial folder is removed, and Python
     // gets its KeyboardInterrupt (the signal's handler runs only when asked, with the GIL).
@@ -262,7 +259,7 @@ py::dict run(const std::string& path, std::optional<Calibration> calibration, co
   d["warnings"] = outcome.warnings;
   d["counts"] = to_python(counts_json(outcome.counts));
   d["reader_report"] = to_python(outcome.reader_report.to_json());
-  d["options"] = to_python(to_json(policy.options));
+  d["options"] = to_python(outcome.summary.options);  // the options used, fallbacks applied
   return d;
 }
 

@@ -41,13 +41,24 @@ fs::path named_folder(const fs::path& dir) {
   return p.has_filename() ? p : p.parent_path();
 }
 
-/// Moves `from` over `to`: the old `to` is set aside, then removed once `from` is in its place.
+/// The hidden sibling `.NAME.ROLE-PID` of the folder `dir` (one per process and role).
+fs::path hidden_sibling(const fs::path& dir, const char* role) {
+  return dir.parent_path() / fmt::format(".{}.{}-{}", dir.filename().string(), role, getpid());
+}
+
+/// Moves `from` over `to`: the old `to` is set aside, then removed once `from` is in its place;
+/// put back when `from` cannot take its place, so that `to` is never lost.
 void replace_folder(const fs::path& from, const fs::path& to) {
-  const fs::path old = to.parent_path() / ("." + to.filename().string() + ".old-" + std::to_string(getpid()));
+  const fs::path old = hidden_sibling(to, "old");
   fs::remove_all(old);
   const bool had_old = fs::exists(to);
   if (had_old) fs::rename(to, old);
-  fs::rename(from, to);
+  try {
+    fs::rename(from, to);
+  } catch (const fs::filesystem_error&) {
+    if (had_old) fs::rename(old, to);
+    throw;
+  }
   if (had_old) fs::remove_all(old);
 }
 
@@ -60,8 +71,7 @@ RunRecorder::RunRecorder(const std::filesystem::path& dir, PerceptionCallbacks a
     throw InputError(dir.string(), "",
                      "exists and is not a results folder (no summary.json or detections.jsonl): refusing to "
                      "replace it; name a new or empty folder");
-  partial_ = destination_.parent_path() /
-             ("." + destination_.filename().string() + ".partial-" + std::to_string(getpid()));
+  partial_ = hidden_sibling(destination_, "partial");
   fs::remove_all(partial_);  // a crashed run of a process that had this pid
   writer_.emplace(partial_);
 }
