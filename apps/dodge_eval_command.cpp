@@ -40,6 +40,20 @@ void print_table(const DodgeEval& e) {
   }
 }
 
+/// The threats oracle_visible escapes and ours does not: where ours' time went.
+void print_lags(const nlohmann::json& lags) {
+  if (lags.empty()) return;
+  auto cell = [](const nlohmann::json& v) { return v.is_null() ? std::string("-") : fmt::format("{:.3f}", v.get<double>()); };
+  std::cout << "\nThreats oracle_visible escapes and ours does not [s]:\n\n"
+               "| seed | in view | first detection | first usable estimate | decision | oracle_visible's decision |\n"
+               "|---|---|---|---|---|---|\n";
+  for (const nlohmann::json& l : lags)
+    std::cout << fmt::format("| {} | {} | {} | {} | {} | {} |\n", l["seed"].get<std::uint64_t>(),
+                             cell(l["first_in_view_t_s"]), cell(l["first_detection_t_s"]),
+                             cell(l["first_usable_estimate_t_s"]), cell(l["decision_t_s"]),
+                             cell(l["oracle_visible_decision_t_s"]));
+}
+
 }  // namespace
 
 void add_dodge_eval_command(CLI::App& app) {
@@ -62,16 +76,15 @@ void add_dodge_eval_command(CLI::App& app) {
     spdlog::info("dodge-eval: {} throws, {} at a time, into {}", o.seeds.size(), o.jobs, o.out_dir);
     const DodgeEval e = run_dodge_eval(o);
     print_table(e);
-    int oracle_escaped = 0, ours_too = 0;
-    for (const DodgeThrow& row : e.throws) {
-      if (row.outcomes.empty() || !row.outcomes.at("oracle").escaped) continue;
-      ++oracle_escaped;
-      ours_too += row.outcomes.at("ours").escaped;
-    }
-    std::cout << fmt::format("\n{} throws in {:.0f} s; ours escaped {} of the {} threats the oracle escaped ({}); "
-                             "{}/dodge_eval.json\n",
-                             e.throws.size(), e.wall_s, ours_too, oracle_escaped, percent(ours_too, oracle_escaped),
-                             o.out_dir);
+    const nlohmann::json j = to_json(e, o);
+    print_lags(j["late_against_oracle_visible"]);
+    std::cout << fmt::format(
+        "\n{} throws in {:.0f} s; ours escaped {} of the {} threats the oracle escaped ({}), {} of the {} that "
+        "oracle_visible escaped ({}); {}/dodge_eval.json\n",
+        e.throws.size(), e.wall_s, j["escaped_where_oracle_escaped"].get<int>(), j["oracle_escaped"].get<int>(),
+        percent(j["escaped_where_oracle_escaped"].get<int>(), j["oracle_escaped"].get<int>()),
+        j["escaped_where_oracle_visible_escaped"].get<int>(), j["oracle_visible_escaped"].get<int>(),
+        percent(j["escaped_where_oracle_visible_escaped"].get<int>(), j["oracle_visible_escaped"].get<int>()), o.out_dir);
   });
 }
 

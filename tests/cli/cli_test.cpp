@@ -317,12 +317,13 @@ TEST(CliDodgeEval, OneThrowGivesTheTotalsTheBaselinesAndItsRow) {
   const fs::path out = test::scratch_dir("cli_dodge_eval");
   const Ran r = fdv("dodge-eval --seeds 6 --jobs 1 --keep --out " + out.string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  for (const char* method : {"| ours |", "| point_estimate |", "| mono |", "| rotation |", "| oracle |"})
+  for (const char* method :
+       {"| ours |", "| point_estimate |", "| mono |", "| rotation |", "| oracle |", "| oracle_visible |"})
     EXPECT_NE(r.output.find(method), std::string::npos) << method << "\n" << r.output;
   const json e = read_json(out / "dodge_eval.json");
   const char* keys[] = {"threats", "escaped", "non_threats", "false_alarms", "near_misses"};
   for (const char* key : keys) EXPECT_TRUE(e.contains(key)) << key;
-  for (const char* baseline : {"point_estimate", "mono", "rotation", "oracle"})
+  for (const char* baseline : {"point_estimate", "mono", "rotation", "oracle", "oracle_visible"})
     for (const char* key : keys) EXPECT_TRUE(e.at("baselines").at(baseline).contains(key)) << baseline << " " << key;
   ASSERT_EQ(e.at("throws").size(), 1u);
   const json& row = e.at("throws").at(0);
@@ -332,10 +333,18 @@ TEST(CliDodgeEval, OneThrowGivesTheTotalsTheBaselinesAndItsRow) {
   EXPECT_NEAR(row.at("true_miss_m").get<double>(), row.at("parameters").at("miss_distance_m").get<double>(), 0.01);
   EXPECT_EQ(row.at("threat").get<bool>(), row.at("parameters").at("threat").get<bool>());
   EXPECT_EQ(e.at("threats").get<int>() + e.at("non_threats").get<int>() + e.at("near_misses").get<int>(), 1);
-  // The oracle knows a threat for certain from the first detection: it manoeuvres.
+  // The oracles know a threat for certain, from the first detection or the first window the ball
+  // is plainly in view, which comes no later: they manoeuvre, oracle_visible no later.
   if (row.at("threat").get<bool>()) {
     EXPECT_TRUE(row.at("outcomes").at("oracle").at("maneuvered").get<bool>());
+    EXPECT_TRUE(row.at("outcomes").at("oracle_visible").at("maneuvered").get<bool>());
+    EXPECT_LE(row.at("outcomes").at("oracle_visible").at("decision_t_s").get<double>(),
+              row.at("outcomes").at("oracle").at("decision_t_s").get<double>());
   }
+  EXPECT_LE(row.at("first_in_view_t_s").get<double>(), row.at("first_detection_t_s").get<double>());
+  EXPECT_GE(row.at("first_usable_estimate_t_s").get<double>(), row.at("first_detection_t_s").get<double>());
+  for (const char* key : {"oracle_visible_escaped", "escaped_where_oracle_visible_escaped", "late_against_oracle_visible"})
+    EXPECT_TRUE(e.contains(key)) << key;
   EXPECT_TRUE(fs::exists(out / "throws" / "6" / "dataset" / "dataset.yaml"));
   for (const char* file : {"detections.jsonl", "dodge.jsonl", "summary.json"})
     EXPECT_TRUE(fs::exists(out / "throws" / "6" / "run" / file)) << file;

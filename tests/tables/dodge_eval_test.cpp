@@ -114,8 +114,39 @@ TEST(DodgeEval, ThrowNeverInViewGivesNoDecisionWithTheReason) {
   ASSERT_EQ(row.outcomes.size(), kDodgeMethods.size());
   for (const auto& [method, outcome] : row.outcomes) {
     EXPECT_FALSE(outcome.maneuvered) << method;
-    EXPECT_EQ(outcome.reason, "never detected") << method;
+    EXPECT_EQ(outcome.reason, method == "oracle_visible" ? "never in view" : "never detected") << method;
   }
+  EXPECT_FALSE(row.first_in_view_t_s);
+  EXPECT_FALSE(row.first_detection_t_s);
+}
+
+std::vector<TimeNs> window_ends_every_25ms(int count) {
+  std::vector<TimeNs> ends;
+  for (int k = 1; k <= count; ++k) ends.push_back(k * 25 * kNsPerMs);
+  return ends;
+}
+
+// oracle_visible's start, size rule: a 1 cm ball coming head-on from 5 m at 10 m/s looks
+// 2 f tan(asin(r / L)) ≈ 10 px·m / L wide (f = 500 px), so 3 px at L = 3.33 m (t = 0.167 s):
+// 2.86 px at the window end 0.150 s (L = 3.5 m), 3.08 px at 0.175 s.
+TEST(FirstWindowInView, TheBallMustLookThreePixelsWide) {
+  const DatasetTruth truth = test::straight_flight({0, 0, 5}, {0, 0, -10}, 0.01, 400);
+  const auto t = first_window_in_view(truth, 1, window_ends_every_25ms(16));
+  ASSERT_TRUE(t);
+  EXPECT_EQ(*t, 175 * kNsPerMs);
+}
+
+// The share rule: a 0.25 m ball at 5 m (50 px wide) comes in through the right border at 10 m/s,
+// its centre at u = 719.5 - 1000 px/s t: half of it is in view at u = 639.5 (t = 0.08 s). At the
+// window end 0.075 s its centre is 5 px outside (about 37 % in view), at 0.100 s 20 px inside.
+TEST(FirstWindowInView, HalfOfTheDiscMustBeInTheImage) {
+  const DatasetTruth truth = test::straight_flight({4, 0, 5}, {-10, 0, 0}, 0.25, 400);
+  const auto t = first_window_in_view(truth, 1, window_ends_every_25ms(16));
+  ASSERT_TRUE(t);
+  EXPECT_EQ(*t, 100 * kNsPerMs);
+  // Never in view: the same ball flying away behind the camera.
+  const DatasetTruth behind = test::straight_flight({0, 0, -1}, {0, 0, -10}, 0.25, 400);
+  EXPECT_FALSE(first_window_in_view(behind, 1, window_ends_every_25ms(16)));
 }
 
 }  // namespace

@@ -26,12 +26,14 @@ using Clock = std::chrono::steady_clock;
 constexpr TimeNs kOutcomeStepNs = kNsPerMs;
 constexpr TimeNs kPastTheEndNs = 300 * kNsPerMs;
 
-/// What one pipeline run gives the evaluation: its decisions, its window ends and the first
-/// detection of the ball (the oracle starts there).
+/// What one pipeline run gives the evaluation: its decisions, its window ends, the first
+/// detection of the ball (the oracle starts there) and the first usable fusion estimate of a
+/// track that follows the ball.
 struct MethodRun {
   std::vector<DodgeDecision> decisions;
   std::vector<TimeNs> window_ends;
   std::optional<TimeNs> first_ball_detection;
+  std::optional<TimeNs> first_usable_estimate;
 };
 
 /// One variant's run over the dataset, through the same run as `fdv run` (into `results_dir`
@@ -40,10 +42,17 @@ MethodRun run_method(const DatasetTruth& truth, int ball, const PerceptionOption
                      const std::string& results_dir) {
   MethodRun run;
   std::vector<WindowDetections> windows;
+  std::map<int, TimeNs> first_usable_by_track;
   PerceptionCallbacks also;
   also.on_window = [&](const WindowResult& w) {
     run.window_ends.push_back(w.t_end);
     windows.push_back(window_detections(w));
+  };
+  also.on_estimate = [&](const EstimateResult& e) {
+    if (e.mode != EstimatorMode::kFusion || !e.estimate->usable) return;
+    // An estimate solved on a depth frame exists once the windows up to it are done.
+    const TimeNs exists_at = std::max(e.t, run.window_ends.empty() ? e.t : run.window_ends.back());
+    first_usable_by_track.try_emplace(e.track_id, exists_at);
   };
   also.on_dodge = [&](const DodgeDecision& d) { run.decisions.push_back(d); };
   RunRequest request;
@@ -51,18 +60,22 @@ MethodRun run_method(const DatasetTruth& truth, int ball, const PerceptionOption
   request.options = options;
   RecordingRun(std::move(request)).into(results_dir, also);
   if (const auto first = first_ball_detection(truth, windows, ball)) run.first_ball_detection = first->window_end;
+  for (int track : tracks_following(truth, windows, ball))
+    if (const auto it = first_usable_by_track.find(track); it != first_usable_by_track.end())
+      if (!run.first_usable_estimate || it->second < *run.first_usable_estimate)
+        run.first_usable_estimate = it->second;
   return run;
 }
 
-/// The oracle: from the first detection of the ball on, at each window's end, the planner gets
-/// the true trajectory and the true vehicle state, both exact (zero covariance).
+/// An oracle: from `start` on, at each window's end, the planner gets the true trajectory and the
+/// true vehicle state, both exact (zero covariance).
 std::vector<DodgeDecision> oracle_decisions(const DatasetTruth& truth, int ball, const MethodRun& run,
-                                            const PerceptionOptions& options) {
+                                            std::optional<TimeNs> start, const PerceptionOptions& options) {
   std::vector<DodgeDecision> decisions;
-  if (!run.first_ball_detection) return decisions;
+  if (!start) return decisions;
   DodgePlanner planner(options.dodge, options.prediction.safety_radius_m);
   for (TimeNs t : run.window_ends) {
-    if (t < *run.first_ball_detection) continue;
+    if (t < *start) continue;
     const auto object = truth.object_at(ball, t);
     if (!object) continue;
     TrajectoryEstimate truth_estimate;
@@ -80,6 +93,16 @@ std::vector<DodgeDecision> oracle_decisions(const DatasetTruth& truth, int ball,
 }
 
 }  // namespace
+
+std::optional<TimeNs> first_window_in_view(const DatasetTruth& truth, int ball, std::span<const TimeNs> window_ends) {
+  const double radius = truth.radius_m.at(ball);
+  for (TimeNs t : window_ends) {
+    if (!truth.in_flight(ball, t)) continue;
+    const GroundTruthBox b = ground_truth_box(truth.objects, ball, radius, truth.body, truth.calibration, t, t);
+    if (b.visible && b.span_px_max >= kInViewMinDiameterPx && b.fraction_in_view_min >= kInViewMinFraction) return t;
+  }
+  return std::nullopt;
+}
 
 DodgeOutcome dodge_outcome(const DatasetTruth& truth, int ball, const std::vector<DodgeDecision>& decisions,
                            double safety_radius_m) {
@@ -162,15 +185,24 @@ DodgeThrow score_dodge_dataset(const std::string& dataset, const DodgeEvalOption
     const MethodRun run = run_method(truth, ball, perception, method == "ours" ? run_dir : "");
     decisions[method] = run.decisions;
     if (method == "ours") {
-      decisions["oracle"] = oracle_decisions(truth, ball, run, ours);
       first_detection = run.first_ball_detection;
+      const std::optional<TimeNs> in_view = first_window_in_view(truth, ball, run.window_ends);
+      decisions["oracle"] = oracle_decisions(truth, ball, run, first_detection, ours);
+      decisions["oracle_visible"] = oracle_decisions(truth, ball, run, in_view, ours);
+      auto seconds = [](std::optional<TimeNs> t) { return t ? std::optional(to_seconds(*t)) : std::nullopt; };
+      row.first_in_view_t_s = seconds(in_view);
+      row.first_detection_t_s = seconds(first_detection);
+      row.first_usable_estimate_t_s = seconds(run.first_usable_estimate);
     }
   }
   for (const std::string& method : kDodgeMethods) {
     DodgeOutcome o = dodge_outcome(truth, ball, decisions[method], radius);
     o.escaped = row.threat && o.escaped;
     if (o.decision_t && contact) o.warning_time_s = to_seconds(*contact - *o.decision_t);
-    if (!o.maneuvered) o.reason = first_detection ? "no manoeuvre decided" : "never detected";
+    if (!o.maneuvered) {
+      if (method == "oracle_visible") o.reason = row.first_in_view_t_s ? "no manoeuvre decided" : "never in view";
+      else o.reason = first_detection ? "no manoeuvre decided" : "never detected";
+    }
     row.outcomes[method] = o;
   }
   return row;
@@ -258,6 +290,27 @@ nlohmann::json to_json(const DodgeEval& e, const DodgeEvalOptions& options) {
   }
   j["oracle_escaped"] = oracle_escaped;
   j["escaped_where_oracle_escaped"] = ours_too;
+  // The same against the detector-independent bound, with the lag of each threat we miss.
+  int visible_escaped = 0, ours_too_visible = 0;
+  j["late_against_oracle_visible"] = nlohmann::json::array();
+  for (const DodgeThrow& row : e.throws) {
+    if (row.outcomes.empty() || !row.outcomes.at("oracle_visible").escaped) continue;
+    ++visible_escaped;
+    const DodgeOutcome& o = row.outcomes.at("ours");
+    ours_too_visible += o.escaped;
+    if (o.escaped) continue;
+    nlohmann::json lag = {{"seed", row.seed}};
+    auto put = [&](const char* key, std::optional<double> t) { lag[key] = t ? nlohmann::json(*t) : nlohmann::json(); };
+    put("first_in_view_t_s", row.first_in_view_t_s);
+    put("first_detection_t_s", row.first_detection_t_s);
+    put("first_usable_estimate_t_s", row.first_usable_estimate_t_s);
+    put("decision_t_s", o.decision_t ? std::optional(to_seconds(*o.decision_t)) : std::nullopt);
+    const DodgeOutcome& bound = row.outcomes.at("oracle_visible");
+    put("oracle_visible_decision_t_s", bound.decision_t ? std::optional(to_seconds(*bound.decision_t)) : std::nullopt);
+    j["late_against_oracle_visible"].push_back(lag);
+  }
+  j["oracle_visible_escaped"] = visible_escaped;
+  j["escaped_where_oracle_visible_escaped"] = ours_too_visible;
   j["baselines"] = nlohmann::json::object();
   for (const std::string& method : kDodgeMethods)
     if (method != "ours") j["baselines"][method] = totals_json(e.totals.at(method));
@@ -268,6 +321,9 @@ nlohmann::json to_json(const DodgeEval& e, const DodgeEvalOptions& options) {
                         {"non_threat", row.non_threat},   {"near_miss", row.near_miss},
                         {"seconds", row.seconds}};
     if (row.true_contact_t_s) t["true_contact_t_s"] = *row.true_contact_t_s;
+    if (row.first_in_view_t_s) t["first_in_view_t_s"] = *row.first_in_view_t_s;
+    if (row.first_detection_t_s) t["first_detection_t_s"] = *row.first_detection_t_s;
+    if (row.first_usable_estimate_t_s) t["first_usable_estimate_t_s"] = *row.first_usable_estimate_t_s;
     if (!row.error.empty()) t["error"] = row.error;
     for (const auto& [method, o] : row.outcomes) t["outcomes"][method] = outcome_json(o);
     j["throws"].push_back(t);
@@ -311,10 +367,10 @@ DodgeEval run_dodge_eval(const DodgeEvalOptions& options) {
         if (row.threat) return std::string(o.escaped ? "escaped" : "hit");
         return std::string(o.maneuvered ? "manoeuvred" : "held");
       };
-      spdlog::info("[{}/{}] seed {}: {} (true miss {:.2f} m); ours {}, oracle {}; {:.1f} s, ~{:.0f} s left", done,
-                   options.seeds.size(), seed,
+      spdlog::info("[{}/{}] seed {}: {} (true miss {:.2f} m); ours {}, oracle {}, oracle_visible {}; {:.1f} s, ~{:.0f} s left",
+                   done, options.seeds.size(), seed,
                    row.threat ? "threat" : (row.non_threat ? "non-threat" : "near miss"), row.true_miss_m,
-                   verdict("ours"), verdict("oracle"), row.seconds, eta);
+                   verdict("ours"), verdict("oracle"), verdict("oracle_visible"), row.seconds, eta);
     }
     eval.throws[i] = std::move(row);
   });

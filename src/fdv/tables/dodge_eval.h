@@ -18,6 +18,7 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -27,8 +28,18 @@
 
 namespace fdv {
 
-/// The methods compared, in the order reported: ours, then the baselines.
-inline const std::vector<std::string> kDodgeMethods = {"ours", "point_estimate", "mono", "rotation", "oracle"};
+/// The methods compared, in the order reported: ours, then the baselines. The two oracles plan on
+/// the true trajectory and vehicle state; `oracle` from our first detection of the ball,
+/// `oracle_visible` from the first window in which the ball is plainly in view
+/// (first_window_in_view), a bound that does not move with our detector.
+inline const std::vector<std::string> kDodgeMethods = {"ours",   "point_estimate", "mono",
+                                                       "rotation", "oracle",       "oracle_visible"};
+
+/// `oracle_visible` starts at the end of the first window in which the ball, in flight, looks at
+/// least this large (its true apparent diameter, raw pixels) ...
+inline constexpr double kInViewMinDiameterPx = 3.0;
+/// ... with at least this share of its disc in the image.
+inline constexpr double kInViewMinFraction = 0.5;
 
 /// A throw between these true miss distances (no manoeuvre) is a near miss [m]: neither threat nor
 /// non-threat, reported apart.
@@ -62,6 +73,10 @@ struct DodgeThrow {
   nlohmann::json parameters;  ///< sim::to_json(RandomThrowParameters)
   double true_miss_m = 0;     ///< without a manoeuvre
   std::optional<double> true_contact_t_s;
+  /// Ours' timeline on the ball: the end of the first window with the ball in view
+  /// (first_window_in_view), of the first with a detection on it, and when the first usable
+  /// fusion estimate of a track following it existed [s].
+  std::optional<double> first_in_view_t_s, first_detection_t_s, first_usable_estimate_t_s;
   bool threat = false, non_threat = false, near_miss = false;
   std::map<std::string, DodgeOutcome> outcomes;  ///< by kDodgeMethods
   double seconds = 0;  ///< wall time of this throw
@@ -80,6 +95,11 @@ struct DodgeEval {
   std::map<std::string, DodgeTotals> totals;
   double wall_s = 0;
 };
+
+/// The end of the first of `window_ends` at which ball `ball` is in flight, its true apparent
+/// diameter is at least kInViewMinDiameterPx and at least kInViewMinFraction of its disc is in
+/// the image (eval/ground_truth_box.h); nothing when it never is.
+std::optional<TimeNs> first_window_in_view(const DatasetTruth& truth, int ball, std::span<const TimeNs> window_ends);
 
 /// The outcome of one method's decisions (in order) on the truth: the kinematic replay.
 DodgeOutcome dodge_outcome(const DatasetTruth& truth, int ball, const std::vector<DodgeDecision>& decisions,
