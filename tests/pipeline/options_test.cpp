@@ -603,7 +603,7 @@ struct DocsTable {
 };
 constexpr DocsTable kDocsTables[] = {
     {"compensation", "DETECTION.md"},     {"detector", "DETECTION.md"},  {"depth_registration", "DETECTION.md"},
-    {"", "ESTIMATION.md"},                {"tracking", "ESTIMATION.md"}, {"depth_segmentation", "ESTIMATION.md"},
+    {"", "ESTIMATION.md"},                {"tracking", "ESTIMATION.md"}, {"looming", "ESTIMATION.md"}, {"depth_segmentation", "ESTIMATION.md"},
     {"estimation", "ESTIMATION.md"},      {"prediction", "ESTIMATION.md"}, {"dodge", "AVOIDANCE.md"},
 };
 

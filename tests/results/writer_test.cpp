@@ -344,8 +344,14 @@ TEST(ResultsWriter, TumFilesHoldTheFinalUsableEstimateOfEachTrackEvery5Ms) {
   unusable.usable = false;
   {
     ResultsWriter out(dir);
-    out.estimate({110 * kNsPerMs, 5, EstimatorMode::kFusion, &est, 1.0});
-    out.estimate({120 * kNsPerMs, 5, EstimatorMode::kFusion, &unusable, 1.0});  // not final: unusable
+    Looming looming;
+    looming.size_px = 12.5;
+    looming.size_sigma_px = 1.25;
+    looming.tau_s = 0.375;
+    looming.tau_sigma_s = 0.0625;
+    out.estimate({110 * kNsPerMs, 5, EstimatorMode::kFusion, &est, 1.0, looming});
+    looming.tau_s = looming.tau_sigma_s = std::nullopt;  // a size that does not visibly change
+    out.estimate({120 * kNsPerMs, 5, EstimatorMode::kFusion, &unusable, 1.0, looming});  // not final: unusable
     out.finish(RunSummary{});
     EXPECT_EQ(out.timing_ms().at("estimation_fusion").count, 2u);
   }
@@ -356,7 +362,16 @@ TEST(ResultsWriter, TumFilesHoldTheFinalUsableEstimateOfEachTrackEvery5Ms) {
   EXPECT_NEAR(poses[4].p_W.x(), 1 + 4 * 0.02, 1e-6);
   EXPECT_NEAR(poses[4].p_W.z(), 3 - 0.5 * 9.81 * 0.02 * 0.02, 1e-6);
   EXPECT_FALSE(std::ifstream(dir + "/track_5_mono.tum"));
-  EXPECT_EQ(read_trajectories(dir).size(), 2u);
+  const std::vector<TrajectoryRow> rows = read_trajectories(dir);
+  ASSERT_EQ(rows.size(), 2u);
+  // The looming keys round-trip; τ null when the size does not visibly change.
+  ASSERT_TRUE(rows[0].looming && rows[1].looming);
+  EXPECT_EQ(rows[0].looming->size_px, 12.5);
+  EXPECT_EQ(rows[0].looming->size_sigma_px, 1.25);
+  EXPECT_EQ(rows[0].looming->tau_s, 0.375);
+  EXPECT_EQ(rows[0].looming->tau_sigma_s, 0.0625);
+  EXPECT_FALSE(rows[1].looming->tau_s);
+  EXPECT_FALSE(rows[1].looming->tau_sigma_s);
 }
 
 TEST(ResultsWriter, TimingCsvHoldsEachWindowsStageTimesAsWritten) {

@@ -51,6 +51,7 @@ std::string PerceptionOptions::validate() const {
       {"detection", detection.validate()},
       {"depth_registration", depth_registration.validate()},
       {"tracking", tracking.validate()},
+      {"looming", looming.validate()},
       {"depth_segmentation", depth_segmentation.validate()},
       {"prediction", prediction.validate()},
       {"dodge", dodge.validate()},
@@ -361,6 +362,9 @@ std::vector<int> Perception::add_event_observations(const TrackerStep& step, std
       observe_cut_object(found, calibration_.event_camera,
                          options_.estimation.event_sigma_px / options_.estimation.event_focal_px, obs);
     TrackEstimators& e = estimators_for(a.track_id);
+    // A cut object's box is the visible part's: its size is not the object's.
+    if (const Detection2D& found = detections[a.detection]; !found.partial)
+      e.looming.add(d.t, found.box_raw.width(), found.box_raw.height());
     e.fusion_new |= e.fusion.add(obs) == AddResult::kAccepted;
     if (e.mono) e.mono_new |= e.mono->add(obs) == AddResult::kAccepted;
     const Track* track = tracker_.find(a.track_id);
@@ -397,7 +401,7 @@ void Perception::segment_depth_since_first_detection(std::span<const int> confir
 Perception::TrackEstimators& Perception::estimators_for(int track_id) {
   auto it = estimators_.find(track_id);
   if (it == estimators_.end()) {
-    TrackEstimators e{TrajectoryEstimator(options_.estimation), std::nullopt};
+    TrackEstimators e{TrajectoryEstimator(options_.estimation), std::nullopt, LoomingFit(options_.looming)};
     if (options_.monocular_baseline) {
       EstimatorOptions mono = options_.estimation;
       mono.mode = EstimatorMode::kMonocular;
@@ -486,7 +490,7 @@ void Perception::estimate(int track_id, TimeNs t) {
     const TrajectoryEstimate& est = estimator.solve();
     if (est.method == EstimateMethod::kNone) return nullptr;
     ++counters_.estimates;
-    if (callbacks_.on_estimate) callbacks_.on_estimate({t, track_id, mode, &est, ms_since(start)});
+    if (callbacks_.on_estimate) callbacks_.on_estimate({t, track_id, mode, &est, ms_since(start), e.looming.at(t)});
     return &est;
   };
   const TrajectoryEstimate* fused = solve_and_emit(e.fusion, EstimatorMode::kFusion, e.fusion_new);

@@ -55,6 +55,7 @@
 #include "fdv/estimation/collision_risk.h"
 #include "fdv/estimation/trajectory_estimator.h"
 #include "fdv/pipeline/event_windower.h"
+#include "fdv/tracking/looming.h"
 #include "fdv/tracking/tracker.h"
 
 namespace fdv {
@@ -77,6 +78,8 @@ struct PerceptionOptions {
   DetectorOptions detection;
   DepthRegistrationOptions depth_registration;
   TrackerOptions tracking;
+  /// Each track's apparent size and time to contact (tracking/looming.h), on its trajectory rows.
+  LoomingOptions looming;
   DepthSegmentationOptions depth_segmentation;
   /// Fusion estimator options; the monocular baseline runs with the same options in kMonocular.
   /// event_focal_px is filled from the calibration when left 0.
@@ -159,6 +162,7 @@ void describe(V& v, PerceptionOptions& o) {
   v.section("detector", o.detection, "detection (docs/DETECTION.md)");
   v.section("depth_registration", o.depth_registration, "depth registration into the event camera");
   v.section("tracking", o.tracking, "2D association and Kalman filter");
+  v.section("looming", o.looming, "apparent size and time to contact of each track (docs/ESTIMATION.md)");
   v.section("depth_segmentation", o.depth_segmentation, "depth segmentation in the track's ROI (docs/ESTIMATION.md)");
   // event_focal_px 0 means "from the calibration" (Perception fills it in): check the rest.
   v.section("estimation", o.estimation, "ballistic trajectory estimation (docs/ESTIMATION.md)",
@@ -215,6 +219,8 @@ struct EstimateResult {
   EstimatorMode mode = EstimatorMode::kFusion;
   const TrajectoryEstimate* estimate = nullptr;
   double ms = 0;
+  /// The track's apparent size and time to contact at t (tracking/looming.h), when it has a fit.
+  std::optional<Looming> looming;
 };
 
 struct PredictionResult {
@@ -293,6 +299,7 @@ class Perception {
   struct TrackEstimators {
     TrajectoryEstimator fusion;
     std::optional<TrajectoryEstimator> mono;
+    LoomingFit looming;
     // An observation was accepted since the last solve: only then is the estimator solved again
     // (the same observations give the same estimate).
     bool fusion_new = false, mono_new = false;

@@ -251,6 +251,12 @@ void to_json(json& j, const TrajectoryRow& r) {
     j["position_sigma"] = u->position_sigma_m;
     j["horizon_sigma"] = u->horizon_sigma_m;
   }
+  if (const auto& l = r.looming) {
+    j["apparent_size_px"] = l->size_px;
+    j["apparent_size_sigma_px"] = l->size_sigma_px;
+    j["tau_s"] = l->tau_s ? json(*l->tau_s) : json();
+    j["tau_sigma_s"] = l->tau_sigma_s ? json(*l->tau_sigma_s) : json();
+  }
 }
 
 void from_json(const json& j, TrajectoryRow& r) {
@@ -283,6 +289,14 @@ void from_json(const json& j, TrajectoryRow& r) {
     optional_number(j, "position_sigma", u.position_sigma_m, kInf);
     optional_number(j, "horizon_sigma", u.horizon_sigma_m, kInf);
     r.uncertainty = u;
+  }
+  if (j.contains("apparent_size_px")) {
+    TrajectoryRow::LoomingKeys l;
+    l.size_px = j.at("apparent_size_px");
+    optional_key(j, "apparent_size_sigma_px", l.size_sigma_px);
+    if (const auto it = j.find("tau_s"); it != j.end() && !it->is_null()) l.tau_s = it->get<double>();
+    if (const auto it = j.find("tau_sigma_s"); it != j.end() && !it->is_null()) l.tau_sigma_s = it->get<double>();
+    r.looming = l;
   }
 }
 
@@ -447,6 +461,7 @@ TrajectoryRow trajectory_row(const EstimateResult& e) {
   r.iterations = est.iterations;
   r.message = est.message;
   if (est.covariance) r.uncertainty = {*est.covariance, est.position_sigma_m, est.horizon_sigma_m};
+  if (const auto& l = e.looming) r.looming = TrajectoryRow::LoomingKeys{l->size_px, l->size_sigma_px, l->tau_s, l->tau_sigma_s};
   return r;
 }
 

@@ -120,6 +120,14 @@ struct TrajectoryRow {
     double position_sigma_m = 0, horizon_sigma_m = 0;
   };
   std::optional<Uncertainty> uncertainty;
+  /// The track's looming at t (tracking/looming.h), when it has a fit: "apparent_size_px",
+  /// "apparent_size_sigma_px" [raw px]; "tau_s", "tau_sigma_s" [s] (> 0 closing, < 0 receding),
+  /// null when the size does not visibly change.
+  struct LoomingKeys {
+    double size_px = 0, size_sigma_px = 0;
+    std::optional<double> tau_s, tau_sigma_s;
+  };
+  std::optional<LoomingKeys> looming;
 };
 
 /// A line of predictions.jsonl: the closest approach predicted from a usable fusion estimate.
