@@ -17,6 +17,7 @@ namespace {
 struct SimulatedThrow {
   sim::MemorySink data;
   Calibration calib;
+  double radius_m = 0;  ///< the ball's
 };
 
 // fast_forward at 320x240 (same field of view): a ball thrown across the path of a vehicle flying at 2 m/s.
@@ -28,6 +29,7 @@ const SimulatedThrow& simulated_throw() {
     sim::Simulator simulator(c);
     simulator.run(out.data);
     out.calib = simulator.calibration();
+    out.radius_m = simulator.resolved_balls().at(0).radius_m;
     return out;
   }();
   return s;
@@ -39,6 +41,7 @@ struct Collected {
   std::vector<TrajectoryEstimate> fusion, mono;
   std::vector<int> fusion_track, mono_track;
   std::vector<TimeNs> fusion_t;  // EstimateResult::t of each fusion estimate
+  std::vector<bool> fusion_conflict;  // EstimateResult::radius_conflict of each
   std::vector<std::pair<int, DepthObservation>> depth;  // accepted observations and their track
   std::vector<std::pair<int, TimeNs>> depth_segmented;   // every segmentation: track, frame time
   std::vector<std::string> warnings;
@@ -66,6 +69,7 @@ PerceptionCallbacks collect(Collected& c) {
     (e.mode == EstimatorMode::kFusion ? c.fusion : c.mono).push_back(*e.estimate);
     (e.mode == EstimatorMode::kFusion ? c.fusion_track : c.mono_track).push_back(e.track_id);
     if (e.mode == EstimatorMode::kFusion) c.fusion_t.push_back(e.t);
+    if (e.mode == EstimatorMode::kFusion) c.fusion_conflict.push_back(e.radius_conflict);
   };
   cb.on_warning = [&c](const std::string& w) { c.warnings.push_back(w); };
   cb.on_dodge = [&c](const DodgeDecision& d) { c.dodge.push_back(d); };
@@ -407,6 +411,37 @@ TEST(Perception, TheSquareDetectionBoxLetsTheDepthSegmentationFindTheBall) {
   const std::vector<DepthObservation> with = depth_of(a, track), without = depth_of(b, track);
   EXPECT_GE(with.size(), 2 * without.size() + 2);
   for (const DepthObservation& o : with) EXPECT_NEAR(o.depth_m, true_depth(s, o.t), 4 * o.sigma_m) << "frame at " << o.t;
+}
+
+// A wrong known radius (1 m for a ball of a few cm): the size gate rejects the ball's depth frames,
+// which before went unsaid and left the estimate without depth. Now the conflict is said once,
+// the track's depth is used without the radius after kRadiusConflictFrames rejections, and its
+// estimates carry the flag; the depths are the truth's. The right radius raises nothing.
+TEST(Perception, AWrongKnownRadiusIsNoticedAgainstDepthAndNotTrusted) {
+  const SimulatedThrow& s = simulated_throw();
+  PerceptionOptions wrong, unknown;
+  wrong.depth_segmentation.object_radius_m = 1.0;
+  const Collected a = run(0, s, wrong), b = run(0, s, unknown);
+  const int track = ball_track(s, a);
+  ASSERT_GE(track, 0);
+  const auto said = std::count_if(a.warnings.begin(), a.warnings.end(), [](const std::string& w) {
+    return w.find("object_radius_m = 1 m conflicts with the depth camera") != std::string::npos;
+  });
+  EXPECT_EQ(said, 1) << ::testing::PrintToString(a.warnings);
+  const std::vector<DepthObservation> with_wrong = depth_of(a, track), with_unknown = depth_of(b, track);
+  ASSERT_GE(with_unknown.size(), 4u);
+  // All but the frames it took to notice (and the frames since the first detection that are
+  // segmented at the confirmation, before any rejection could count) are kept.
+  EXPECT_GE(with_wrong.size() + Perception::kRadiusConflictFrames + 2, with_unknown.size());
+  for (const DepthObservation& o : with_wrong) EXPECT_NEAR(o.depth_m, true_depth(s, o.t), 4 * o.sigma_m) << o.t;
+  int flagged = 0;
+  for (std::size_t i = 0; i < a.fusion.size(); ++i) flagged += a.fusion_track[i] == track && a.fusion_conflict[i];
+  EXPECT_GT(flagged, 0);
+  PerceptionOptions right;
+  right.depth_segmentation.object_radius_m = s.radius_m;
+  const Collected c = run(0, s, right);
+  for (const std::string& w : c.warnings) EXPECT_EQ(w.find("conflicts with the depth camera"), std::string::npos) << w;
+  EXPECT_TRUE(std::none_of(c.fusion_conflict.begin(), c.fusion_conflict.end(), [](bool f) { return f; }));
 }
 
 // Estimate-aided association (PerceptionOptions::estimate_aided_association): a head-on throw whose

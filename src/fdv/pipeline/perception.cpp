@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <chrono>
 
+#include <fmt/format.h>
+
 #include "fdv/core/error.h"
 #include "fdv/estimation/camera_pose.h"
 #include "fdv/pipeline/detector_input.h"
@@ -445,18 +447,35 @@ bool Perception::segment_depth(const RegisteredDepth& depth, const Track& track)
   DepthResult r;
   r.t = depth.t;
   r.track_id = track.id();
-  r.segmentation = segment_object_depth(depth_view(depth), calibration_.event_camera, query,
-                                        options_.depth_segmentation);
+  TrackEstimators& e = estimators_for(track.id());
+  DepthSegmentationOptions segmentation = options_.depth_segmentation;
+  if (e.radius_conflict) segmentation.object_radius_m = 0;
+  r.segmentation = segment_object_depth(depth_view(depth), calibration_.event_camera, query, segmentation);
   r.ms = ms_since(start);
   if (callbacks_.on_depth) callbacks_.on_depth(r);
+  note_radius_conflict(e, track.id(), r.segmentation);
   if (!r.segmentation.observation || !T_W_E) return false;
   ++counters_.depth_observations;
   if (!options_.estimate_trajectories) return false;
   const DepthObservation& o = *r.segmentation.observation;
-  TrackEstimators& e = estimators_for(track.id());
   const bool accepted = e.fusion.add(DepthMeasurement{o.t, o.depth_m, o.sigma_m, *T_W_E}) == AddResult::kAccepted;
   e.fusion_new |= accepted;
   return accepted;
+}
+
+// A wrong known radius makes the size gate reject the object's every depth frame: the estimate
+// would go on without depth, trusting the radius over the depth camera. After
+// kRadiusConflictFrames rejections in a row, the track's depth is segmented without the radius.
+void Perception::note_radius_conflict(TrackEstimators& e, int track_id, const DepthSegmentation& s) {
+  if (s.observation) e.size_rejections_in_a_row = 0;
+  if (s.rejection != DepthRejection::kSizeInconsistent || e.radius_conflict) return;
+  if (++e.size_rejections_in_a_row < kRadiusConflictFrames) return;
+  e.radius_conflict = true;
+  warn_once("object radius conflicts with depth",
+            fmt::format("depth_segmentation.object_radius_m = {} m conflicts with the depth camera: {} depth frames "
+                        "of track {} in a row rejected ({}); its depth is used without the radius from now on "
+                        "(its estimates are flagged radius_conflict)",
+                        options_.depth_segmentation.object_radius_m, kRadiusConflictFrames, track_id, s.reason));
 }
 
 // Feedback, estimator -> depth segmentation: the track's trajectory sets the expected depth of
@@ -490,7 +509,8 @@ void Perception::estimate(int track_id, TimeNs t) {
     const TrajectoryEstimate& est = estimator.solve();
     if (est.method == EstimateMethod::kNone) return nullptr;
     ++counters_.estimates;
-    if (callbacks_.on_estimate) callbacks_.on_estimate({t, track_id, mode, &est, ms_since(start), e.looming.at(t)});
+    if (callbacks_.on_estimate)
+      callbacks_.on_estimate({t, track_id, mode, &est, ms_since(start), e.looming.at(t), e.radius_conflict});
     return &est;
   };
   const TrajectoryEstimate* fused = solve_and_emit(e.fusion, EstimatorMode::kFusion, e.fusion_new);

@@ -221,6 +221,9 @@ struct EstimateResult {
   double ms = 0;
   /// The track's apparent size and time to contact at t (tracking/looming.h), when it has a fit.
   std::optional<Looming> looming;
+  /// The known object radius (depth_segmentation.object_radius_m) conflicts with this track's
+  /// depth frames and no longer gates them (Perception::kRadiusConflictFrames).
+  bool radius_conflict = false;
 };
 
 struct PredictionResult {
@@ -290,6 +293,11 @@ class Perception {
   const Calibration& calibration() const { return calibration_; }
   const Tracker& tracker() const { return tracker_; }
 
+  /// A known object radius whose size gate rejects this many of a track's depth frames in a row
+  /// (and none accepted in between) is taken as wrong for that track: said once in a warning, and
+  /// its depth frames are segmented as if the radius were unknown from then on.
+  static constexpr int kRadiusConflictFrames = 3;
+
  private:
   struct PendingWindow {
     TimeNs t_start = 0, t_end = 0;
@@ -300,6 +308,10 @@ class Perception {
     TrajectoryEstimator fusion;
     std::optional<TrajectoryEstimator> mono;
     LoomingFit looming;
+    /// Depth frames rejected in a row by the known radius's size gate; at kRadiusConflictFrames the
+    /// radius is taken as wrong for this track (radius_conflict) and no longer gates its depth.
+    int size_rejections_in_a_row = 0;
+    bool radius_conflict = false;
     // An observation was accepted since the last solve: only then is the estimator solved again
     // (the same observations give the same estimate).
     bool fusion_new = false, mono_new = false;
@@ -329,6 +341,7 @@ class Perception {
   /// The depth observation of one track in one registered frame (and its on_depth report); true
   /// when the track's fusion estimator accepted it.
   bool segment_depth(const RegisteredDepth& depth, const Track& track);
+  void note_radius_conflict(TrackEstimators& e, int track_id, const DepthSegmentation& s);
   std::optional<ExpectedDepth> expected_depth_from_estimate(int track_id, TimeNs t,
                                                             const Eigen::Isometry3d& T_W_E) const;
   /// Every 3D solve starts here (after a window's event observations, after a depth observation):

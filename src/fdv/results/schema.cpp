@@ -257,6 +257,7 @@ void to_json(json& j, const TrajectoryRow& r) {
     j["tau_s"] = l->tau_s ? json(*l->tau_s) : json();
     j["tau_sigma_s"] = l->tau_sigma_s ? json(*l->tau_sigma_s) : json();
   }
+  if (r.radius_conflict) j["radius_conflict"] = true;
 }
 
 void from_json(const json& j, TrajectoryRow& r) {
@@ -298,6 +299,7 @@ void from_json(const json& j, TrajectoryRow& r) {
     if (const auto it = j.find("tau_sigma_s"); it != j.end() && !it->is_null()) l.tau_sigma_s = it->get<double>();
     r.looming = l;
   }
+  optional_key(j, "radius_conflict", r.radius_conflict);
 }
 
 void to_json(json& j, const PredictionRow& r) {
@@ -462,6 +464,7 @@ TrajectoryRow trajectory_row(const EstimateResult& e) {
   r.message = est.message;
   if (est.covariance) r.uncertainty = {*est.covariance, est.position_sigma_m, est.horizon_sigma_m};
   if (const auto& l = e.looming) r.looming = TrajectoryRow::LoomingKeys{l->size_px, l->size_sigma_px, l->tau_s, l->tau_sigma_s};
+  r.radius_conflict = e.radius_conflict;
   return r;
 }
 

@@ -128,6 +128,9 @@ struct TrajectoryRow {
     std::optional<double> tau_s, tau_sigma_s;
   };
   std::optional<LoomingKeys> looming;
+  /// "radius_conflict": written (true) only when the known object radius conflicted with this
+  /// track's depth and no longer gates it (EstimateResult::radius_conflict).
+  bool radius_conflict = false;
 };
 
 /// A line of predictions.jsonl: the closest approach predicted from a usable fusion estimate.
