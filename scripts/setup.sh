@@ -2,14 +2,25 @@
 # Installs every Debian package fast-dynamic-vision needs, then configures and builds it.
 # Idempotent: packages already present are skipped by apt; the build is incremental.
 #
-#   scripts/setup.sh                 # install + Release build into build/
-#   BUILD_DIR=build-asan FDV_SANITIZE=ON scripts/setup.sh   # ASan+UBSan build
+#   scripts/setup.sh                 # install + Release build of `fdv` and the Python package
+#   FDV_BUILD=all scripts/setup.sh   # ... and everything else: tests, benchmarks, ROS node, fuzz
+#   BUILD_DIR=build-asan FDV_SANITIZE=ON FDV_BUILD=all scripts/setup.sh   # ASan+UBSan build
 #   FDV_SKIP_INSTALL=1 scripts/setup.sh                     # build only
 #   FDV_BUILD_BENCH=OFF scripts/setup.sh                    # without the benchmark programs
-#   CC=clang CXX=clang++ FDV_SANITIZE=ON FDV_FUZZ=ON BUILD_DIR=build-fuzz scripts/setup.sh
+#   CC=clang CXX=clang++ FDV_SANITIZE=ON FDV_FUZZ=ON FDV_BUILD=all BUILD_DIR=build-fuzz scripts/setup.sh
 #                                  # clang, ASan+UBSan, and the libFuzzer targets (fuzz/run.sh)
 set -euo pipefail
 cd "$(dirname "$0")/.."
+
+# The demo needs only the program (and users of build/python the extension): building the tests
+# and benchmarks too would more than double the first command's time (docs/BUILDING.md).
+TARGETS=()
+case "${FDV_BUILD:-demo}" in
+  all) ;;
+  demo) TARGETS=(--target fdv_cli)
+        [ "${FDV_SANITIZE:-OFF}" = "ON" ] || TARGETS+=(fdv_python) ;;  # no package under ASan
+  *) echo "setup: FDV_BUILD must be 'demo' or 'all', got '${FDV_BUILD}'" >&2; exit 2 ;;
+esac
 
 PACKAGES=(
   build-essential cmake ninja-build pkg-config
@@ -51,5 +62,5 @@ cmake -S . -B "$BUILD_DIR" -G Ninja \
   -DFDV_SANITIZE="${FDV_SANITIZE:-OFF}" \
   -DFDV_BUILD_BENCH="${FDV_BUILD_BENCH:-ON}" \
   -DFDV_FUZZ="${FDV_FUZZ:-OFF}" >/dev/null
-cmake --build "$BUILD_DIR" -j "$(nproc)"
+cmake --build "$BUILD_DIR" -j "$(nproc)" "${TARGETS[@]}"
 echo "setup: built into $BUILD_DIR"
