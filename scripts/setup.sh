@@ -27,6 +27,7 @@ PACKAGES=(
   libeigen3-dev libopencv-dev libceres-dev libyaml-cpp-dev libcli11-dev
   nlohmann-json3-dev libspdlog-dev libfmt-dev liblz4-dev libzstd-dev
   libflatbuffers-dev flatbuffers-compiler libsqlite3-dev libtinyxml2-dev
+  libhdf5-dev hdf5-filter-plugin hdf5-filter-plugin-blosc-serial python3-h5py
   libgtest-dev libgmock-dev libbenchmark-dev
   librosbag-storage-dev libroslz4-dev libbz2-dev libsensor-msgs-dev libnav-msgs-dev
   libgeometry-msgs-dev libfastcdr-dev
