@@ -29,6 +29,14 @@ struct Row {
 
 /// "first event at or after time t": Metavision's CD/indexes (t = ts + the table's time base) and
 /// DSEC's ms_to_idx (t = k ms).
+/// Metavision's EventCD record as stored (x u16 @0, y u16 @2, p i16 @4, t i64 @8): read as it
+/// is when the file's type is exactly this, which spares HDF5's field-by-field conversion.
+struct CdEvent {
+  std::uint16_t x, y;
+  std::int16_t p;
+  std::int64_t t;
+};
+
 struct IndexEntry {
   std::int64_t id;
   std::int64_t t_us;
@@ -167,6 +175,13 @@ class MetavisionLayout final : public Layout {
     H5Tinsert(row_type_.get(), "x", HOFFSET(Row, x), H5T_NATIVE_INT32);
     H5Tinsert(row_type_.get(), "y", HOFFSET(Row, y), H5T_NATIVE_INT32);
     H5Tinsert(row_type_.get(), "p", HOFFSET(Row, p), H5T_NATIVE_INT32);
+    cd_type_ = Id(H5Tcreate(H5T_COMPOUND, sizeof(CdEvent)));
+    H5Tinsert(cd_type_.get(), "x", HOFFSET(CdEvent, x), H5T_NATIVE_UINT16);
+    H5Tinsert(cd_type_.get(), "y", HOFFSET(CdEvent, y), H5T_NATIVE_UINT16);
+    H5Tinsert(cd_type_.get(), "p", HOFFSET(CdEvent, p), H5T_NATIVE_INT16);
+    H5Tinsert(cd_type_.get(), "t", HOFFSET(CdEvent, t), H5T_NATIVE_INT64);
+    const Id file_type(H5Dget_type(events_.get()));
+    exact_ = H5Tequal(file_type.get(), cd_type_.get()) > 0;
     filters_ = hdf5::check_filters(s.path, kEvents, events_.get());
     if (!exists(s.file.get(), kIndexes)) return;
     indexes_ = open_dataset(s, kIndexes);
@@ -193,7 +208,10 @@ class MetavisionLayout final : public Layout {
 
   hsize_t rows() const override { return rows_; }
   void read(hsize_t first, hsize_t n, std::vector<Row>& out) override {
-    read_rows(s_, kEvents, events_.get(), row_type_.get(), first, n, out);
+    if (!exact_) return read_rows(s_, kEvents, events_.get(), row_type_.get(), first, n, out);
+    read_rows(s_, kEvents, events_.get(), cd_type_.get(), first, n, cd_);
+    out.resize(n);
+    for (std::size_t i = 0; i < n; ++i) out[i] = {cd_[i].t, cd_[i].x, cd_[i].y, cd_[i].p};
   }
   hsize_t index_rows() const override { return index_rows_; }
   std::string index_name() const override { return kIndexes; }
@@ -208,7 +226,9 @@ class MetavisionLayout final : public Layout {
 
  private:
   const Source& s_;
-  Id events_, indexes_, row_type_, index_type_;
+  Id events_, indexes_, row_type_, cd_type_, index_type_;
+  bool exact_ = false;  ///< the file's type is CdEvent's
+  std::vector<CdEvent> cd_;
   hsize_t rows_ = 0, index_rows_ = 0;
   std::int64_t index_base_us_ = 0;
   std::string filters_;
