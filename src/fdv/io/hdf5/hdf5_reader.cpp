@@ -131,6 +131,7 @@ std::optional<std::string> attribute_text(hid_t loc, const char* name) {
   if (H5Tis_variable_str(type.get()) > 0) {
     const Id mem(H5Tcopy(H5T_C_S1));
     H5Tset_size(mem.get(), H5T_VARIABLE);
+    H5Tset_cset(mem.get(), H5Tget_cset(type.get()));  // HDF5 does not convert ASCII <-> UTF-8 (h5py's str)
     char* text = nullptr;
     if (H5Aread(attr.get(), mem.get(), &text) < 0 || !text) return std::nullopt;
     std::string out(text);
