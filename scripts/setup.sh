@@ -38,6 +38,8 @@ PACKAGES=(
   python3-rosbag rosbash rospack-tools
   # the fdv Python package (python/), for Debian's /usr/bin/python3
   python3-dev pybind11-dev python3-numpy python3-matplotlib python3-pytest
+  # `pip install .` into a venv, offline (docs/PYTHON.md "pip"; .ci/run)
+  python3-venv python3-pip python3-setuptools python3-wheel
 )
 # The fuzz build: clang with its libFuzzer and sanitizer runtimes; python3 builds the seed corpora.
 [ "${FDV_FUZZ:-OFF}" = "ON" ] && PACKAGES+=(clang libclang-rt-14-dev python3)
