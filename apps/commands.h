@@ -20,6 +20,6 @@ void add_eval_command(CLI::App& app);
 void add_demo_command(CLI::App& app);
 void add_table_commands(CLI::App& app);  ///< table1, table2
 void add_dodge_eval_command(CLI::App& app);
-void add_export_command(CLI::App& app);  ///< --to ros1-bag (needs a build with FDV_ROS1)
+void add_convert_command(CLI::App& app);  ///< alias export; --to ros1-bag needs FDV_ROS1
 
 }  // namespace fdv::cli

@@ -23,7 +23,7 @@ int main(int argc, char** argv) {
   fdv::cli::add_demo_command(app);
   fdv::cli::add_table_commands(app);
   fdv::cli::add_dodge_eval_command(app);
-  fdv::cli::add_export_command(app);
+  fdv::cli::add_convert_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

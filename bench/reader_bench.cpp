@@ -7,7 +7,9 @@
 //  - ROS 1 bags with dvs_msgs/EventArray messages of 5000 events (1 M events), plain and LZ4,
 //    written here with ROS's own library (the tests' writer; only when the tests are built);
 //  - ROS 2 bags: the two real recordings in ../shared/data/real (libcaer packets of a DVXplorer,
-//    and event_camera_msgs EVT 3.0 packets).
+//    and event_camera_msgs EVT 3.0 packets);
+//  - HDF5 against EVT 3.0 on the same events: the real `gen41_street_evt3.raw`, and its events
+//    written here with Hdf5EventWriter (Metavision layout), uncompressed and gzip level 4.
 // The synthetic inputs are written once per run into a temporary folder, removed at exit.
 // Run: build-*/bench/reader_bench [--benchmark_repetitions=3]
 #include <benchmark/benchmark.h>
@@ -22,6 +24,7 @@
 #include <vector>
 
 #include "fdv/io/dataset/dataset_writer.h"
+#include "fdv/io/hdf5/hdf5_writer.h"
 #include "fdv/io/recording.h"
 #ifdef FDV_BENCH_ROS1
 #include "tests/io/rosbag/ros1_bag_writer.h"
@@ -165,5 +168,23 @@ void BM_Ros2BagReader(benchmark::State& state) {
 BENCHMARK(BM_Ros2BagReader)->ArgName("evt3")->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 }  // namespace
+
+void BM_Evt3VsHdf5(benchmark::State& state) {
+  const std::string raw = std::string(FDV_REAL_DATA_DIR) + "/gen41_street_evt3.raw";
+  if (state.range(0) == 0) return read_all(state, raw);
+  const bool gzip = state.range(0) == 2;
+  const fs::path h5 = scratch_dir() / (gzip ? "street_gzip.h5" : "street.h5");
+  if (!fs::exists(h5) && fs::exists(raw)) {
+    auto reader = fdv::open_recording(raw);
+    fdv::Hdf5EventWriter w(h5.string(), reader->info().width, reader->info().height,
+                           {.gzip_level = gzip ? 4 : 0, .chunk_rows = 16384});
+    fdv::SensorChunk chunk;
+    while (reader->read(chunk)) w.add(chunk.events);
+    w.close();
+  }
+  read_all(state, h5.string());
+}
+// 0: the EVT 3.0 RAW file; 1: the same events in HDF5; 2: in HDF5 with gzip.
+BENCHMARK(BM_Evt3VsHdf5)->ArgName("hdf5")->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
 
 BENCHMARK_MAIN();

@@ -17,6 +17,9 @@ if(NOT TARGET PkgConfig::FDV_LZ4)
   pkg_check_modules(FDV_LZ4 REQUIRED IMPORTED_TARGET GLOBAL liblz4)
   pkg_check_modules(FDV_ZSTD REQUIRED IMPORTED_TARGET GLOBAL libzstd)
   pkg_check_modules(FDV_TINYXML2 REQUIRED IMPORTED_TARGET GLOBAL tinyxml2)
+  # HDF5 event files (io/hdf5): Debian's libhdf5-dev, its C library (pkg-config: CMake's FindHDF5
+  # would need the C language enabled).
+  pkg_check_modules(FDV_HDF5 REQUIRED IMPORTED_TARGET GLOBAL hdf5)
 endif()
 
 # ROS 1 bags: Debian's rosbag storage library (librosbag-storage-dev). Its CMake package needs

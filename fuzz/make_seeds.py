@@ -184,6 +184,30 @@ def message_seeds(out):
         (out / f"cdr-event_packet-{db3}").write_bytes(bytes([EVENT_PACKET | CDR_BIT]) + b"".join(blobs))
 
 
+def hdf5_seeds(out):
+    """Small HDF5 event files in both layouts, written with h5py (python3-h5py)."""
+    import h5py
+    import numpy as np
+    n = 300
+    t = np.cumsum(np.arange(n) % 7 * 400).astype("<i8")
+    cd = np.zeros(n, dtype=[("x", "<u2"), ("y", "<u2"), ("p", "<i2"), ("t", "<i8")])
+    cd["x"], cd["y"], cd["p"], cd["t"] = np.arange(n) % 640, np.arange(n) % 480, np.arange(n) % 2, t
+    for name, opts in [("metavision.h5", {}), ("metavision_gzip.h5", {"compression": "gzip", "chunks": (64,)})]:
+        with h5py.File(out / name, "w") as f:
+            f.attrs["geometry"] = b"640x480"
+            f.create_dataset("CD/events", data=cd, **opts)
+            starts = np.searchsorted(t, np.arange(t[0], t[-1] + 1, 2000))
+            index = np.zeros(len(starts) + 1, dtype=[("id", "<u8"), ("ts", "<i8")])
+            index[0] = (0, -1)
+            index["id"][1:], index["ts"][1:] = starts, t[starts] - t[0]
+            f.create_dataset("CD/indexes", data=index).attrs["offset"] = str(-t[0]).encode()
+    with h5py.File(out / "dsec.h5", "w") as f:
+        for k, dtype in [("x", "<u2"), ("y", "<u2"), ("p", "u1"), ("t", "<u4")]:
+            f.create_dataset(f"events/{k}", data=cd[k].astype(dtype))
+        f.create_dataset("ms_to_idx", data=np.searchsorted(t, np.arange(0, t[-1] // 1000 + 2) * 1000).astype("<u8"))
+        f.create_dataset("t_offset", data=np.int64(1_600_000_000_000_000))
+
+
 def main():
     build = Path(sys.argv[1]).resolve()
     fdv = build / "fdv"
@@ -197,6 +221,8 @@ def main():
     for f in sorted(REAL.glob("*.raw")):
         copy_prefix(f, out / f.name)
     copy_findings("evt2", out, "*.raw")
+
+    hdf5_seeds(target_dir(build, "fuzz_hdf5"))
 
     out = target_dir(build, "fuzz_ros2_bag")
     for f in sorted(REAL.glob("*.db3")):

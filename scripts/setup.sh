@@ -2,20 +2,32 @@
 # Installs every Debian package fast-dynamic-vision needs, then configures and builds it.
 # Idempotent: packages already present are skipped by apt; the build is incremental.
 #
-#   scripts/setup.sh                 # install + Release build into build/
-#   BUILD_DIR=build-asan FDV_SANITIZE=ON scripts/setup.sh   # ASan+UBSan build
+#   scripts/setup.sh                 # install + Release build of `fdv` and the Python package
+#   FDV_BUILD=all scripts/setup.sh   # ... and everything else: tests, benchmarks, ROS node, fuzz
+#   BUILD_DIR=build-asan FDV_SANITIZE=ON FDV_BUILD=all scripts/setup.sh   # ASan+UBSan build
 #   FDV_SKIP_INSTALL=1 scripts/setup.sh                     # build only
 #   FDV_BUILD_BENCH=OFF scripts/setup.sh                    # without the benchmark programs
-#   CC=clang CXX=clang++ FDV_SANITIZE=ON FDV_FUZZ=ON BUILD_DIR=build-fuzz scripts/setup.sh
+#   CC=clang CXX=clang++ FDV_SANITIZE=ON FDV_FUZZ=ON FDV_BUILD=all BUILD_DIR=build-fuzz scripts/setup.sh
 #                                  # clang, ASan+UBSan, and the libFuzzer targets (fuzz/run.sh)
 set -euo pipefail
 cd "$(dirname "$0")/.."
+
+# The demo needs only the program (and users of build/python the extension): building the tests
+# and benchmarks too would more than double the first command's time (docs/BUILDING.md).
+TARGETS=()
+case "${FDV_BUILD:-demo}" in
+  all) ;;
+  demo) TARGETS=(--target fdv_cli)
+        [ "${FDV_SANITIZE:-OFF}" = "ON" ] || TARGETS+=(fdv_python) ;;  # no package under ASan
+  *) echo "setup: FDV_BUILD must be 'demo' or 'all', got '${FDV_BUILD}'" >&2; exit 2 ;;
+esac
 
 PACKAGES=(
   build-essential cmake ninja-build pkg-config
   libeigen3-dev libopencv-dev libceres-dev libyaml-cpp-dev libcli11-dev
   nlohmann-json3-dev libspdlog-dev libfmt-dev liblz4-dev libzstd-dev
   libflatbuffers-dev flatbuffers-compiler libsqlite3-dev libtinyxml2-dev
+  libhdf5-dev hdf5-filter-plugin hdf5-filter-plugin-blosc-serial python3-h5py
   libgtest-dev libgmock-dev libbenchmark-dev
   librosbag-storage-dev libroslz4-dev libbz2-dev libsensor-msgs-dev libnav-msgs-dev
   libgeometry-msgs-dev libfastcdr-dev
@@ -26,6 +38,8 @@ PACKAGES=(
   python3-rosbag rosbash rospack-tools
   # the fdv Python package (python/), for Debian's /usr/bin/python3
   python3-dev pybind11-dev python3-numpy python3-matplotlib python3-pytest
+  # `pip install .` into a venv, offline (docs/PYTHON.md "pip"; .ci/run)
+  python3-venv python3-pip python3-setuptools python3-wheel
 )
 # The fuzz build: clang with its libFuzzer and sanitizer runtimes; python3 builds the seed corpora.
 [ "${FDV_FUZZ:-OFF}" = "ON" ] && PACKAGES+=(clang libclang-rt-14-dev python3)
@@ -51,5 +65,5 @@ cmake -S . -B "$BUILD_DIR" -G Ninja \
   -DFDV_SANITIZE="${FDV_SANITIZE:-OFF}" \
   -DFDV_BUILD_BENCH="${FDV_BUILD_BENCH:-ON}" \
   -DFDV_FUZZ="${FDV_FUZZ:-OFF}" >/dev/null
-cmake --build "$BUILD_DIR" -j "$(nproc)"
+cmake --build "$BUILD_DIR" -j "$(nproc)" "${TARGETS[@]}"
 echo "setup: built into $BUILD_DIR"

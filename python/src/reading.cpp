@@ -351,8 +351,16 @@ void register_reading(py::module_& m) {
       "open",
       [](const std::string& path, const std::string& events_topic, const std::string& imu_topic,
          const std::string& depth_topic, const std::string& odometry_topic, const std::string& ground_truth_topic,
-         std::size_t chunk_events, const std::string& time_unit) {
+         std::size_t chunk_events, const std::string& time_unit,
+         std::optional<std::pair<int, int>> resolution) {
         ReaderOptions o;
+        if (resolution) {
+          if (resolution->first < 1 || resolution->second < 1 || resolution->first > 65535 ||
+              resolution->second > 65535)
+            throw py::value_error("resolution must be (width, height) with sides in 1..65535");
+          o.width = resolution->first;
+          o.height = resolution->second;
+        }
         o.events_topic = events_topic;
         o.imu_topic = imu_topic;
         o.depth_topic = depth_topic;
@@ -365,8 +373,10 @@ void register_reading(py::module_& m) {
       py::arg("path"), py::kw_only(), py::arg("events_topic") = "", py::arg("imu_topic") = "",
       py::arg("depth_topic") = "", py::arg("odometry_topic") = "", py::arg("ground_truth_topic") = "",
       py::arg("chunk_events") = std::size_t{1} << 16, py::arg("time_unit") = "us",
+      py::arg("resolution") = py::none(),
       "Opens any supported recording (format detected, as `fdv info`). Topics: ROS bags only (empty: "
-      "chosen by type). time_unit 'us' (Metavision's, default) or 'ns' for every `t` field.");
+      "chosen by type). time_unit 'us' (Metavision's, default) or 'ns' for every `t` field. "
+      "resolution=(width, height): the sensor size of a file that does not give it (HDF5, DSEC layout).");
 }
 
 }  // namespace fdv::python

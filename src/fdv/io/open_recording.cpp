@@ -6,6 +6,7 @@
 #include "fdv/io/dataset/dataset_reader.h"
 #include "fdv/io/recording.h"
 #include "fdv/io/aedat4/aedat4_reader.h"
+#include "fdv/io/hdf5/hdf5_reader.h"
 #include "fdv/io/prophesee/prophesee_raw_reader.h"
 #include "fdv/io/rpg/rpg_text_reader.h"
 #include "fdv/io/rosbag/rosbag_reader.h"
@@ -38,6 +39,7 @@ std::unique_ptr<RecordingReader> open_recording(const std::string& path,
   // bag file (an SQLite database: the reader checks for the topics/messages tables).
   if (head.starts_with("#ROSBAG V")) return open_ros1_bag(path, options);
   if (head.starts_with(kSqliteMagic)) return open_ros2_bag(path, options);
+  if (looks_like_hdf5(head)) return open_hdf5(path, options);
   if (head.starts_with("\x89MCAP"))
     throw InputError(path, "byte 0",
                      "MCAP (ROS 2) is not supported: Debian ships no MCAP library; "

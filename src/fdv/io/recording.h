@@ -72,6 +72,10 @@ struct ReaderOptions {
   std::string depth_topic;
   std::string odometry_topic;
   std::string ground_truth_topic;
+  /// Event sensor size for files that may not say it (HDF5: DSEC files carry no size); the
+  /// file's own size wins when it has one. 0: from the file only.
+  int width = 0;
+  int height = 0;
 };
 
 class RecordingReader {

@@ -196,6 +196,17 @@ class RawReader final : public RecordingReader {
                           " encoding, from the " + header.encoding_source);
     info_.notes.push_back("sensor size " + std::to_string(header.width) + "x" +
                           std::to_string(header.height) + ", from the " + header.geometry_source);
+    // fdv's EVT 3.0 writer keeps the first event's time here (evt3_writer.h).
+    if (const auto* offset = find_key(header, "time_offset_us")) {
+      std::int64_t us = 0;
+      const auto [ptr, ec] = std::from_chars(offset->data(), offset->data() + offset->size(), us);
+      constexpr std::int64_t kMaxUs = std::numeric_limits<TimeNs>::max() / kNsPerUs;
+      if (ec != std::errc() || ptr != offset->data() + offset->size() || us > kMaxUs || us < -kMaxUs)
+        throw InputError(path, "key time_offset_us",
+                         "expected an integer number of microseconds, got '" + escape_non_utf8(*offset) + "'");
+      offset_ns_ = us * kNsPerUs;
+      info_.notes.push_back("times moved by time_offset_us " + std::to_string(us) + " (header line)");
+    }
     for (const char* key : {"plugin_name", "serial_number", "date"})
       if (const auto* v = find_key(header, key))
         info_.notes.push_back(std::string(key) + ": " + escape_non_utf8(*v));
@@ -213,10 +224,11 @@ class RawReader final : public RecordingReader {
       const std::size_t want = std::min(chunk_events_ - chunk.events.size(), kSliceEvents);
       DecodeCounts counts;
       std::size_t consumed = 0;
-      const std::size_t n = decoder_.decode(buffer_.data() + pos_, n_words_ - pos_, raw_.data(),
+      std::size_t n = decoder_.decode(buffer_.data() + pos_, n_words_ - pos_, raw_.data(),
                                             want, consumed, counts);
       const std::uint64_t slice_byte = buffer_byte_ + pos_ * sizeof(Word);
       account(counts, slice_byte);
+      if (offset_ns_ != 0) shift(n, slice_byte);
       if (n > 0)
         sanitizer_.append(raw_.data(), raw_.data() + n, chunk.events, report_,
                           "byte " + std::to_string(slice_byte));
@@ -230,6 +242,21 @@ class RawReader final : public RecordingReader {
   }
 
  private:
+  /// Adds the header's time offset to the n decoded events; one that would leave int64 ns is
+  /// dropped and counted (raw_ is compacted in place).
+  void shift(std::size_t& n, std::uint64_t slice_byte) {
+    std::size_t kept = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      Event e = raw_[i];
+      if (__builtin_add_overflow(e.t, offset_ns_, &e.t)) continue;
+      raw_[kept++] = e;
+    }
+    if (kept != n)
+      report_.drop("event time beyond the int64 nanosecond range (time counter wrapped too often)",
+                   "byte " + std::to_string(slice_byte), n - kept);
+    n = kept;
+  }
+
   /// Loads the next buffer of whole words; false at the end of the data.
   bool refill() {
     pos_ = n_words_ = 0;
@@ -302,6 +329,7 @@ class RawReader final : public RecordingReader {
   std::vector<Word> buffer_;
   std::size_t n_words_ = 0, pos_ = 0;
   std::vector<Event> raw_;
+  TimeNs offset_ns_ = 0;  ///< `% time_offset_us`, added to every decoded time
   std::uint64_t triggers_ = 0, vendor_ = 0, time_high_backwards_ = 0, time_high_glitches_ = 0;
   bool finished_ = false;
 };

@@ -1,6 +1,8 @@
-// `fdv export DATASET --to ros1-bag OUT.bag`: any recording open_recording reads (a simulated
-// dataset folder, aedat4, a bag, ...) written as a ROS 1 bag with the node's default topics, so
-// that a ROS stack can replay it (`rosbag play`). Prints a JSON summary of what it wrote.
+// `fdv convert INPUT --to evt3|hdf5|ros1-bag OUT [--start S] [--end S]` (alias `fdv export`):
+// any recording open_recording reads (a simulated dataset folder, aedat4, RAW, HDF5, a bag, ...)
+// written in a format other tools read. ROS 1 bag: events, IMU, depth and odometry on the node's
+// default topics, for `rosbag play`; EVT 3.0 RAW and HDF5 (Metavision layout): events only.
+// What the format cannot hold is left out and counted. Prints a JSON summary of what it wrote.
 #include <iostream>
 #include <limits>
 #include <map>
@@ -10,6 +12,9 @@
 #include "apps/commands.h"
 #include "apps/reader_flags.h"
 #include "fdv/core/error.h"
+#include "fdv/core/time.h"
+#include "fdv/io/hdf5/hdf5_writer.h"
+#include "fdv/io/prophesee/evt3_writer.h"
 #include "fdv/io/recording.h"
 #include "ros/bridge/ros1_bag_export.h"
 
@@ -19,6 +24,8 @@ namespace {
 struct ExportArgs {
   std::string input, to, out;
   ReaderOptions reader;
+  std::optional<double> start_s, end_s;  ///< after the recording's first time
+  int gzip_level = 0;
   ros1::BagExportOptions bag;
   double event_message_ms = 1.0;
   std::optional<std::int64_t> time_offset_ns;
@@ -71,7 +78,104 @@ void write_chunk(const SensorChunk& c, std::int64_t offset, ros1::BagExporter& b
 }
 #endif
 
-void run_export(ExportArgs& a) {
+/// The earliest time of a chunk (max when empty).
+TimeNs first_time(const SensorChunk& c) {
+  TimeNs t = std::numeric_limits<TimeNs>::max();
+  if (!c.events.empty()) t = std::min(t, c.events.front().t);
+  if (!c.imu.empty()) t = std::min(t, c.imu.front().t);
+  if (!c.depth.empty()) t = std::min(t, c.depth.front().t);
+  if (!c.odometry.empty()) t = std::min(t, c.odometry.front().t);
+  if (!c.ground_truth.empty()) t = std::min(t, c.ground_truth.front().t);
+  return t;
+}
+
+/// Keeps the items of `c` in [begin, end) and counts the others.
+class TimeWindow {
+ public:
+  TimeWindow(const ExportArgs& a, TimeNs t0)
+      : begin_(a.start_s ? after(t0, *a.start_s) : std::numeric_limits<TimeNs>::min()),
+        end_(a.end_s ? after(t0, *a.end_s) : std::numeric_limits<TimeNs>::max()) {}
+  void apply(SensorChunk& c) {
+    cut(c.events);
+    cut(c.imu);
+    cut(c.depth);
+    cut(c.odometry);
+    cut(c.ground_truth);
+  }
+  std::uint64_t outside() const { return outside_; }
+
+ private:
+  static TimeNs after(TimeNs t0, double s) {
+    return checked_add(t0, from_seconds(s)).value_or(std::numeric_limits<TimeNs>::max());
+  }
+  template <typename T>
+  void cut(std::vector<T>& v) {
+    const auto n = v.size();
+    std::erase_if(v, [&](const T& x) { return x.t < begin_ || x.t >= end_; });
+    outside_ += n - v.size();
+  }
+  TimeNs begin_, end_;
+  std::uint64_t outside_ = 0;
+};
+
+void check_window(const ExportArgs& a) {
+  constexpr double kMaxS = 1e9;  // ~31 years: from_seconds stays in int64 ns
+  if ((a.start_s && !(*a.start_s >= 0 && *a.start_s < kMaxS)) || (a.end_s && !(*a.end_s > 0 && *a.end_s < kMaxS)) ||
+      (a.start_s && a.end_s && !(*a.end_s > *a.start_s)))
+    throw ConfigError("--start/--end: expected 0 <= start < end seconds after the recording's first time");
+}
+
+/// Events-only formats (EVT 3.0 RAW, HDF5): everything else is counted as not written.
+template <typename Writer>
+void convert_events(ExportArgs& a, RecordingReader& reader, Writer& writer, nlohmann::json& out) {
+  SensorChunk chunk;
+  bool more = reader.read(chunk);
+  TimeWindow window(a, first_time(chunk));
+  std::map<std::string, std::uint64_t> left_out;
+  while (more) {
+    window.apply(chunk);
+    writer.add(chunk.events);
+    left_out["imu"] += chunk.imu.size();
+    left_out["depth"] += chunk.depth.size();
+    left_out["odometry"] += chunk.odometry.size();
+    left_out["ground_truth"] += chunk.ground_truth.size();
+    more = reader.read(chunk);
+  }
+  writer.close();
+  out["events"] = writer.events();
+  out["times_floored_to_us"] = writer.floored_events();
+  out["not_written"] = left_out;
+  out["outside_start_end"] = window.outside();
+}
+
+std::pair<int, int> sensor_size(const ExportArgs& a, const RecordingReader& reader) {
+  const int w = reader.info().width, h = reader.info().height;
+  if (w <= 0 || h <= 0)
+    throw InputError(a.input, "", "the recording does not give the sensor size, which " + a.to +
+                                      " must hold: pass --resolution WxH");
+  return {w, h};
+}
+
+void run_ros1_bag(ExportArgs& a);
+
+void run_convert(ExportArgs& a) {
+  check_window(a);
+  if (a.to == "ros1-bag") return run_ros1_bag(a);
+  auto reader = open_recording(a.input, a.reader);
+  const auto [w, h] = sensor_size(a, *reader);
+  nlohmann::json out = {{"input", a.input}, {"output", a.out}, {"format", a.to}};
+  if (a.to == "evt3") {
+    Evt3Writer writer(a.out, w, h);
+    convert_events(a, *reader, writer, out);
+  } else {
+    Hdf5EventWriter writer(a.out, w, h, {.gzip_level = a.gzip_level, .chunk_rows = 16384});
+    convert_events(a, *reader, writer, out);
+  }
+  out["read_report"] = reader->report().to_json();
+  std::cout << out.dump(2) << std::endl;
+}
+
+void run_ros1_bag(ExportArgs& a) {
 #if FDV_HAS_ROS1
   if (a.event_message_ms <= 0 || a.event_message_ms > 4294)
     throw ConfigError("--event-message-ms " + std::to_string(a.event_message_ms) +
@@ -82,6 +186,7 @@ void run_export(ExportArgs& a) {
   a.bag.height = reader->info().height;
   SensorChunk chunk;
   bool more = reader->read(chunk);
+  TimeWindow window(a, first_time(chunk));
   const std::int64_t offset = a.time_offset_ns ? *a.time_offset_ns : auto_time_offset(chunk);
   std::map<std::string, int> depth_encodings;
   std::uint64_t events = 0, ground_truth = 0;
@@ -90,6 +195,7 @@ void run_export(ExportArgs& a) {
     ros1::BagExporter bag(a.out, a.bag);
     std::vector<ros1::EventRecord> buffer;
     while (more) {
+      window.apply(chunk);
       events += chunk.events.size();
       ground_truth += chunk.ground_truth.size();
       write_chunk(chunk, offset, bag, buffer, depth_encodings);
@@ -103,11 +209,15 @@ void run_export(ExportArgs& a) {
     throw ConfigError(e.what());
   }
   nlohmann::json out = {{"input", a.input},
+                        {"output", a.out},
+                        {"format", a.to},
                         {"bag", a.out},
                         {"time_offset_ns", offset},
                         {"events", events},
                         {"depth_encodings", depth_encodings},
                         {"not_exported", {{"ground_truth", ground_truth}}},
+                        {"not_written", {{"ground_truth", ground_truth}}},
+                        {"outside_start_end", window.outside()},
                         {"read_report", reader->report().to_json()}};
   out["topics"] = nlohmann::json::array();
   for (const auto& t : topics)
@@ -123,13 +233,22 @@ void run_export(ExportArgs& a) {
 
 }  // namespace
 
-void add_export_command(CLI::App& app) {
+void add_convert_command(CLI::App& app) {
   auto* cmd = app.add_subcommand(
-      "export", "write a recording (dataset folder, aedat4, bag, ...) as a ROS 1 bag for replay");
+      "convert", "write a recording (dataset folder, aedat4, RAW, HDF5, bag, ...) as EVT 3.0 RAW, HDF5 or a ROS 1 bag");
+  cmd->alias("export");
   static ExportArgs a;
   cmd->add_option("input", a.input, "recording file or dataset folder")->required();
-  cmd->add_option("--to", a.to, "output format")->required()->check(CLI::IsMember({"ros1-bag"}));
-  cmd->add_option("output", a.out, "bag file to write")->required();
+  cmd->add_option("--to", a.to, "output format: evt3 (events), hdf5 (events, Metavision layout), ros1-bag "
+                                "(events, IMU, depth, odometry)")
+      ->required()
+      ->check(CLI::IsMember({"evt3", "hdf5", "ros1-bag"}));
+  cmd->add_option("output", a.out, "file to write")->required();
+  cmd->add_option("--start", a.start_s, "seconds after the recording's first time: write from here");
+  cmd->add_option("--end", a.end_s, "seconds after the recording's first time: write up to here");
+  cmd->add_option("--gzip", a.gzip_level, "hdf5: gzip level 1..9 (0: uncompressed)")
+      ->check(CLI::Range(0, 9))
+      ->capture_default_str();
   cmd->add_option("--events-as", a.bag.events_as,
                   "event message: event_array (dvs_msgs/EventArray) or event_packet "
                   "(event_camera_msgs/EventPacket)")
@@ -154,7 +273,7 @@ void add_export_command(CLI::App& app) {
   cmd->add_option("--depth-out-topic", a.bag.depth_topic)->capture_default_str();
   cmd->add_option("--odometry-out-topic", a.bag.odometry_topic)->capture_default_str();
   add_reader_flags(cmd, a.reader);
-  cmd->callback([] { run_export(a); });
+  cmd->callback([] { run_convert(a); });
 }
 
 }  // namespace fdv::cli
