@@ -12,7 +12,7 @@ build=$(realpath "$1")
 seconds=$2
 shift 2
 all=(fuzz_aedat4 fuzz_evt_raw fuzz_ros1_bag fuzz_ros2_bag fuzz_ros_messages fuzz_rpg_text fuzz_dataset
-     fuzz_calibration fuzz_options fuzz_scenario)
+     fuzz_calibration fuzz_options fuzz_scenario fuzz_perception_push fuzz_ros_node_core)
 targets=("${@:-${all[@]}}")
 
 /usr/bin/python3 fuzz/make_seeds.py "$build"
