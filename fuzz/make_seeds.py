@@ -208,6 +208,38 @@ def hdf5_seeds(out):
         f.create_dataset("t_offset", data=np.int64(1_600_000_000_000_000))
 
 
+# fuzz/ros_node_core_fuzzer.cpp: the index of each (stream, type) pair in its kMessages.
+NODE_MESSAGES = {"event_array": 0, "event_packet": 2, "imu": 3, "depth16": 4, "depth32": 4, "odometry": 5,
+                 "pose": 6, "transform": 7}
+
+
+def node_core_seeds(messages_dir, out):
+    """Runs of the message seeds, as the node's subscribers receive them: byte 0 the configuration
+    (bit 0 CDR, bit 1 a configured sensor size), then per message its kind, 2-byte length, bytes."""
+    for wire, cdr in [("ros1", 0), ("cdr", 1)]:
+        run = b""
+        for f in sorted(messages_dir.glob(f"{wire}-*")):
+            kind = f.name.split("-")[1]
+            body = f.read_bytes()[1:]
+            if kind in NODE_MESSAGES and len(body) < 65536:
+                run += struct.pack("<BH", NODE_MESSAGES[kind], len(body)) + body
+        for sized in [0, 2]:
+            (out / f"{wire}-run-{sized}").write_bytes(bytes([cdr | sized]) + run)
+
+
+def perception_push_seeds(out):
+    """fuzz/perception_push_fuzzer.cpp: a few valid pushes of each kind, in time order (ns)."""
+    events = b"".join(struct.pack("<HHhq", 10 + i % 20, 5 + i % 30, 1 if i % 2 else -1, 1000 * i) for i in range(64))
+    imu = struct.pack("<q6d", 0, 0.1, 0.0, 0.0, 0.0, 0.0, 9.81)
+    odometry = struct.pack("<q13d", 0, 0, 0, 0, 1, 0, 0, 0, 2, 0, 0, 0, 0, 0)
+    depth = struct.pack("<q", 30_000) + struct.pack("<192H", *([1500] * 192))
+    (out / "every-kind").write_bytes(bytes([1]) + imu + bytes([2]) + odometry + bytes([0, 64]) + events +
+                                     bytes([3]) + depth)
+    (out / "events").write_bytes(bytes([0, 64]) + events)
+    for f in sorted((ROOT / "fuzz" / "seeds" / "perception_push").glob("*")):  # its findings, fixed
+        shutil.copy(f, out)
+
+
 def main():
     build = Path(sys.argv[1]).resolve()
     fdv = build / "fdv"
@@ -231,6 +263,9 @@ def main():
 
     out = target_dir(build, "fuzz_ros_messages")
     message_seeds(out)
+
+    node_core_seeds(out, target_dir(build, "fuzz_ros_node_core"))
+    perception_push_seeds(target_dir(build, "fuzz_perception_push"))
 
     out = target_dir(build, "fuzz_ros1_bag")
     subprocess.run([str(build / "fuzz" / "fuzz_ros1_seed_writer"), str(out)], check=True)

@@ -12,7 +12,7 @@ build=$(realpath "$1")
 seconds=$2
 shift 2
 all=(fuzz_aedat4 fuzz_evt_raw fuzz_ros1_bag fuzz_ros2_bag fuzz_ros_messages fuzz_rpg_text fuzz_dataset
-     fuzz_calibration fuzz_options fuzz_scenario)
+     fuzz_calibration fuzz_options fuzz_scenario fuzz_perception_push fuzz_ros_node_core)
 # fuzz_hdf5 is built but run only by name: Debian's libhdf5 1.10.8 itself crashes on hostile
 # files within seconds (docs/FORMATS.md "HDF5 events"), which fdv cannot guard against.
 targets=("${@:-${all[@]}}")

@@ -9,6 +9,7 @@
 #   FDV_BUILD_BENCH=OFF scripts/setup.sh                    # without the benchmark programs
 #   CC=clang CXX=clang++ FDV_SANITIZE=ON FDV_FUZZ=ON FDV_BUILD=all BUILD_DIR=build-fuzz scripts/setup.sh
 #                                  # clang, ASan+UBSan, and the libFuzzer targets (fuzz/run.sh)
+#   FDV_TARGETS="core_test pipeline_test" scripts/setup.sh  # build only these targets
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -43,6 +44,9 @@ PACKAGES=(
 )
 # The fuzz build: clang with its libFuzzer and sanitizer runtimes; python3 builds the seed corpora.
 [ "${FDV_FUZZ:-OFF}" = "ON" ] && PACKAGES+=(clang libclang-rt-14-dev python3)
+# The ThreadSanitizer build (docs/BUILDING.md): clang and its TSan runtime; GCC's shared one,
+# preloaded into python3 for the Python threads test.
+[ "${FDV_SANITIZE:-OFF}" = "thread" ] && PACKAGES+=(clang libclang-rt-14-dev libtsan2)
 
 if [ "${FDV_SKIP_INSTALL:-0}" != "1" ]; then
   missing=()
@@ -65,5 +69,8 @@ cmake -S . -B "$BUILD_DIR" -G Ninja \
   -DFDV_SANITIZE="${FDV_SANITIZE:-OFF}" \
   -DFDV_BUILD_BENCH="${FDV_BUILD_BENCH:-ON}" \
   -DFDV_FUZZ="${FDV_FUZZ:-OFF}" >/dev/null
+# FDV_TARGETS names the targets outright (a sanitizer stage that runs a few tests builds only those).
+# shellcheck disable=SC2206  # FDV_TARGETS is a list
+[ -n "${FDV_TARGETS:-}" ] && TARGETS=(--target ${FDV_TARGETS})
 cmake --build "$BUILD_DIR" -j "$(nproc)" "${TARGETS[@]}"
 echo "setup: built into $BUILD_DIR"

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
+
 namespace fdv {
 namespace {
 
@@ -51,6 +53,19 @@ TEST(CameraPose, ExtrapolatesOnlyWithinTheLimit) {
   EXPECT_NEAR(Eigen::AngleAxisd(T->linear()).angle(), 0.015, 1e-12);  // 1 rad/s × 15 ms
   EXPECT_FALSE(camera_pose_at(odo, -11 * kNsPerMs, Eigen::Isometry3d::Identity(), 10 * kNsPerMs)
                    .has_value());
+}
+
+// Times from the two ends of int64 (any value a push may carry): out of reach, not an overflow.
+// Found by fuzz_perception_push (UBSan: signed overflow in front.t - t).
+TEST(CameraPose, TimesFarApartAreOutOfReachNotAnOverflow) {
+  const Eigen::Vector3d v(2, 0, 0);
+  const TimeNs big = std::numeric_limits<TimeNs>::max(), small = std::numeric_limits<TimeNs>::min();
+  const std::vector<OdometrySample> odo = {sample(kNsPerS, 0, Eigen::Vector3d::Zero(), v, 1.0)};
+  EXPECT_FALSE(body_state_at(odo, small, 10 * kNsPerMs).has_value());
+  EXPECT_FALSE(body_state_at(odo, big, 10 * kNsPerMs).has_value());
+  const std::vector<OdometrySample> late = {sample(big - 1, 0, Eigen::Vector3d::Zero(), v, 1.0)};
+  EXPECT_FALSE(body_state_at(late, small, big).has_value());  // the gap exceeds any limit
+  EXPECT_TRUE(body_state_at(late, big, 10).has_value());     // 1 ns ahead: within reach
 }
 
 }  // namespace

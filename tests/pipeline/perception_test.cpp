@@ -6,6 +6,7 @@
 
 #include <map>
 #include <set>
+#include <thread>
 
 #include "fdv/eval/ground_truth_box.h"
 #include "fdv/eval/trajectory_error.h"
@@ -115,6 +116,73 @@ Collected run(TimeNs lag_ns, const SimulatedThrow& s = simulated_throw(), const 
   p.finish();
   out.counters = p.counters();
   return out;
+}
+
+// The front end's threads (compensation, time images, segmentation, pre-processing on the shared
+// pool) change no result: the documented promise of PerceptionOptions::threads, checked against
+// the one-thread run. Also the ThreadSanitizer build's test of Perception (tests/CMakeLists.txt).
+struct ThreadedThrow {
+  SimulatedThrow data;
+  PerceptionOptions options;
+};
+
+// fast_forward at 160x120 for 0.7 s (the ball crosses at 0.45-0.55 s): short under ThreadSanitizer,
+// with the ball detected and estimated.
+const ThreadedThrow& threaded_throw() {
+  static const ThreadedThrow s = [] {
+    ThreadedThrow out;
+    sim::ScenarioConfig c = sim::make_preset("fast_forward", 3);
+    sim::set_event_resolution(c, 160, 120);
+    c.duration_s = 0.7;
+    c.threads = 2;  // the simulator's loops on a pool of their own, also under the sanitizer
+    sim::Simulator simulator(c);
+    simulator.run(out.data.data);
+    out.data.calib = simulator.calibration();
+    return out;
+  }();
+  return s;
+}
+
+void expect_same_run(const Collected& a, const Collected& b) {
+  EXPECT_EQ(a.windows, b.windows);
+  ASSERT_EQ(a.fusion.size(), b.fusion.size());
+  for (std::size_t i = 0; i < a.fusion.size(); ++i) {
+    EXPECT_EQ(a.fusion[i].trajectory.p0_W, b.fusion[i].trajectory.p0_W) << "estimate " << i;
+    EXPECT_EQ(a.fusion[i].trajectory.v0_W, b.fusion[i].trajectory.v0_W) << "estimate " << i;
+  }
+  EXPECT_EQ(a.fusion_track, b.fusion_track);
+  EXPECT_EQ(a.depth.size(), b.depth.size());
+  EXPECT_EQ(a.warnings, b.warnings);
+}
+
+TEST(PerceptionThreads, AnyThreadCountGivesTheResultsOfOne) {
+  const ThreadedThrow& s = threaded_throw();
+  PerceptionOptions one = s.options;
+  one.threads = 1;
+  const Collected reference = run(0, s.data, one);
+  ASSERT_FALSE(reference.fusion.empty());  // the run reaches every stage, estimation included
+  for (const int threads : {2, 3}) {
+    SCOPED_TRACE("threads " + std::to_string(threads));
+    PerceptionOptions many = s.options;
+    many.threads = threads;
+    expect_same_run(run(0, s.data, many), reference);
+  }
+}
+
+// Two pipelines on two threads share ThreadPool::shared(): the one that finds it busy runs its
+// loops alone. Each still gives the results of a run on its own.
+TEST(PerceptionThreads, TwoPipelinesOnTwoThreadsGiveTheResultsOfOneAlone) {
+  const ThreadedThrow& s = threaded_throw();
+  PerceptionOptions options = s.options;
+  options.threads = 2;
+  const Collected alone = run(0, s.data, options);
+  Collected first, second;
+  std::thread a([&] { first = run(0, s.data, options); });
+  std::thread b([&] { second = run(0, s.data, options); });
+  a.join();
+  b.join();
+  expect_same_run(first, alone);
+  expect_same_run(second, alone);
 }
 
 // A ball cut by the border is observed at its whole centre where the detector estimated

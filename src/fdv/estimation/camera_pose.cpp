@@ -1,5 +1,8 @@
 #include "fdv/estimation/camera_pose.h"
 
+#include <algorithm>
+#include <cstdint>
+
 namespace fdv {
 
 namespace {
@@ -21,12 +24,17 @@ OdometrySample extrapolate(const OdometrySample& s, TimeNs t) {
 std::optional<OdometrySample> body_state_at(const std::vector<OdometrySample>& odometry, TimeNs t,
                                             TimeNs max_extrapolation_ns) {
   if (odometry.empty()) return std::nullopt;
+  // later - earlier of two times, exact even when it exceeds int64 (times from either end of it).
+  const auto gap = [](TimeNs earlier, TimeNs later) {
+    return static_cast<std::uint64_t>(later) - static_cast<std::uint64_t>(earlier);
+  };
+  const auto limit = static_cast<std::uint64_t>(std::max<TimeNs>(0, max_extrapolation_ns));
   if (t < odometry.front().t) {
-    if (odometry.front().t - t > max_extrapolation_ns) return std::nullopt;
+    if (gap(t, odometry.front().t) > limit) return std::nullopt;
     return extrapolate(odometry.front(), t);
   }
   if (t > odometry.back().t) {
-    if (t - odometry.back().t > max_extrapolation_ns) return std::nullopt;
+    if (gap(odometry.back().t, t) > limit) return std::nullopt;
     return extrapolate(odometry.back(), t);
   }
   return interpolate_odometry(odometry, t);

@@ -738,5 +738,46 @@ TEST_F(Ros1BagTest, BagFromMemoryReadsLikeTheFileAndLeavesNothingBehind) {
   EXPECT_EQ(open_descriptors(), descriptors);
 }
 
+// Readers reuse the library's bag objects (constructing one costs about 20 ms): whatever the
+// previous reader met (a bag the library refused mid-open, an empty bag, two readers at once), the
+// next one reads exactly what a first reader read.
+TEST_F(Ros1BagTest, ReadersOneAfterAnotherShareNoState) {
+  auto first = open_ros1_bag(bag_);
+  const Everything a = read_all(*first);
+  const std::vector<TopicInfo> topics = first->info().topics;
+  first.reset();
+
+  std::string unindexed = file_string(bag_);  // refused by the library's open, not before it
+  const auto field = unindexed.find("index_pos=");
+  ASSERT_NE(field, std::string::npos);
+  std::memset(unindexed.data() + field + 10, 0, 8);
+  EXPECT_NE(expect_input_error([&] { open_ros1_bag_bytes(unindexed, "unindexed.bag"); }).find("unindexed"),
+            std::string::npos);
+  const std::string empty = dir_ + "/empty.bag";
+  { BagWriter bag(empty); }
+  EXPECT_TRUE(open_ros1_bag(empty)->info().topics.empty());
+  const std::string lz4 = dir_ + "/lz4.bag";
+  write_reference_bag(lz4, BagWriter::Compression::kLz4);
+  auto both_a = open_ros1_bag(lz4), both_b = open_ros1_bag(bag_);  // two bags in use at once
+  EXPECT_EQ(read_all(*both_a).all.events, a.all.events);
+  EXPECT_EQ(read_all(*both_b).all.events, a.all.events);
+  both_a.reset();
+  both_b.reset();
+
+  auto again = open_ros1_bag(bag_);
+  const Everything b = read_all(*again);
+  ASSERT_EQ(again->info().topics.size(), topics.size());
+  for (std::size_t i = 0; i < topics.size(); ++i) {
+    EXPECT_EQ(again->info().topics[i].topic, topics[i].topic);
+    EXPECT_EQ(again->info().topics[i].count, topics[i].count);
+  }
+  EXPECT_EQ(b.all.events, a.all.events);
+  EXPECT_EQ(b.all.imu.size(), a.all.imu.size());
+  EXPECT_EQ(b.all.depth.size(), a.all.depth.size());
+  EXPECT_EQ(b.all.odometry.size(), a.all.odometry.size());
+  EXPECT_EQ(b.all.ground_truth.size(), a.all.ground_truth.size());
+  EXPECT_EQ(b.chunks, a.chunks);
+}
+
 }  // namespace
 }  // namespace fdv

@@ -13,6 +13,7 @@
 #include <cstring>
 #include <fstream>
 #include <map>
+#include <mutex>
 #include <optional>
 #include <unordered_map>
 
@@ -29,6 +30,55 @@ using rosbag_impl_reader = fdv::bag::BagReader;
 
 TimeNs to_ns(const ros::Time& t) { return static_cast<TimeNs>(t.toNSec()); }
 
+/// rosbag::Bag objects, reused. Constructing one costs about 20 ms (its pluginlib loader of
+/// encryptor plugins searches the ament index), opening, reading and closing a small bag on one
+/// 0.1 ms: reading many small bags (a folder of recordings, a fuzzer) was bound by the
+/// construction. Closed bags go back to a small free list (thread-safe); it is never destroyed,
+/// so no plugin loader is torn down during static destruction.
+class BagPool {
+ public:
+  struct Return {
+    void operator()(::rosbag::Bag* bag) const { pool().give_back(bag); }
+  };
+  using Handle = std::unique_ptr<::rosbag::Bag, Return>;
+
+  static BagPool& pool() {
+    static BagPool* const instance = new BagPool;
+    return *instance;
+  }
+
+  Handle take() {
+    std::unique_ptr<::rosbag::Bag> bag;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (!idle_.empty()) {
+        bag = std::move(idle_.back());
+        idle_.pop_back();
+      }
+    }
+    return Handle(bag ? bag.release() : new ::rosbag::Bag);
+  }
+
+ private:
+  /// Closed bags kept: each keeps its buffers (up to the largest chunk it read).
+  static constexpr std::size_t kMaxIdle = 2;
+
+  void give_back(::rosbag::Bag* raw) {
+    std::unique_ptr<::rosbag::Bag> bag(raw);
+    try {
+      bag->close();  // clears every connection, chunk and index of the bag it read
+      bag->setEncryptorPlugin("rosbag/NoEncryptor");  // a bag's header may have named another
+    } catch (const std::exception&) {
+      return;  // not reusable: destroyed here
+    }
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (idle_.size() < kMaxIdle) idle_.push_back(std::move(bag));
+  }
+
+  std::mutex mutex_;
+  std::vector<std::unique_ptr<::rosbag::Bag>> idle_;
+};
+
 class Ros1BagReader final : public rosbag_impl_reader {
  public:
   /// Reads the bag at `file`; messages name it `name` (the path when empty).
@@ -38,7 +88,7 @@ class Ros1BagReader final : public rosbag_impl_reader {
     check_magic(file, path);
     structure_.emplace(file, path);  // InputError naming the byte when the index does not hold
     try {
-      bag_.open(file, ::rosbag::bagmode::Read);
+      bag_->open(file, ::rosbag::bagmode::Read);
     } catch (const ::rosbag::BagUnindexedException&) {
       throw InputError(path, "byte 13",
                        "the bag is unindexed (its recording was not closed): run `rosbag reindex " +
@@ -58,7 +108,7 @@ class Ros1BagReader final : public rosbag_impl_reader {
       }
       ordinal_.assign(selected().size(), 0);
       view_ = std::make_unique<::rosbag::View>();
-      if (!names.empty()) view_->addQuery(bag_, ::rosbag::TopicQuery(names));
+      if (!names.empty()) view_->addQuery(*bag_, ::rosbag::TopicQuery(names));
       it_ = view_->begin();
       end_ = view_->end();
     } catch (const InputError&) {
@@ -97,7 +147,7 @@ class Ros1BagReader final : public rosbag_impl_reader {
     for (const auto& s : selected()) {
       if (s.stream != StreamKind::kEvents) continue;
       try {
-        ::rosbag::View v(bag_, ::rosbag::TopicQuery(raw_topic_.at(s.topic)));
+        ::rosbag::View v(*bag_, ::rosbag::TopicQuery(raw_topic_.at(s.topic)));
         auto it = v.begin();
         if (it == v.end() || damage_up_to(to_ns(it->getTime()))) return false;  // read() reports it
         copy_bytes(*it, bytes);
@@ -212,7 +262,7 @@ class Ros1BagReader final : public rosbag_impl_reader {
 
   std::optional<bag::Ros1BagStructure> structure_;
   std::size_t checked_ = 0;  ///< chunks (by start time) whose records were checked
-  ::rosbag::Bag bag_;
+  BagPool::Handle bag_ = BagPool::pool().take();  ///< before the view, which refers to it
   std::unique_ptr<::rosbag::View> view_;
   ::rosbag::View::iterator it_, end_;
   bool advance_ = false;
