@@ -13,7 +13,12 @@ void add_info_command(CLI::App& app) {
   static ReaderOptions options;
   cmd->add_option("input", input, "recording file or dataset folder")->required();
   add_reader_flags(cmd, options);
-  cmd->callback([] { std::cout << summarize_recording(*open_recording(input, options)).dump(2) << std::endl; });
+  // Bytes of a path that are not UTF-8 print as U+FFFD, as in summary.json (results/writer.cpp).
+  cmd->callback([] {
+    std::cout << summarize_recording(*open_recording(input, options))
+                     .dump(2, ' ', false, nlohmann::json::error_handler_t::replace)
+              << std::endl;
+  });
 }
 
 }  // namespace fdv::cli

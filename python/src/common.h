@@ -8,8 +8,11 @@
 #include <pybind11/pybind11.h>
 
 #include <cstdint>
+#include <memory>
+#include <mutex>
 #include <nlohmann/json.hpp>
 #include <span>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -44,6 +47,32 @@ struct ObjectRecord {
   std::int32_t id;
   double px, py, pz;  ///< object centre in W [m]
   double vx, vy, vz;  ///< [m/s]
+};
+
+/// Thread safety of the Python objects: each call holds the GIL except where it reads or runs
+/// C++ work, so an object whose calls release the GIL keeps a second thread out: fdv.Perception
+/// serialises its calls (a lock taken with the GIL released); the iterators of a recording refuse
+/// a call while another thread's runs (OneCallAtATime). The value classes (Calibration,
+/// PerceptionOptions) and fdv.Recording's own methods run under the GIL throughout.
+///
+/// One call at a time on an object whose calls release the GIL: a second thread's call while one
+/// runs raises RuntimeError naming the object, instead of racing on its state. (Blocking instead
+/// would deadlock: the first call takes the GIL back while the second holds it, waiting.)
+class OneCallAtATime {
+ public:
+  explicit OneCallAtATime(const char* name) : name_(name) {}
+  /// Holds the object until the lock goes out of scope.
+  [[nodiscard]] std::unique_lock<std::mutex> enter() {
+    std::unique_lock lock(*mutex_, std::try_to_lock);
+    if (!lock.owns_lock())
+      throw std::runtime_error(std::string(name_) +
+                               ": used from two threads at once; give each thread its own iterator");
+    return lock;
+  }
+
+ private:
+  const char* name_;
+  std::unique_ptr<std::mutex> mutex_ = std::make_unique<std::mutex>();  ///< movable with its owner
 };
 
 /// Unit of the `t` field of every array in and out: Metavision's µs by default, or ns.

@@ -102,11 +102,12 @@ class PyPerception {
         const std::int16_t p = field<std::int16_t>(r, f.p);
         const std::int64_t t_unit = field<std::int64_t>(r, f.t);
         const TimeNs t = to_ns(t_unit, unit_);
-        if (t < last)
+        // A corrupt time (not valid_time) is Perception's to drop and count, not an order error.
+        if (valid_time(t) && t < last)
           throw py::value_error("push_events: event times go backwards at index " + std::to_string(i) + " (t " +
                                 std::to_string(t_unit) + " after " + std::to_string(from_ns(last, unit_)) +
                                 "); events must be pushed in time order; nothing of this array was pushed");
-        last = t;
+        if (valid_time(t)) last = t;
         events_[i] = {t, x, y, p > 0};
       }
       perception_->push_events(events_);
@@ -117,28 +118,32 @@ class PyPerception {
   void push_imu(const py::array& a) {
     require_records(a, py::dtype::of<ImuRecord>(), "push_imu");
     const auto* in = static_cast<const ImuRecord*>(a.data());
+    std::vector<ImuSample> samples(static_cast<std::size_t>(a.size()));
+    for (std::size_t i = 0; i < samples.size(); ++i) {  // converted first: an overflow pushes nothing
+      const ImuRecord& r = in[i];
+      samples[i] = {to_ns(r.t, unit_), {r.gx, r.gy, r.gz}, {r.ax, r.ay, r.az}};
+    }
+    // Each sample is checked by Perception: an invalid one is dropped and counted (input_report).
     locked("push_imu", [&] {
-      for (py::ssize_t i = 0; i < a.size(); ++i) {
-        const ImuRecord& r = in[i];
-        perception_->push_imu({to_ns(r.t, unit_), {r.gx, r.gy, r.gz}, {r.ax, r.ay, r.az}});
-      }
+      for (const ImuSample& s : samples) perception_->push_imu(s);
     });
   }
 
   void push_odometry(const py::array& a) {
     require_records(a, py::dtype::of<OdometryRecord>(), "push_odometry");
     const auto* in = static_cast<const OdometryRecord*>(a.data());
+    std::vector<OdometrySample> samples(static_cast<std::size_t>(a.size()));
+    for (std::size_t i = 0; i < samples.size(); ++i) {
+      const OdometryRecord& r = in[i];
+      OdometrySample& s = samples[i];
+      s.t = to_ns(r.t, unit_);
+      s.p_W_B = {r.px, r.py, r.pz};
+      s.q_W_B = Eigen::Quaterniond(r.qw, r.qx, r.qy, r.qz);
+      s.v_W = {r.vx, r.vy, r.vz};
+      s.omega_B = {r.wx, r.wy, r.wz};
+    }
     locked("push_odometry", [&] {
-      for (py::ssize_t i = 0; i < a.size(); ++i) {
-        const OdometryRecord& r = in[i];
-        OdometrySample s;
-        s.t = to_ns(r.t, unit_);
-        s.p_W_B = {r.px, r.py, r.pz};
-        s.q_W_B = Eigen::Quaterniond(r.qw, r.qx, r.qy, r.qz);
-        s.v_W = {r.vx, r.vy, r.vz};
-        s.omega_B = {r.wx, r.wy, r.wz};
-        perception_->push_odometry(s);
-      }
+      for (const OdometrySample& s : samples) perception_->push_odometry(s);
     });
   }
 
@@ -180,6 +185,7 @@ class PyPerception {
     py::dict d;
     for (std::size_t k = 0; k < lists_.size(); ++k) d[kListNames[k]] = lists_[k];
     d["counts"] = counts();
+    d["input_report"] = input_report();
     return d;
   }
   py::object counts() const {
@@ -190,6 +196,16 @@ class PyPerception {
       c = perception_->counters();
     }
     return to_python(counts_json(c));
+  }
+  /// The pushed samples Perception dropped as invalid: {"dropped": {reason: {count, first}}, ...}.
+  py::object input_report() const {
+    nlohmann::json j;
+    {
+      py::gil_scoped_release release;
+      std::lock_guard lock(mutex_);
+      j = perception_->input_report().to_json();
+    }
+    return to_python(j);
   }
   const py::list& list(RowKind k) const { return lists_[static_cast<std::size_t>(k)]; }
 
@@ -285,6 +301,8 @@ void register_perception(py::module_& m) {
       .def("finish", &PyPerception::finish, "flushes the last windows; returns results() (no push after it)")
       .def("results", &PyPerception::results)
       .def_property_readonly("counts", &PyPerception::counts, "summary.json's counts")
+      .def_property_readonly("input_report", &PyPerception::input_report,
+                             "pushed samples dropped as invalid, by reason (as a reader's report)")
       .def_property_readonly("windows", [](const PyPerception& p) { return p.list(RowKind::kWindow); })
       .def_property_readonly("depth", [](const PyPerception& p) { return p.list(RowKind::kDepth); })
       .def_property_readonly("trajectories", [](const PyPerception& p) { return p.list(RowKind::kTrajectory); })

@@ -12,6 +12,7 @@
 #include "fdv/io/recording.h"
 #include "fdv/io/recording_summary.h"
 #include "fdv/io/time_ordered_merger.h"
+#include "fdv/pipeline/event_windower.h"
 
 namespace fdv::python {
 namespace {
@@ -34,14 +35,20 @@ struct Source {
 
 /// Events of a recording in chunks (as read), or Metavision-style slices: `delta_t` [µs] gives
 /// consecutive slices [t0 + k·Δt, t0 + (k+1)·Δt) from the first event's time t0, empty ones
-/// included; `n_events` slices of that many events; both: a slice ends at whichever comes first.
+/// included, up to kMaxEmptySlices in a row (the rest of a longer gap is skipped, as `fdv run`'s
+/// windower does: a gap of a year would be 3e10 slices of 1 ms); `n_events` slices of that many
+/// events; both: a slice ends at whichever comes first.
 class EventIterator {
+  static constexpr std::uint64_t kMaxEmptySlices = EventWindowerOptions{}.max_empty_windows;
+
  public:
   EventIterator(std::shared_ptr<Source> source, std::optional<std::int64_t> delta_t_us,
                 std::optional<std::int64_t> n_events)
       : source_(std::move(source)), reader_(source_->open()) {
     if (delta_t_us) {
-      if (*delta_t_us <= 0) throw py::value_error("delta_t must be > 0 µs, got " + std::to_string(*delta_t_us));
+      // At most 1e15 µs (31 years): slice ends, up to two slices past a valid time, fit in TimeNs.
+      if (*delta_t_us <= 0 || *delta_t_us > 1'000'000'000'000'000)
+        throw py::value_error("delta_t must be in (0, 1e15] µs, got " + std::to_string(*delta_t_us));
       delta_t_ns_ = to_ns(*delta_t_us, TimeUnit::kUs);
     }
     if (n_events) {
@@ -51,6 +58,7 @@ class EventIterator {
   }
 
   py::array_t<EventCD> next() {
+    const auto held = one_call_.enter();
     if (source_->closed) {
       reader_.reset();
       source_->check_open();
@@ -88,11 +96,24 @@ class EventIterator {
       py::gil_scoped_release release;
       take(n, data);
     }
-    if (window_done) *window_end_ += *delta_t_ns_;
+    if (window_done) next_slice(n == 0);
     return out;
   }
 
  private:
+  /// Moves window_end_ to the next slice's end; past a gap's kMaxEmptySlices empty slices, to
+  /// the end of the slice that holds the next event.
+  void next_slice(bool empty) {
+    empty_in_a_row_ = empty ? empty_in_a_row_ + 1 : 0;
+    TimeNs end = *window_end_ + *delta_t_ns_;  // valid times and a Δt from to_ns: no overflow
+    if (empty_in_a_row_ >= kMaxEmptySlices && buffered_ > 0) {
+      const TimeNs next_t = buffer_.front()[front_pos_].t;
+      if (next_t >= end) end += ((next_t - end) / *delta_t_ns_ + 1) * *delta_t_ns_;
+      empty_in_a_row_ = 0;
+    }
+    window_end_ = end;
+  }
+
   /// Appends the next chunk that has events to the buffer; false at the end of the recording.
   bool read_more() {
     if (eof_) return false;
@@ -139,6 +160,7 @@ class EventIterator {
     }
   }
 
+  OneCallAtATime one_call_{"fdv.EventIterator"};
   std::shared_ptr<Source> source_;
   std::unique_ptr<RecordingReader> reader_;
   SensorChunk chunk_;
@@ -149,6 +171,7 @@ class EventIterator {
   std::optional<TimeNs> delta_t_ns_;
   std::optional<std::size_t> n_events_;
   std::optional<TimeNs> window_end_;
+  std::uint64_t empty_in_a_row_ = 0;
 };
 
 py::list depth_list(const std::vector<DepthFrame>& frames, TimeUnit u) {
@@ -174,6 +197,7 @@ class ChunkIterator {
  public:
   explicit ChunkIterator(std::shared_ptr<Source> source) : source_(std::move(source)), reader_(source_->open()) {}
   py::dict next() {
+    const auto held = one_call_.enter();
     if (source_->closed) {
       reader_.reset();
       source_->check_open();
@@ -188,6 +212,7 @@ class ChunkIterator {
   }
 
  private:
+  OneCallAtATime one_call_{"fdv.ChunkIterator"};
   std::shared_ptr<Source> source_;
   std::unique_ptr<RecordingReader> reader_;
   SensorChunk chunk_;
@@ -204,6 +229,7 @@ class MergedIterator {
     merger_ = std::make_unique<TimeOrderedMerger>(std::move(readers));
   }
   py::tuple next() {
+    const auto held = one_call_.enter();
     if (source_->closed) {
       merger_.reset();
       source_->check_open();
@@ -231,6 +257,7 @@ class MergedIterator {
   }
 
  private:
+  OneCallAtATime one_call_{"fdv.MergedIterator"};
   std::shared_ptr<Source> source_;
   std::unique_ptr<TimeOrderedMerger> merger_;
 };

@@ -1,7 +1,10 @@
 """Bad input: a Python exception with a clear message, never a crash; the C++ messages kept."""
+import itertools
+import json
 import os
 import shutil
 import subprocess
+import threading
 
 import numpy as np
 import pytest
@@ -112,7 +115,7 @@ def test_perception_after_finish(dataset):
 
 
 def test_bad_slicing_arguments(dataset):
-    with pytest.raises(ValueError, match="delta_t must be > 0"):
+    with pytest.raises(ValueError, match=r"delta_t must be in \(0, 1e15\] µs"):
         fdv.open(str(dataset)).events(delta_t=0)
     with pytest.raises(ValueError, match="time_unit must be"):
         fdv.open(str(dataset), time_unit="ms")
@@ -193,3 +196,160 @@ def test_a_corrupt_polarity_or_padding_in_events_bin_is_dropped_where_it_is(data
     assert after["events"] == before["events"] - 2
     dropped = after["report"]["dropped"]["events.bin: polarity not 0 or 1, or padding not zero"]
     assert dropped == {"count": 2, "first": f"byte {header + 100 * record}"}
+
+
+def run_perception(rec, imu, odometry, events):
+    p = fdv.Perception(rec.calibration, fdv.PerceptionOptions())
+    p.push_imu(imu)
+    p.push_odometry(odometry)
+    p.push_events(events)
+    return p.finish()
+
+
+def test_perception_drops_and_counts_what_a_reader_would(dataset):
+    # ../shared/adversarial-findings/py_perception_nan_quat.py: NaN and inf IMU, a pose with
+    # qw = 5, a zero quaternion, a NaN position. Each is dropped, counted by reason with the first
+    # one's place, and changes no result (the same run without those samples is the expectation).
+    rec = fdv.open(str(dataset))
+    ev = np.concatenate(list(rec.events()), dtype=fdv.EVENT_DTYPE)
+    imu, odo = rec.imu(), rec.odometry()
+    bad_imu = imu.copy()
+    bad_imu["gx"][3], bad_imu["ax"][5] = np.nan, np.inf
+    bad_odo = odo.copy()
+    bad_odo["qw"][4] = 5.0
+    bad_odo["qw"][6] = bad_odo["qx"][6] = bad_odo["qy"][6] = bad_odo["qz"][6] = 0.0
+    bad_odo["px"][8] = np.nan
+    keep_imu = np.ones(len(imu), bool)
+    keep_imu[[3, 5]] = False
+    keep_odo = np.ones(len(odo), bool)
+    keep_odo[[4, 6, 8]] = False
+    expected = run_perception(rec, imu[keep_imu], odo[keep_odo], ev)
+    got = run_perception(rec, bad_imu, bad_odo, ev)
+    for key in ("windows", "trajectories", "predictions", "dodge", "counts"):
+        assert got[key] == expected[key], key
+    assert expected["input_report"]["dropped"] == {}
+    dropped = got["input_report"]["dropped"]
+    assert dropped["imu: non-finite value"]["count"] == 2
+    assert dropped["imu: non-finite value"]["first"].startswith("imu 3 (t ")
+    assert dropped["odometry: quaternion is not unit length"]["count"] == 2
+    assert dropped["odometry: quaternion is not unit length"]["first"].startswith("odometry 4 (t ")
+    assert dropped["odometry: non-finite value"]["count"] == 1
+    assert any(w.startswith("pushed imu: non-finite value: dropped") for w in got["warnings"])
+    # All IMU non-finite: every sample dropped, so the run has no IMU and says so.
+    all_nan = imu.copy()
+    all_nan["gx"][:] = np.nan
+    got = run_perception(rec, all_nan, odo, ev)
+    assert got["input_report"]["dropped"]["imu: non-finite value"]["count"] == len(imu)
+    counts = got["counts"]
+    assert counts["imu"] == 0 and counts["windows_with_fallback_flag"]["imu missing"] == counts["windows"]
+
+
+def test_perception_drops_an_event_at_a_corrupt_time(dataset):
+    p = fdv.Perception(fdv.Calibration.load(str(dataset / "calibration.yaml")), time_unit="ns")
+    p.push_events(events([-2**63, 1000, 2000, 2**63 - 1, 3000]))
+    r = p.finish()
+    assert r["counts"]["events_read"] == 3
+    assert r["input_report"]["dropped"]["event: time out of range (corrupt)"] == {
+        "count": 2, "first": f"event 0 (t {-2**63} ns)"}
+
+
+def test_fdv_info_of_a_folder_whose_name_is_not_utf8(dataset, workdir):
+    # Bytes \xff\xfe in the folder's name: shown as U+FFFD, as summary.json shows them.
+    parent = bytes(workdir) + b"/bad\xff\xfename"
+    os.makedirs(parent, exist_ok=True)
+    copy = parent + b"/ds"
+    if not os.path.exists(copy):
+        shutil.copytree(bytes(dataset), copy)
+    done = subprocess.run([FDV_CLI.encode(), b"info", copy], capture_output=True)
+    assert done.returncode == 0, done.stderr
+    info = json.loads(done.stdout.decode())
+    assert info["path"].endswith("/bad\ufffd\ufffdname/ds") and info["events"] > 0
+
+
+def edited_events(dataset, workdir, name, edit):
+    """A copy of the dataset whose events.bin records (a numpy structured array) `edit` changed."""
+    copy = workdir / name
+    shutil.rmtree(copy, ignore_errors=True)
+    shutil.copytree(dataset, copy)
+    dt = np.dtype([("t", "<i8"), ("x", "<u2"), ("y", "<u2"), ("p", "u1"), ("pad", "V3")])
+    data = (copy / "events.bin").read_bytes()
+    records = np.frombuffer(data[24:], dt).copy()
+    edit(records)
+    (copy / "events.bin").write_bytes(data[:24] + records.tobytes())
+    return copy
+
+
+def test_an_event_at_a_corrupt_time_is_a_counted_drop(dataset, workdir):
+    # make_cases.sh's ev_negtime: the first event at INT64_MIN, the 501st at INT64_MAX.
+    def edit(r):
+        r["t"][0], r["t"][500] = -2**63, 2**63 - 1
+    copy = edited_events(dataset, workdir, "ev_negtime", edit)
+    before, after = cli_json("info", dataset), cli_json("info", copy)
+    assert after["events"] == before["events"] - 2
+    assert after["duration_s"] < before["duration_s"] and after["first_t_s"] >= 0
+    assert after["report"]["dropped"]["event time out of range (corrupt)"] == {"count": 2, "first": "byte 24"}
+    slices = list(fdv.open(str(copy)).events(delta_t=1000))
+    assert sum(len(s) for s in slices) == after["events"]
+
+
+def test_delta_t_slices_skip_the_rest_of_a_long_gap(dataset, workdir):
+    # A real jump of 1e6 s after event 1000 (every later event follows it): 1e12 slices of 1 ms.
+    def edit(r):
+        r["t"][1000:] += 10**15
+    copy = edited_events(dataset, workdir, "ev_gap", edit)
+    rec = fdv.open(str(copy), time_unit="ns")
+    slices = list(itertools.islice(rec.events(delta_t=1000), 100000))
+    assert len(slices) < 100000, "endless over the gap"
+    times = np.concatenate(slices)["t"]
+    assert len(times) == cli_json("info", copy)["events"]
+    ends = np.array([s["t"][-1] for s in slices if len(s)])
+    t0 = times[0]
+    # Every slice is [t0 + kΔt, t0 + (k+1)Δt): each event's slice index is its time's.
+    k = [(s["t"] - t0) // 10**6 for s in slices if len(s)]
+    assert all(len(set(ks)) == 1 for ks in k) and all(np.diff([ks[0] for ks in k]) > 0)
+    empty_run = max(len(list(g)) for e, g in itertools.groupby(len(s) == 0 for s in slices) if e)
+    assert empty_run == 400
+    assert ends[-1] == times[-1]
+
+
+def test_a_drop_is_reported_at_its_own_record_not_its_chunks(dataset, workdir):
+    # make_cases.sh's ev_back2: record 100000 goes backwards, record 100010 is outside the sensor;
+    # both lie in the chunk of 65536 events that starts at record 65536 (byte 1048600).
+    def edit(r):
+        r["t"][100000] = r["t"][99999] - 1000
+        r["x"][100010] = 9999
+    copy = edited_events(dataset, workdir, "ev_back2", edit)
+    dropped = cli_json("info", copy)["report"]["dropped"]
+    assert dropped["event timestamp went backwards"] == {"count": 1, "first": f"byte {24 + 100000 * 16}"}
+    assert dropped["event pixel outside the sensor"] == {"count": 1, "first": f"byte {24 + 100010 * 16}"}
+
+
+def test_an_iterator_used_from_two_threads_refuses_the_second_not_races(dataset):
+    # Each next() reads with the GIL released: two threads on one iterator would share its buffers.
+    # A call that overlaps another raises, having consumed nothing: the events handed out by the
+    # calls that ran are every event of the recording, once.
+    total = fdv.open(str(dataset)).info["events"]
+    it = fdv.open(str(dataset)).events(n_events=500)
+    got, refused, other = [], [], []
+
+    def drain():
+        while True:
+            try:
+                got.append(len(next(it)))
+            except StopIteration:
+                return
+            except RuntimeError as e:
+                refused.append(str(e))
+            except Exception as e:  # anything else is a failure
+                other.append(repr(e))
+                return
+
+    threads = [threading.Thread(target=drain) for _ in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert not other, other
+    assert sum(got) == total
+    assert all(r == "fdv.EventIterator: used from two threads at once; give each thread its own iterator"
+               for r in refused), refused[:3]

@@ -14,6 +14,7 @@
 /// message are the same. This header includes nothing of ROS or fdv: the implementation is
 /// compiled as C++17 (Debian's generated ROS headers do not compile as C++20) and this header is
 /// included by the C++20 command line.
+/// Thread safety: the functions share no state; one bag is written by one thread.
 #include <cstdint>
 #include <memory>
 #include <string>

@@ -27,6 +27,7 @@ void NodeDiagnostics::warn_new_drops() {
 
 void NodeDiagnostics::run_finished(const Perception& perception) {
   finished_run_ = counts_json(perception.counters());
+  report_.merge(perception.input_report());
 }
 
 nlohmann::json NodeDiagnostics::to_json(const StreamMerger& merger, const LatencyMeter& latency,
@@ -42,10 +43,13 @@ nlohmann::json NodeDiagnostics::to_json(const StreamMerger& merger, const Latenc
         {"missing", p.missing},
         {"newest_t", p.seen ? nlohmann::json(to_seconds(p.newest)) : nlohmann::json(nullptr)}};
   }
+  // The pipeline's own drops (Perception::input_report) beside the decoders': one report.
+  ReadReport dropped = report_;
+  if (running) dropped.merge(running->input_report());
   nlohmann::json d = {{"streams", streams},
                       {"windows", windows_},
                       {"runs", runs_},
-                      {"dropped_by_reason", report_.to_json()}};
+                      {"dropped_by_reason", dropped.to_json()}};
   if (nlohmann::json l = latency.summary(); !l.is_null()) d["latency_ms"] = std::move(l);
   d["pipeline"] = running ? counts_json(running->counters()) : finished_run_;
   return d;

@@ -33,7 +33,8 @@ class NodeDiagnostics {
   void dropped(Stream stream) { ++dropped_[index(stream)]; }
   void window_done() { ++windows_; }
   void run_started() { ++runs_; }
-  /// The pipeline's counters of a finished run, reported until the next run has a Perception.
+  /// The pipeline's counters of a finished run, reported until the next run has a Perception;
+  /// its input drops join report() for good.
   void run_finished(const Perception& perception);
 
   /// `running`: the Perception of the run in progress, or null when it has none yet.

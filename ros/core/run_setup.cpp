@@ -25,6 +25,11 @@ std::pair<int, int> RunSetup::configured_size() const {
 
 bag::MessageDecoder RunSetup::new_decoder() const {
   bag::MessageDecoder decoder(cdr_ ? bag::Dialect::kCdr : bag::Dialect::kRos1);
+  // A day before ROS 1 time ends (2^32 s, in 2106): every time the node publishes (a window's end
+  // at most window_ms later, a prediction) is then one ros::Time can hold; ros::Time aborts the
+  // process on a time beyond it.
+  constexpr TimeNs kLatestStampNs = ((TimeNs{1} << 32) - 86'400) * kNsPerS;
+  decoder.set_latest_time(kLatestStampNs, "stamp beyond ROS time's range (2106)");
   if (const auto [width, height] = configured_size(); width > 0 && height > 0) {
     decoder.set_sensor_size(width, height);
     decoder.require_event_message_size(width, height);

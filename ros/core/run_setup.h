@@ -4,6 +4,7 @@
 /// fresh decoder and Perception. A run ends with NodeCore::finish(), and the next message starts
 /// the next one (a replay looped, a sensor restarted).
 /// Immutable after construction: its members may be called concurrently.
+/// Thread safety: const methods may be called concurrently; NodeCore calls it from one thread.
 #include <memory>
 #include <optional>
 #include <utility>

@@ -102,16 +102,8 @@ class FdvRosNode {
     camera_frame_ = pnh_.param<std::string>("camera_frame", "event_camera");
     world_frame_ = pnh_.param<std::string>("world_frame", "world");
     idle_finish_s_ = pnh_.param("idle_finish_s", 2.0);
-    const int queue = pnh_.param("queue_size", 10000);
-
-    detections_ = pnh_.advertise<fdv_msgs::WindowDetections>("detections", 100);
-    tracks_ = pnh_.advertise<fdv_msgs::TrackStates>("tracks", 100);
-    estimates_ = pnh_.advertise<fdv_msgs::TrajectoryEstimate>("estimates", 100);
-    paths_ = pnh_.advertise<nav_msgs::Path>("predicted_path", 100);
-    predictions_ = pnh_.advertise<fdv_msgs::CollisionPrediction>("collision", 100);
-    dodge_ = pnh_.advertise<fdv_msgs::DodgeDecision>("dodge", 100);
-    markers_ = pnh_.advertise<visualization_msgs::MarkerArray>("markers", 100);
-    diagnostics_ = nh_.advertise<diagnostic_msgs::DiagnosticArray>("/diagnostics", 10);
+    queue_ = pnh_.param("queue_size", 10000);
+    topics_ = topics;
 
     NodeOutputs outputs;
     outputs.on_window = [this](const fdv::ros_core::WindowOutput& w) {
@@ -137,18 +129,12 @@ class FdvRosNode {
       ROS_WARN_STREAM("fdv: " << message);
     };
     core_ = std::make_unique<NodeCore>(config, std::move(outputs));
-
-    for (const auto& [stream, topic] : topics) {
-      if (topic.empty()) continue;
-      const Stream s = stream;
-      subscribers_.push_back(nh_.subscribe<topic_tools::ShapeShifter>(
-          topic, static_cast<std::uint32_t>(queue),
-          [this, s](const topic_tools::ShapeShifter::ConstPtr& msg) { receive(s, *msg); },
-          ros::VoidConstPtr(), ros::TransportHints().tcpNoDelay()));
-      ROS_INFO_STREAM("fdv: " << fdv::ros_core::to_string(s) << " from " << topic);
-    }
-    // Wall clock only for the plumbing: diagnostics once a second, and the end of input
-    // (nothing received for idle_finish_s: the last window is closed, as at a recording's end).
+    connect();
+    for (const auto& [stream, topic] : topics_)
+      if (!topic.empty()) ROS_INFO_STREAM("fdv: " << fdv::ros_core::to_string(stream) << " from " << topic);
+    // Wall clock only for the plumbing: the master's watch and diagnostics once a second, and the
+    // end of input (nothing received for idle_finish_s: the last window is closed, as at a
+    // recording's end).
     timer_ = nh_.createWallTimer(ros::WallDuration(1.0), [this](const ros::WallTimerEvent&) { tick(); });
   }
 
@@ -168,7 +154,54 @@ class FdvRosNode {
     pending_ = true;
   }
 
+  /// Advertises the outputs and subscribes to the inputs, registering each with the master; what
+  /// was registered before is shut down first (advertising a topic still advertised would only
+  /// add a reference, and register nothing with a restarted master).
+  void connect() {
+    subscribers_.clear();
+    for (ros::Publisher* p : {&detections_, &tracks_, &estimates_, &paths_, &predictions_, &dodge_, &markers_, &diagnostics_})
+      p->shutdown();
+    detections_ = pnh_.advertise<fdv_msgs::WindowDetections>("detections", 100);
+    tracks_ = pnh_.advertise<fdv_msgs::TrackStates>("tracks", 100);
+    estimates_ = pnh_.advertise<fdv_msgs::TrajectoryEstimate>("estimates", 100);
+    paths_ = pnh_.advertise<nav_msgs::Path>("predicted_path", 100);
+    predictions_ = pnh_.advertise<fdv_msgs::CollisionPrediction>("collision", 100);
+    dodge_ = pnh_.advertise<fdv_msgs::DodgeDecision>("dodge", 100);
+    markers_ = pnh_.advertise<visualization_msgs::MarkerArray>("markers", 100);
+    diagnostics_ = nh_.advertise<diagnostic_msgs::DiagnosticArray>("/diagnostics", 10);
+    for (const auto& [stream, topic] : topics_) {
+      if (topic.empty()) continue;
+      const Stream s = stream;
+      subscribers_.push_back(nh_.subscribe<topic_tools::ShapeShifter>(
+          topic, static_cast<std::uint32_t>(queue_),
+          [this, s](const topic_tools::ShapeShifter::ConstPtr& msg) { receive(s, *msg); },
+          ros::VoidConstPtr(), ros::TransportHints().tcpNoDelay()));
+    }
+  }
+
+  /// roscpp registers with the master only when a node advertises or subscribes: after a
+  /// master's restart the node would be unknown to it, alive and silent. So the master is checked
+  /// every tick: gone, an ERROR in the log (repeated every 10 s) and in /diagnostics (to the
+  /// subscribers still connected); back, every publisher and subscriber is registered anew.
+  void watch_master() {
+    const bool up = ros::master::check();
+    if (!up) {
+      if (master_up_)
+        ROS_ERROR_STREAM("fdv: lost the ROS master at " << ros::master::getURI()
+                         << ": cut off from new publishers and subscribers until it is back (checked every second)");
+      else
+        ROS_ERROR_STREAM_THROTTLE(10.0, "fdv: still cut off: no ROS master at " << ros::master::getURI());
+    } else if (!master_up_) {
+      connect();
+      ++master_returns_;
+      ROS_WARN_STREAM("fdv: the ROS master at " << ros::master::getURI()
+                      << " is back: publishers and subscribers registered again");
+    }
+    master_up_ = up;
+  }
+
   void tick() {
+    watch_master();
     if (pending_ && (ros::WallTime::now() - last_message_).toSec() > idle_finish_s_) {
       ROS_INFO("fdv: no input for %.1f s: end of input, last window closed", idle_finish_s_);
       finish();
@@ -199,6 +232,11 @@ class FdvRosNode {
         status.message = "streams missing or messages dropped (see the values)";
       }
     }
+    if (!master_up_) {
+      status.level = diagnostic_msgs::DiagnosticStatus::ERROR;
+      status.message = "cut off: no ROS master at " + ros::master::getURI();
+    }
+    add("master_returns", json(master_returns_));
     add("windows", d.at("windows"));
     add("runs", d.at("runs"));
     if (d.contains("latency_ms"))
@@ -212,6 +250,10 @@ class FdvRosNode {
 
   ros::NodeHandle nh_, pnh_;
   std::unique_ptr<NodeCore> core_;
+  std::map<Stream, std::string> topics_;
+  int queue_ = 10000;
+  bool master_up_ = true;
+  std::uint64_t master_returns_ = 0;  ///< times the master came back after being lost
   std::vector<ros::Subscriber> subscribers_;
   ros::Publisher detections_, tracks_, estimates_, paths_, predictions_, dodge_, markers_, diagnostics_;
   ros::WallTimer timer_;

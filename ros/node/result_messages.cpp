@@ -8,9 +8,12 @@ namespace {
 
 using nlohmann::json;
 
+/// ros::Time aborts the process on a time it cannot hold: NodeCore takes no stamp near its end,
+/// and this keeps a result's time within it whatever the row says.
 ros::Time stamp(const json& seconds) {
   const double s = seconds.get<double>();
-  return s > 0 ? ros::Time(s) : ros::Time();
+  if (!(s > 0)) return ros::Time();
+  return s < static_cast<double>(std::numeric_limits<std::uint32_t>::max()) ? ros::Time(s) : ros::TIME_MAX;
 }
 
 /// A message header: the row's time in `frame`.

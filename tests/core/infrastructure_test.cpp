@@ -11,6 +11,7 @@
 #include "fdv/core/lanes.h"
 #include "fdv/core/numeric.h"
 #include "fdv/core/thread_pool.h"
+#include "test_support.h"
 
 namespace fdv {
 namespace {
@@ -97,6 +98,19 @@ TEST(ConfigText, YamlErrorsBecomeInputErrorsNamingTheFile) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("opts.yaml"), std::string::npos) << e.what();
   }
+}
+
+TEST(ConfigText, ARepeatedKeyIsAnErrorButTheSameKeyInTwoMappingsIsNot) {
+  EXPECT_EQ(test::input_error_of("f.yaml", [] { parse_config_yaml("a:\n  - {k: 1, k: 2}\n", "f.yaml"); }),
+            "line 2, column 12 | duplicate key 'k' (first at line 2, column 6)");
+  // A mapping reached again through an alias is the same mapping, walked once.
+  EXPECT_NO_THROW(parse_config_yaml("a: &x {k: 1}\nb: *x\nc: {k: 2}\n", "f.yaml"));
+  // Aliases nested 30 deep stand for 2^30 mappings: the walk visits each written one once.
+  std::string text = "l0: &l0 {k: 1}\n";
+  for (int i = 1; i <= 30; ++i)
+    text += "l" + std::to_string(i) + ": &l" + std::to_string(i) + " [*l" + std::to_string(i - 1) + ", *l" +
+            std::to_string(i - 1) + "]\n";
+  EXPECT_NO_THROW(parse_config_yaml(text, "f.yaml"));
 }
 
 }  // namespace

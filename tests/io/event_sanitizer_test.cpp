@@ -2,6 +2,9 @@
 // and a single time far ahead held until the next event says whether it was corrupt.
 #include <gtest/gtest.h>
 
+#include <limits>
+#include <map>
+#include <string>
 #include <vector>
 
 #include "fdv/io/recording.h"
@@ -14,7 +17,11 @@ constexpr TimeNs kMs = 1'000'000;
 std::vector<Event> run(EventSanitizer& s, const std::vector<std::vector<Event>>& batches,
                        ReadReport& report) {
   std::vector<Event> out;
-  for (const auto& b : batches) s.append(b.data(), b.data() + b.size(), out, report, "batch");
+  std::size_t first = 0;  // the batch's first event's index in the whole stream
+  for (const auto& b : batches) {
+    s.append(b.data(), b.data() + b.size(), out, report, [&](std::size_t i) { return "event " + std::to_string(first + i); });
+    first += b.size();
+  }
   return out;
 }
 
@@ -35,6 +42,34 @@ TEST(EventSanitizer, DropsEventsBehindTheStreamOrOutsideTheSensor) {
   EXPECT_EQ(out, (std::vector<Event>{{5 * kMs, 1, 1, true}, {6 * kMs, 3, 3, false}}));
   EXPECT_EQ(dropped(r, "event timestamp went backwards"), 1u);
   EXPECT_EQ(dropped(r, "event pixel outside the sensor"), 1u);
+}
+
+TEST(EventSanitizer, EachDropIsReportedAtItsOwnEventAndACorruptTimeIsDropped) {
+  EventSanitizer s(10, 10);
+  ReadReport r;
+  constexpr TimeNs kMin = std::numeric_limits<TimeNs>::min(), kMax = std::numeric_limits<TimeNs>::max();
+  const auto out = run(s,
+                       {{{kMin, 1, 1, true},  // event 0: INT64_MIN, a corrupt time (not the stream's start)
+                         {5 * kMs, 1, 1, true},
+                         {6 * kMs, 1, 1, true}},
+                        {{7 * kMs, 1, 1, true},
+                         {4 * kMs, 2, 2, true},  // event 4: backwards
+                         {8 * kMs, 10, 2, true},  // event 5: outside
+                         {kMax, 1, 1, true},      // event 6: corrupt
+                         {3 * kMs, 2, 2, true},   // backwards again: counted, the first stays event 4
+                         {9 * kMs, 3, 3, false}}},
+                       r);
+  EXPECT_EQ(out, (std::vector<Event>{{5 * kMs, 1, 1, true}, {6 * kMs, 1, 1, true}, {7 * kMs, 1, 1, true}, {9 * kMs, 3, 3, false}}));
+  const std::map<std::string, ReadReport::Entry> expected{
+      {"event time out of range (corrupt)", {2, "event 0"}},
+      {"event timestamp went backwards", {2, "event 4"}},
+      {"event pixel outside the sensor", {1, "event 5"}},
+  };
+  ASSERT_EQ(r.dropped().size(), expected.size());
+  for (const auto& [reason, e] : expected) {
+    EXPECT_EQ(r.dropped().at(reason).count, e.count) << reason;
+    EXPECT_EQ(r.dropped().at(reason).first_where, e.first_where) << reason;
+  }
 }
 
 TEST(EventSanitizer, ACorruptTimeFarAheadIsDroppedAndTheStreamGoesOn) {

@@ -585,6 +585,14 @@ TEST(Options, MalformedStructureNamesFileAndKey) {
   EXPECT_EQ(error_of(std::string(kMaxConfigFileBytes + 1, ' ')), " | larger than 1048576 bytes: not a configuration file");
 }
 
+TEST(Options, ADuplicateKeyIsAnErrorNamingItAndBothLines) {
+  // yaml-cpp keeps both and finds the first: the second value was lost without a word.
+  EXPECT_EQ(error_of("window_ms: 10\nthreads: 1\nwindow_ms: 20\n"),
+            "line 3, column 1 | duplicate key 'window_ms' (first at line 1, column 1)");
+  EXPECT_EQ(error_of("tracking:\n  gate_chi2: 9\n  gate_chi2: 12\n"),
+            "line 3, column 3 | duplicate key 'gate_chi2' (first at line 2, column 3)");
+}
+
 TEST(Options, FuzzFindingNonScalarKey) {
   const auto path = test::fuzz_finding("options/f9-non-scalar-key.yaml");
   FDV_REQUIRE_REAL_FILE(path);

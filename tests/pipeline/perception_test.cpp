@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <functional>
+#include <limits>
 #include <map>
 #include <set>
 #include <thread>
@@ -93,10 +95,13 @@ std::vector<int> ball_detection_tracks(const SimulatedThrow& s, const Collected&
 /// them. Depth frames are handed over with the events, `depth_lag_ns` behind them (ahead when
 /// negative), in time order unless `depth_order` gives another: the k-th frame handed over is
 /// depth_order[k], when the events are past the time of the k-th frame in time order.
+/// `first` is given the Perception before anything else is pushed.
 Collected run(TimeNs lag_ns, const SimulatedThrow& s = simulated_throw(), const PerceptionOptions& options = {},
-              TimeNs depth_lag_ns = 0, std::vector<std::size_t> depth_order = {}) {
+              TimeNs depth_lag_ns = 0, std::vector<std::size_t> depth_order = {},
+              const std::function<void(Perception&)>& first = {}) {
   Collected out;
   Perception p(s.calib, options, collect(out));
+  if (first) first(p);
   if (depth_order.empty())
     for (std::size_t i = 0; i < s.data.depth.size(); ++i) depth_order.push_back(i);
   std::size_t imu = 0, odo = 0, depth = 0;
@@ -257,6 +262,56 @@ TEST(Perception, AFarFutureEventTimeSkipsTheGapInsteadOfMakingBillionsOfWindows)
   EXPECT_EQ(out.results.back().t_start, kYear);
   EXPECT_EQ(out.results.back().index, windows_before_event);
   EXPECT_EQ(out.results.back().events, 1u);
+}
+
+TEST(Perception, InvalidSamplesAreDroppedAndCountedAsAReaderDoesAndChangeNothing) {
+  // Each with the time of the first good sample of its stream: kept, it would change the results.
+  const SimulatedThrow& s = simulated_throw();
+  ReadReport report;
+  const Collected with_bad = run(0, s, {}, 0, {}, [&](Perception& p) {
+    constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+    ImuSample imu = s.data.imu.front();
+    imu.gyro_rad_s.x() = kNaN;
+    p.push_imu(imu);
+    imu.gyro_rad_s.x() = 0;
+    imu.accel_m_s2.z() = std::numeric_limits<double>::infinity();
+    p.push_imu(imu);
+    OdometrySample pose = s.data.odometry.front();
+    pose.p_W_B.x() = 100;  // where the sample would move the vehicle, were it kept
+    pose.q_W_B.w() = 5;
+    p.push_odometry(pose);
+    pose.q_W_B.coeffs().setZero();
+    p.push_odometry(pose);
+    DepthFrame torn = s.data.depth.front();
+    torn.depth_m.pop_back();
+    p.push_depth(torn);
+    const std::vector<Event> corrupt{{std::numeric_limits<TimeNs>::min(), 10, 10, true}};
+    p.push_events(corrupt);
+    report = p.input_report();
+  });
+  const Collected clean = run(0);
+  EXPECT_EQ(with_bad.windows, clean.windows);
+  ASSERT_EQ(with_bad.fusion.size(), clean.fusion.size());
+  for (std::size_t i = 0; i < clean.fusion.size(); ++i)
+    EXPECT_TRUE(with_bad.fusion[i].trajectory.p0_W.isApprox(clean.fusion[i].trajectory.p0_W, 1e-12));
+  EXPECT_EQ(with_bad.counters.imu, clean.counters.imu);
+  EXPECT_EQ(with_bad.counters.events, clean.counters.events);
+  const auto at = [](TimeNs t) { return " (t " + std::to_string(t) + " ns)"; };
+  const std::map<std::string, ReadReport::Entry> expected{
+      {"imu: non-finite value", {2, "imu 0" + at(s.data.imu.front().t)}},
+      {"odometry: quaternion is not unit length", {2, "odometry 0" + at(s.data.odometry.front().t)}},
+      {"depth: pixel count differs from width x height", {1, "depth 0" + at(s.data.depth.front().t)}},
+      {"event: time out of range (corrupt)", {1, "event 0" + at(std::numeric_limits<TimeNs>::min())}},
+  };
+  ASSERT_EQ(report.dropped().size(), expected.size());
+  for (const auto& [reason, entry] : expected) {
+    ASSERT_TRUE(report.dropped().contains(reason)) << reason;
+    EXPECT_EQ(report.dropped().at(reason).count, entry.count) << reason;
+    EXPECT_EQ(report.dropped().at(reason).first_where, entry.first_where) << reason;
+  }
+  EXPECT_NE(std::find(with_bad.warnings.begin(), with_bad.warnings.end(),
+                      "pushed imu: non-finite value: dropped (further ones counted in the input report)"),
+            with_bad.warnings.end());
 }
 
 TEST(Perception, ResultsDoNotDependOnHowStreamsAreInterleavedWithinTheLatenessBound) {

@@ -427,6 +427,58 @@ TEST(NodeCoreConfig, AnUnknownOptionKeyIsAnErrorNamingIt) {
   }
 }
 
+/// A dvs_msgs/EventArray serialized by hand (ROS 1 rules): `n` events at (5, 5), the k-th at
+/// sec + k ms, in a message declaring width x height.
+std::vector<std::uint8_t> event_array_bytes(std::uint32_t width, std::uint32_t height, std::uint32_t n,
+                                            std::uint32_t sec, std::uint32_t nsec = 0) {
+  std::vector<std::uint8_t> b;
+  auto u32 = [&](std::uint32_t v) { for (int i = 0; i < 4; ++i) b.push_back(static_cast<std::uint8_t>(v >> (8 * i))); };
+  u32(0), u32(sec), u32(0), u32(0);  // header: seq, stamp, frame_id ""
+  u32(height), u32(width), u32(n);
+  for (std::uint32_t k = 0; k < n; ++k) {
+    b.push_back(5), b.push_back(0), b.push_back(5), b.push_back(0);  // x, y
+    u32(sec), u32(nsec + k * 1'000'000);                             // ts
+    b.push_back(1);
+  }
+  return b;
+}
+
+std::uint64_t dropped_for(const NodeCore& core, const std::string& reason) {
+  const json diagnostics = core.diagnostics();
+  const json& dropped = diagnostics["dropped_by_reason"]["dropped"];
+  return dropped.contains(reason) ? dropped[reason]["count"].get<std::uint64_t>() : 0;
+}
+
+TEST(NodeCoreBadMessage, ASensorSizeAboveTheCapIsADropNotAnAllocation) {
+  NodeCore core(NodeConfig{}, {});  // no calibration, no size: the first event message's size
+  for (const std::uint32_t side : {65535u, 0xFFFFFFFFu}) {
+    const auto b = event_array_bytes(side, side, 3, 1);
+    EXPECT_FALSE(core.push(Stream::kEvents, "dvs_msgs/EventArray", b.data(), b.size())) << side;
+  }
+  EXPECT_EQ(dropped_for(core, "events: sensor size above the cap 4096"), 2u);
+  // The run still takes its size from the first message that has a usable one.
+  const auto ok = event_array_bytes(64, 48, 3, 1);
+  EXPECT_TRUE(core.push(Stream::kEvents, "dvs_msgs/EventArray", ok.data(), ok.size()));
+}
+
+TEST(NodeCoreBadMessage, AStampNearTheEndOfRosTimeIsADrop) {
+  // 4294967295.999999999 s: ros::Time would abort the node on the window ending after it.
+  std::vector<json> windows;
+  NodeOutputs o;
+  o.on_window = [&](const ros_core::WindowOutput& w) { windows.push_back(w.window); };
+  NodeCore core(NodeConfig{}, std::move(o));
+  const auto ok = event_array_bytes(64, 48, 3, 1);
+  EXPECT_TRUE(core.push(Stream::kEvents, "dvs_msgs/EventArray", ok.data(), ok.size()));
+  const auto late = event_array_bytes(64, 48, 2, 0xFFFFFFFFu, 999'000'000u);
+  EXPECT_FALSE(core.push(Stream::kEvents, "dvs_msgs/EventArray", late.data(), late.size()));
+  EXPECT_EQ(dropped_for(core, "events: stamp beyond ROS time's range (2106)"), 2u);
+  // It moved no stream time: the next events are not taken for going backwards.
+  const auto next = event_array_bytes(64, 48, 3, 2);
+  EXPECT_TRUE(core.push(Stream::kEvents, "dvs_msgs/EventArray", next.data(), next.size()));
+  core.finish();
+  for (const json& w : windows) EXPECT_LT(w["t_end"].get<double>(), 10.0) << "no window at the late stamp";
+}
+
 TEST(NodeCoreConfig, OverridesReachTheOptions) {
   NodeConfig c;
   c.width = 64, c.height = 48;

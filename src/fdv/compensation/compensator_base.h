@@ -2,6 +2,7 @@
 /// Internal: what every compensation strategy shares — the undistortion table, the output buffers,
 /// the IMU / odometry summary of the window, the overload guard, and the per-event warp loop.
 /// Include only from compensation/*.cpp and tests.
+/// Thread safety: not thread-safe (output buffers reused per window); one instance per thread.
 #include <cmath>
 #include <limits>
 #include <memory>

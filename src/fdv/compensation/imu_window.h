@@ -11,6 +11,7 @@
 /// the window; a spacing larger than max_gap_ns between the samples that cover the window (or
 /// between the window's ends and the nearest sample) is flagged as a gap: the mean is still
 /// computed from what is there, and the caller reports the flag.
+/// Thread safety: value types and pure functions; may be used from any thread.
 #include <span>
 
 #include "fdv/core/sensor_data.h"

@@ -17,6 +17,7 @@
 /// slot's middle time t_s; inverse depth ρ at the raw pixel (holes: the largest ρ within
 /// hole_fill_radius_px, else the missing-depth policy); X = R_s·[r; 1] + ρ·(t − t0)·v;
 /// (u, v) = K·(X / X_z). t_s of the output is float(t − t0 [ns]) · 1e-9f (the output's definition).
+/// Thread safety: pure functions; may be called from any thread.
 #include <cstdint>
 #include <vector>
 

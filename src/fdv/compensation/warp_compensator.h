@@ -1,6 +1,7 @@
 #pragma once
 /// Internal: the IMU / odometry / depth driven strategies "none", "rotation" (Falanga et al. 2020)
 /// and "rotation_translation" (the paper, eqs. 6-8). Create through make_compensator().
+/// Thread safety: not thread-safe (as CompensatorBase); one instance per thread.
 #include <vector>
 
 #include "fdv/compensation/compensator_base.h"

@@ -15,6 +15,7 @@
 
 #include "fdv/core/config_text.h"
 #include "fdv/core/error.h"
+#include "fdv/core/sensor_data.h"
 
 namespace fdv {
 namespace {
@@ -71,7 +72,7 @@ Eigen::Matrix3d read_rotation(const YAML::Node& node, const std::string& file,
   } else if (node.IsMap() && node["quaternion_xyzw"]) {
     const auto q = read_numbers(node["quaternion_xyzw"], file, key + ".quaternion_xyzw", 4);
     const Eigen::Quaterniond quat(q[3], q[0], q[1], q[2]);
-    if (std::abs(quat.norm() - 1.0) > 1e-3)
+    if (std::abs(quat.norm() - 1.0) > kUnitQuaternionTolerance)
       throw InputError(file, "key " + key, "quaternion is not unit length");
     R = quat.normalized().toRotationMatrix();
   } else {

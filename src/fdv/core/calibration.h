@@ -1,6 +1,7 @@
 #pragma once
 /// Sensor rig calibration: cameras, extrinsics, IMU alignment. Frames: B body, E event camera,
 /// D depth camera, I IMU. T_B_E maps E coordinates into B.
+/// Thread safety: value types and pure functions; may be used from any thread.
 #include <Eigen/Geometry>
 #include <optional>
 #include <string>

@@ -16,6 +16,8 @@
 #include <cstddef>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <set>
 #include <string>
 #include <string_view>
 
@@ -35,12 +37,23 @@ inline void check_config_text(std::string_view text, const std::string& name) {
                          " bytes: not a configuration file");
 }
 
-/// The whole file as text. InputError when it cannot be read, is a folder, or is longer than
-/// kMaxConfigFileBytes (at most that many bytes plus one are read).
-inline std::string read_config_file(const std::string& path) {
+/// InputError(path, "", why) when `path` exists but is not a regular file: opening a FIFO blocks
+/// until a writer comes, a device never ends, and a folder is no file. Every reader of a named
+/// file checks this before opening it. Returns `path`.
+inline const std::string& check_regular_file(const std::string& path) {
   std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) throw InputError(path, "", "is a folder, not a file");
-  std::ifstream in(path, std::ios::binary);
+  const std::filesystem::file_status status = std::filesystem::status(path, ec);
+  if (std::filesystem::exists(status) && !std::filesystem::is_regular_file(status))
+    throw InputError(path, "",
+                     std::filesystem::is_directory(status) ? "is a folder, not a file"
+                                                           : "not a regular file (a FIFO or a device cannot be read)");
+  return path;
+}
+
+/// The whole file as text. InputError when it cannot be read, is not a regular file, or is longer
+/// than kMaxConfigFileBytes (at most that many bytes plus one are read).
+inline std::string read_config_file(const std::string& path) {
+  std::ifstream in(check_regular_file(path), std::ios::binary);
   if (!in) throw InputError(path, "", "cannot open the file");
   std::string text(kMaxConfigFileBytes + 1, '\0');
   in.read(text.data(), static_cast<std::streamsize>(text.size()));
@@ -74,17 +87,44 @@ inline std::string yaml_reason(const YAML::Exception& e) {
   return out;
 }
 
-/// Parses YAML text after check_config_text. Any yaml-cpp error becomes InputError(name,
-/// "line L, column C", reason).
+/// InputError(name, "line L, column C", "duplicate key 'k' ...") for the first key a mapping in
+/// `node` repeats. yaml-cpp keeps every pair of a mapping and node[key] finds the first, so a
+/// repeated key would silently lose its later value. A node reached again through an alias is
+/// walked once (`walked`: the positions of the collections seen), so the walk is as long as the text.
+inline void check_no_duplicate_keys(const YAML::Node& node, const std::string& name, std::set<int>& walked) {
+  if (!node.IsMap() && !node.IsSequence()) return;
+  if (!walked.insert(node.Mark().pos).second) return;
+  if (node.IsSequence()) {
+    for (const YAML::Node& item : node) check_no_duplicate_keys(item, name, walked);
+    return;
+  }
+  std::map<std::string, YAML::Mark> keys;
+  for (const auto& pair : node) {
+    if (pair.first.IsScalar()) {
+      const auto [first, inserted] = keys.emplace(pair.first.Scalar(), pair.first.Mark());
+      if (!inserted)
+        throw InputError(name, yaml_position(pair.first.Mark()),
+                         "duplicate key '" + pair.first.Scalar() + "' (first at " + yaml_position(first->second) + ")");
+    }
+    check_no_duplicate_keys(pair.second, name, walked);
+  }
+}
+
+/// Parses YAML text after check_config_text. Any yaml-cpp error, and a key repeated in a mapping,
+/// becomes InputError(name, "line L, column C", reason).
 inline YAML::Node parse_config_yaml(std::string_view text, const std::string& name) {
   check_config_text(text, name);
+  YAML::Node root;
   try {
-    return YAML::Load(std::string(text));
+    root = YAML::Load(std::string(text));
   } catch (const YAML::DeepRecursion& e) {
     throw InputError(name, yaml_position(e.mark), "nested deeper than the YAML parser's limit");
   } catch (const YAML::Exception& e) {
     throw InputError(name, yaml_position(e.mark), yaml_reason(e));
   }
+  std::set<int> walked;
+  check_no_duplicate_keys(root, name, walked);
+  return root;
 }
 
 /// read(), with a yaml-cpp error thrown by it turned into InputError(name, "line L, column C",

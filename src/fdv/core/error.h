@@ -1,6 +1,7 @@
 #pragma once
 /// Errors at the API boundary. Every message names the file, the position in it (byte offset,
 /// line, or key) and the reason, so a user can act on it.
+/// Thread safety: immutable once thrown; may be read from any thread.
 #include <stdexcept>
 #include <string>
 

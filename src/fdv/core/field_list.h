@@ -26,6 +26,7 @@
 /// Modules need no YAML or JSON library for this: the visitor is a template parameter. The
 /// visitors are here (docs table), in fdv/core/options_yaml.h (load, write) and
 /// fdv/core/options_json.h (write).
+/// Thread safety: stateless templates; a visitor object is used by one thread at a time.
 #include <fmt/format.h>
 
 #include <Eigen/Core>

@@ -4,6 +4,7 @@
 /// the pipeline and the simulator).
 ///
 ///   nlohmann::json j = options_to_json(perception_options);   // {"compensation": {...}, ...}
+/// Thread safety: a JsonWriter is used by one thread at a time; the functions share no state.
 #include <nlohmann/json.hpp>
 
 #include <string_view>

@@ -11,6 +11,7 @@
 /// number"), an unknown key ("unknown key (known here: ...)"), a removed key (its reason), and,
 /// with `validate`, a section whose validate() fails (where = the section; the reason names
 /// durations by their YAML `_ms` keys). A yaml-cpp exception inside becomes one too.
+/// Thread safety: a YamlLoader or YamlWriter is used by one thread at a time.
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 

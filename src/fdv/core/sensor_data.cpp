@@ -2,8 +2,35 @@
 
 #include <algorithm>
 #include <cassert>
+#include <cmath>
+
+#include "fdv/core/camera.h"
 
 namespace fdv {
+
+const char* why_invalid(const ImuSample& s) {
+  if (!valid_time(s.t)) return "time out of range (corrupt)";
+  if (!s.gyro_rad_s.allFinite() || !s.accel_m_s2.allFinite()) return "non-finite value";
+  return nullptr;
+}
+
+const char* why_invalid(const OdometrySample& s) {
+  if (!valid_time(s.t)) return "time out of range (corrupt)";
+  if (!s.p_W_B.allFinite() || !s.q_W_B.coeffs().allFinite() || !s.v_W.allFinite() || !s.omega_B.allFinite())
+    return "non-finite value";
+  if (!(std::abs(s.q_W_B.norm() - 1.0) <= kUnitQuaternionTolerance)) return "quaternion is not unit length";
+  return nullptr;
+}
+
+const char* why_invalid(const DepthFrame& f) {
+  if (!valid_time(f.t)) return "time out of range (corrupt)";
+  if (f.width < 1 || f.height < 1 || f.width > kMaxCameraSide || f.height > kMaxCameraSide)
+    return "image size outside 1..4096";
+  static_assert(kMaxCameraSide == 4096, "the reason above names the cap");
+  if (f.depth_m.size() != static_cast<std::size_t>(f.width) * static_cast<std::size_t>(f.height))
+    return "pixel count differs from width x height";
+  return nullptr;
+}
 
 OdometrySample interpolate_odometry(const std::vector<OdometrySample>& samples, TimeNs t) {
   assert(!samples.empty());

@@ -1,6 +1,7 @@
 #pragma once
 /// Value types for everything the sensors produce. Frames as in the paper: W world, B body,
 /// E event camera, D depth camera, I IMU. A transform T_A_B maps B coordinates into A.
+/// Thread safety: value types and pure functions; may be used from any thread.
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstddef>
@@ -59,6 +60,19 @@ struct OdometrySample {
     return T;
   }
 };
+
+/// How far from 1 a quaternion's norm may be before it is not taken as a rotation (it is then
+/// normalised): 1e-3 covers text files printed with 4 decimals. Every reader and Perception use it.
+inline constexpr double kUnitQuaternionTolerance = 1e-3;
+
+/// Why a sample cannot be used, or nullptr: a time outside valid_time(), a non-finite value, a
+/// quaternion whose norm is not 1 within kUnitQuaternionTolerance (so also a zero one), a depth
+/// frame whose size is outside 1..kMaxCameraSide or disagrees with its pixel count. Readers and
+/// Perception drop such samples with this reason. Depth values themselves are not checked (0,
+/// NaN or negative is a pixel without depth).
+const char* why_invalid(const ImuSample& s);
+const char* why_invalid(const OdometrySample& s);
+const char* why_invalid(const DepthFrame& f);
 
 /// Ground truth of a tracked object (ball): position and velocity of its centre in W.
 struct ObjectState {

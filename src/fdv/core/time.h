@@ -19,6 +19,12 @@ inline constexpr TimeNs kNsPerS = 1'000'000'000;
 constexpr double to_seconds(TimeNs t_ns) { return static_cast<double>(t_ns) * 1e-9; }
 inline TimeNs from_seconds(double t_s) { return static_cast<TimeNs>(std::llround(t_s * 1e9)); }
 
+/// The times a sensor sample may carry: |t| < 2^62 ns (146 years either side of the input's epoch,
+/// Unix time until 2116). Outside, the time is corrupt (e.g. INT64_MIN from a damaged record), and
+/// the difference of two valid times always fits in TimeNs. Readers and Perception drop the rest.
+inline constexpr TimeNs kMaxAbsTimeNs = TimeNs{1} << 62;
+constexpr bool valid_time(TimeNs t) { return t > -kMaxAbsTimeNs && t < kMaxAbsTimeNs; }
+
 /// Checked time arithmetic for values read from files: a hostile stamp must give an error or a
 /// counted drop, never a wrapped time (signed overflow is undefined behaviour).
 inline std::optional<TimeNs> checked_add(TimeNs a, TimeNs b) {

@@ -7,6 +7,7 @@
 ///     report(cut->visible, cut->visible_fraction);     // the part in the frame
 ///     if (cut->center_full) use(*cut->center_full);     // the disc's centre, outside or inside
 ///   }
+/// Thread safety: value types and pure functions; may be used from any thread.
 #include <Eigen/Core>
 #include <optional>
 

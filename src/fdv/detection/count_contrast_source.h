@@ -11,6 +11,7 @@
 ///   CountContrastSource source(options);   // once; allocate(width, height) before the first find()
 ///   std::optional<Candidate> c = source.find(in, res);
 ///   res.diagnostics<CountContrastDiagnostics>(CountContrastSource::kName)   // how close; nullptr: no search
+/// Thread safety: not thread-safe (per-window tables); owned by one Detector, used by one thread.
 #include <optional>
 #include <string_view>
 #include <vector>

@@ -8,6 +8,7 @@
 ///   DenseMotionSource source(options);   // once; allocate(width, height) before the first find()
 ///   std::optional<Candidate> c = source.find(in, res);
 ///   res.diagnostics<DenseMotionDiagnostics>(DenseMotionSource::kName)   // how close; nullptr: no square
+/// Thread safety: not thread-safe (per-window state); owned by one Detector, used by one thread.
 #include <optional>
 #include <string_view>
 

@@ -1,6 +1,7 @@
 #pragma once
 /// One detected moving object in one event window. Plain value type (Eigen only), so tracking
 /// and output code can use it without OpenCV.
+/// Thread safety: value types and pure functions; may be used from any thread.
 #include <Eigen/Core>
 #include <optional>
 #include <string_view>

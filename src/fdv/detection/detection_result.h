@@ -6,6 +6,7 @@
 ///   DetectionResult r = detector.detect(view);
 ///   if (const auto* cc = r.diagnostics<CountContrastDiagnostics>("count_contrast")) use(cc->contrast);
 ///   double ms = r.timings.source_ms("count_contrast");   // 0: not tried in this window
+/// Thread safety: value types; const access from any thread.
 #include <Eigen/Core>
 #include <array>
 #include <cstddef>

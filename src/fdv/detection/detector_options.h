@@ -12,6 +12,7 @@
 /// fields their YAML names (e.g. `dense_motion_radius_px` fills dense_motion.radius_px), and
 /// describe(v, DetectorOptions&) lists the sources' keys beside the shared ones, so files written
 /// before the split still load. validate()'s messages name those keys.
+/// Thread safety: value types and pure functions; may be used from any thread.
 #include <string>
 
 namespace fdv {

@@ -12,6 +12,7 @@
 /// outgrows the initial one on both sides (diverging: no dominant pattern; it could only be
 /// rejected as too large, so the remaining iterations are skipped). (Algorithm 1's line
 /// "J_c ← J(D_P, T)" computes a quantity the paper never uses or defines; it is omitted.)
+/// Thread safety: value types and pure functions; may be used from any thread.
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 #include <cstdint>

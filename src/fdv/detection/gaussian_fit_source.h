@@ -9,6 +9,7 @@
 ///
 /// evaluate_pattern() is one pattern's evaluation, which the track-aided source reuses inside the
 /// tracks' gates. Options: DetectorOptions::gaussian_fit and the shared fields.
+/// Thread safety: not thread-safe (per-window state); owned by one Detector, used by one thread.
 #include <optional>
 #include <span>
 #include <string_view>

@@ -8,6 +8,7 @@
 ///   res.diagnostics<PatternFitDiagnostics>(TrackAidedSource::kName)   // the last pattern's fit
 ///
 /// It has no buffers of its own: the patterns are evaluated on P itself (no blanking).
+/// Thread safety: not thread-safe (per-window state); owned by one Detector, used by one thread.
 #include <optional>
 #include <string_view>
 

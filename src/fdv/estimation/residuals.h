@@ -12,6 +12,7 @@
 ///
 /// The event functor returns false (Ceres rejects the step) where the object would be less than
 /// min_z in front of the camera: the projection is undefined there.
+/// Thread safety: value types and pure functions; may be used from any thread.
 #include <ceres/autodiff_cost_function.h>
 
 #include <Eigen/Core>

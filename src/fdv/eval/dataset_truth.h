@@ -10,6 +10,7 @@
 ///
 /// Pitfall: the object samples are only as dense as the simulator wrote them (1 kHz); object_at()
 /// propagates ballistically from the nearest one, which is exact in free flight only.
+/// Thread safety: value types and pure functions; may be used from any thread.
 #include <map>
 #include <opencv2/core.hpp>
 #include <optional>

@@ -11,6 +11,7 @@
 ///
 /// The windows come from a run in memory (run_experiment) or from a results folder
 /// (read_detections in fdv/results/reader.h).
+/// Thread safety: value types and pure functions; may be used from any thread.
 #include <array>
 #include <map>
 #include <nlohmann/json_fwd.hpp>

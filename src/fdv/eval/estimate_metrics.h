@@ -13,6 +13,7 @@
 /// Records are the converged estimates; `usable` marks those fit to act on (the first-estimate
 /// timing counts only these; APE scores the final converged fit, usable or not, as Table II
 /// compares estimators on their in-sample fits).
+/// Thread safety: value types and pure functions; may be used from any thread.
 #include <map>
 #include <optional>
 #include <utility>

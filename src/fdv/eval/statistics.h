@@ -1,5 +1,6 @@
 #pragma once
 /// Summary statistics for timings and errors, as the tables report them.
+/// Thread safety: value types and pure functions; may be used from any thread.
 #include <nlohmann/json_fwd.hpp>
 #include <span>
 

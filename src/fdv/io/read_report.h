@@ -1,6 +1,7 @@
 #pragma once
 /// What a reader dropped or repaired, counted per reason, with the first place it happened.
 /// Readers never silently change data: anything skipped lands here and `fdv info` prints it.
+/// Thread safety: not thread-safe; const methods may be called concurrently while no thread adds.
 #include <cstdint>
 #include <map>
 #include <nlohmann/json_fwd.hpp>

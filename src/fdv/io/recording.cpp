@@ -28,8 +28,20 @@ bool SensorChunk::empty() const {
 }
 
 void EventSanitizer::append(const Event* first, const Event* last, std::vector<Event>& out,
-                            ReadReport& report, const std::string& where) {
-  std::uint64_t backwards = 0, outside = 0, far_ahead = 0;
+                            ReadReport& report, const EventLocator& where) {
+  // Per reason: the count in this batch and the index of its first event (located once, at the end).
+  struct Dropped {
+    std::uint64_t n = 0;
+    std::size_t first = 0;
+    void add(std::size_t i) {
+      if (n++ == 0) first = i;
+    }
+  } corrupt, outside, backwards;
+  std::uint64_t far_ahead = 0;
+  std::string far_ahead_where;  // the held event's: it may come from an earlier batch
+  auto drop_held = [&] {
+    if (far_ahead++ == 0) far_ahead_where = held_where_;
+  };
   // b follows a: not behind it, at most kMaxForwardJumpNs ahead (unsigned: no overflow).
   const auto follows = [](TimeNs a, TimeNs b) {
     return b >= a && static_cast<std::uint64_t>(b) - static_cast<std::uint64_t>(a) <=
@@ -39,16 +51,20 @@ void EventSanitizer::append(const Event* first, const Event* last, std::vector<E
   TimeNs t_last = last_t_;
   bool started = t_last != std::numeric_limits<TimeNs>::min(), holding = held_.has_value();
   for (const Event* e = first; e != last; ++e) {
-    if (e->x >= width_ || e->y >= height_) {
-      ++outside;
+    const auto i = static_cast<std::size_t>(e - first);
+    if (!valid_time(e->t)) [[unlikely]] {
+      corrupt.add(i);
+    } else if (e->x >= width_ || e->y >= height_) {
+      outside.add(i);
     } else if (e->t < t_last) {
-      ++backwards;
+      backwards.add(i);
     } else if (holding || (started && !follows(t_last, e->t))) [[unlikely]] {
       if (!holding) {  // the class comment: held until the next event decides
         held_ = *e;
+        held_where_ = where(i);
         holding = true;
       } else if (follows(t_last, e->t)) {  // the held time was corrupt
-        ++far_ahead;
+        drop_held();
         held_.reset();
         holding = false;
         t_last = e->t;
@@ -60,8 +76,9 @@ void EventSanitizer::append(const Event* first, const Event* last, std::vector<E
         t_last = e->t;
         out.push_back(*e);
       } else {  // far ahead of both: the older one cannot be right
-        ++far_ahead;
+        drop_held();
         held_ = *e;
+        held_where_ = where(i);
       }
     } else {
       t_last = e->t;
@@ -70,9 +87,10 @@ void EventSanitizer::append(const Event* first, const Event* last, std::vector<E
     }
   }
   last_t_ = t_last;
-  if (outside) report.drop("event pixel outside the sensor", where, outside);
-  if (backwards) report.drop("event timestamp went backwards", where, backwards);
-  if (far_ahead) report.drop("event time far ahead of the stream", where, far_ahead);
+  if (corrupt.n) report.drop("event time out of range (corrupt)", where(corrupt.first), corrupt.n);
+  if (outside.n) report.drop("event pixel outside the sensor", where(outside.first), outside.n);
+  if (backwards.n) report.drop("event timestamp went backwards", where(backwards.first), backwards.n);
+  if (far_ahead) report.drop("event time far ahead of the stream", far_ahead_where, far_ahead);
 }
 
 }  // namespace fdv

@@ -18,6 +18,7 @@
 ///    tail) is dropped and counted so the rest of the file stays usable.
 /// Not thread-safe; one reader per thread.
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <optional>
@@ -94,8 +95,13 @@ class RecordingReader {
 std::unique_ptr<RecordingReader> open_recording(const std::string& path,
                                                 const ReaderOptions& options = {});
 
-/// Drops events that break the stream contract (time going backwards, pixel outside the
-/// sensor) and counts them in `report`. Readers run every decoded batch through it.
+/// Where the i-th event of a batch is in the input ("byte 1600024", "line 17"): a drop's first
+/// position names the exact record, not the batch.
+using EventLocator = std::function<std::string(std::size_t index)>;
+
+/// Drops events that break the stream contract (a corrupt time outside valid_time(), time going
+/// backwards, pixel outside the sensor) and counts them in `report`. Readers run every decoded
+/// batch through it.
 /// An event more than kMaxForwardJumpNs after the last one kept is held until the next event
 /// decides (a single corrupt time far ahead would otherwise make every later event "go
 /// backwards"): if that event follows the last kept time (not behind it, at most the same span
@@ -106,15 +112,16 @@ class EventSanitizer {
  public:
   static constexpr TimeNs kMaxForwardJumpNs = 1'000'000'000;
   EventSanitizer(int width, int height) : width_(width), height_(height) {}
-  /// Appends the valid events of [first, last) to `out`; `where` locates the batch for the report.
+  /// Appends the valid events of [first, last) to `out`; `where` locates each for the report.
   void append(const Event* first, const Event* last, std::vector<Event>& out, ReadReport& report,
-              const std::string& where);
+              const EventLocator& where);
   TimeNs last_time() const { return last_t_; }
 
  private:
   int width_, height_;
   TimeNs last_t_ = std::numeric_limits<TimeNs>::min();
   std::optional<Event> held_;
+  std::string held_where_;
 };
 
 }  // namespace fdv

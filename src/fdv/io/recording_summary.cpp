@@ -44,6 +44,7 @@ nlohmann::json summarize_recording(RecordingReader& reader) {
   if (events.count) {
     j["first_t_s"] = to_seconds(events.first);
     j["last_t_s"] = to_seconds(events.last);
+    // No overflow: readers hand out only valid_time() times, whose differences fit (core/time.h).
     j["duration_s"] = to_seconds(events.last - events.first);
   }
   j["imu"] = imu.to_json();

@@ -7,8 +7,8 @@
 ///   imu.take_until(chunk.events.back().t, SIZE_MAX, chunk.imu, report);
 ///
 /// `parse` turns the fields of one row into an item or returns a short reason for dropping the
-/// row. Rows that fail to parse, or whose time goes backwards, are dropped and counted in the
-/// report as "<name>: <reason>" with "<path>:line N". A missing file is an absent stream
+/// row. Rows that fail to parse, whose time is corrupt (not valid_time) or goes backwards, are
+/// dropped and counted in the report as "<name>: <reason>" with "<path>:line N". A missing file is an absent stream
 /// (present() == false), not an error. Not thread-safe.
 #include <filesystem>
 #include <functional>
@@ -69,6 +69,8 @@ class TableStream {
       const std::string where = lines_->path() + ":" + lines_->where();
       if (!why.empty()) {
         report.drop(name_ + ": " + why, where);
+      } else if (!valid_time(item.t)) {
+        report.drop(name_ + ": time out of range (corrupt)", where);
       } else if (item.t < last_t_) {
         report.drop(name_ + ": timestamp went backwards", where);
       } else {

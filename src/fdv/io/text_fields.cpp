@@ -4,6 +4,7 @@
 #include <cmath>
 #include <fstream>
 
+#include "fdv/core/config_text.h"
 #include "fdv/core/error.h"
 
 namespace fdv {
@@ -16,7 +17,7 @@ std::string_view trim(std::string_view s) {
 }  // namespace
 
 LineReader::LineReader(const std::string& path)
-    : path_(path), in_(std::make_unique<std::ifstream>(path, std::ios::binary)) {
+    : path_(path), in_(std::make_unique<std::ifstream>(check_regular_file(path), std::ios::binary)) {
   if (!*in_) throw InputError(path, "", "cannot open file");
 }
 

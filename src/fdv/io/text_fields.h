@@ -1,6 +1,7 @@
 #pragma once
 /// Line-by-line reading of numeric text tables (CSV, space-separated), streaming, with exact
 /// integer timestamps: a time never passes through a double, so nanoseconds since 1970 stay exact.
+/// Thread safety: a LineReader is used by one thread; the functions are pure.
 #include <cstdint>
 #include <fstream>
 #include <istream>

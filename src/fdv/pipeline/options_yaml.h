@@ -15,6 +15,7 @@
 /// where the option went) or options that fail validate() throw InputError(file,
 /// "key <section>.<key>", reason); validate() messages name the YAML keys. No yaml-cpp exception
 /// escapes. The key tables are in docs/DETECTION.md and docs/ESTIMATION.md (`fdv options`).
+/// Thread safety: pure functions; may be called from any thread.
 #include <nlohmann/json.hpp>
 
 #include <string>

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <iterator>
 
 #include <fmt/format.h>
 
@@ -143,7 +144,23 @@ void Perception::enqueue(const EventWindow& w) {
   pending_windows_.push_back(std::move(p));
 }
 
+void Perception::drop_input(const char* stream, const char* why, std::uint64_t index, TimeNs t, std::uint64_t n) {
+  const std::string reason = std::string(stream) + ": " + why;
+  input_report_.drop(reason, std::string(stream) + " " + std::to_string(index) + " (t " + std::to_string(t) + " ns)", n);
+  warn_once("dropped " + reason, "pushed " + reason + ": dropped (further ones counted in the input report)");
+}
+
 void Perception::push_events(std::span<const Event> events) {
+  const std::uint64_t first_index = events_pushed_;
+  events_pushed_ += events.size();
+  const auto corrupt = [](const Event& e) { return !valid_time(e.t); };
+  if (const auto bad = std::find_if(events.begin(), events.end(), corrupt); bad != events.end()) {
+    valid_events_.clear();
+    std::remove_copy_if(events.begin(), events.end(), std::back_inserter(valid_events_), corrupt);
+    drop_input("event", "time out of range (corrupt)", first_index + static_cast<std::uint64_t>(bad - events.begin()),
+               bad->t, events.size() - valid_events_.size());
+    events = valid_events_;
+  }
   if (events.empty()) return;
   counters_.events += events.size();
   windower_.push(events, [this](const EventWindow& w) { enqueue(w); });
@@ -152,6 +169,8 @@ void Perception::push_events(std::span<const Event> events) {
 }
 
 void Perception::push_imu(const ImuSample& sample) {
+  if (const char* why = why_invalid(sample)) return drop_input("imu", why, imu_pushed_++, sample.t);
+  ++imu_pushed_;
   if (!imu_.empty() && sample.t < imu_.back().t) {
     ++counters_.imu_out_of_order;
     return;
@@ -164,18 +183,23 @@ void Perception::push_imu(const ImuSample& sample) {
 }
 
 void Perception::push_odometry(const OdometrySample& sample) {
+  if (const char* why = why_invalid(sample)) return drop_input("odometry", why, odometry_pushed_++, sample.t);
+  ++odometry_pushed_;
   if (!odometry_.empty() && sample.t < odometry_.back().t) {
     ++counters_.odometry_out_of_order;
     return;
   }
   ++counters_.odometry;
   odometry_.push_back(sample);
+  odometry_.back().q_W_B.normalize();
   trim_history(odometry_);
   advance_stream_time(sample.t);
   process_ready(false);
 }
 
 void Perception::push_depth(const DepthFrame& frame) {
+  if (const char* why = why_invalid(frame)) return drop_input("depth", why, depth_pushed_++, frame.t);
+  ++depth_pushed_;
   ++counters_.depth_frames;
   if (!registrar_) {
     warn_once("no depth camera", "depth frames given but the calibration has no depth camera: ignored");

@@ -54,6 +54,7 @@
 #include "fdv/estimation/collision.h"
 #include "fdv/estimation/collision_risk.h"
 #include "fdv/estimation/trajectory_estimator.h"
+#include "fdv/io/read_report.h"
 #include "fdv/pipeline/event_windower.h"
 #include "fdv/tracking/looming.h"
 #include "fdv/tracking/tracker.h"
@@ -282,6 +283,10 @@ class Perception {
   Perception(const Calibration& calibration, PerceptionOptions options, PerceptionCallbacks callbacks);
   ~Perception();
 
+  /// Samples are checked as the readers check them: an event, IMU sample, pose or depth frame
+  /// that why_invalid() (fdv/core/sensor_data.h) refuses, or whose time is not valid_time(), is
+  /// dropped and counted in input_report() (and warned about once per reason); a dropped sample
+  /// changes nothing else. A pose's quaternion within kUnitQuaternionTolerance is normalised.
   void push_events(std::span<const Event> events);
   void push_imu(const ImuSample& sample);
   void push_odometry(const OdometrySample& sample);
@@ -290,6 +295,9 @@ class Perception {
   void finish();
 
   const PerceptionCounters& counters() const { return counters_; }
+  /// The pushed samples dropped as invalid, by reason, with the first one's stream, index among
+  /// the samples of that stream pushed so far (from 0) and time, as a reader reports its drops.
+  const ReadReport& input_report() const { return input_report_; }
   const Calibration& calibration() const { return calibration_; }
   const Tracker& tracker() const { return tracker_; }
 
@@ -358,6 +366,9 @@ class Perception {
   /// fusion estimate, the pose is unknown or the prediction is behind the camera.
   std::optional<double> trajectory_mahalanobis2(const TrajectoryEstimate& est, const TrackerDetection& d) const;
   void warn_once(const std::string& key, const std::string& message);
+  /// Counts `n` pushed samples dropped as invalid (input_report_), the first the stream's
+  /// `index`-th push, at time t.
+  void drop_input(const char* stream, const char* why, std::uint64_t index, TimeNs t, std::uint64_t n = 1);
 
   Calibration calibration_;
   PerceptionOptions options_;
@@ -383,6 +394,9 @@ class Perception {
   TimeNs processed_until_ = std::numeric_limits<TimeNs>::min();  ///< t_end of the last window done
   std::vector<std::string> warned_;
   PerceptionCounters counters_;
+  ReadReport input_report_;
+  std::uint64_t events_pushed_ = 0, imu_pushed_ = 0, odometry_pushed_ = 0, depth_pushed_ = 0;
+  std::vector<Event> valid_events_;  ///< push_events' copy when some events are dropped
 };
 
 }  // namespace fdv

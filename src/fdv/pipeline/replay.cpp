@@ -31,7 +31,10 @@ PerceptionCounters replay(std::unique_ptr<RecordingReader> reader, const Calibra
     }
   }
   perception.finish();
-  if (reader_report) *reader_report = merger.source(0).report();
+  if (reader_report) {  // the pipeline's own drops beside the reader's: one report of the input
+    *reader_report = merger.source(0).report();
+    reader_report->merge(perception.input_report());
+  }
   return perception.counters();
 }
 

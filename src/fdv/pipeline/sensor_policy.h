@@ -22,6 +22,7 @@
 ///
 /// Throws ConfigError when there is neither a calibration nor a sensor size, or when the
 /// calibration's image size is not the sensor's.
+/// Thread safety: value types and pure functions; may be used from any thread.
 #include <optional>
 #include <string>
 #include <vector>

@@ -18,6 +18,7 @@
 /// Optional members are keys written only in some lines. The reader requires the keys evaluation
 /// depends on (marked "required") and takes the default for another key a line lacks (results
 /// written by an older fdv).
+/// Thread safety: value types and pure functions; may be used from any thread.
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>

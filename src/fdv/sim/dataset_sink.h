@@ -6,6 +6,7 @@
 ///   DatasetSink sink(out_dir, sim.calibration());
 ///   auto summary = sim.run(sink);
 ///   sink.finish(sim.manifest_yaml());
+/// Thread safety: not thread-safe; the Simulator calls it from one thread.
 #include <string>
 
 #include "fdv/io/dataset/dataset_writer.h"

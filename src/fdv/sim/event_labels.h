@@ -11,6 +11,7 @@
 ///
 ///   EventLabelWriter w(dir + "/truth/event_labels.bin");  w.append(labels);  w.finish();
 ///   std::vector<std::int16_t> labels = read_event_labels(dir);
+/// Thread safety: not thread-safe; one writer per file, used by one thread.
 #include <cstdint>
 #include <fstream>
 #include <span>

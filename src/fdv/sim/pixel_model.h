@@ -11,6 +11,7 @@
 /// follows the input and is latched at the end of the period (so a steady ramp gives one event
 /// per refractory period + C / |dL/dt|, as a real pixel does); with refractory 0 the reference
 /// simply steps by ±C. Allocation-free; pure function of its arguments and the memory.
+/// Thread safety: value types and pure functions; may be used from any thread.
 #include <cmath>
 #include <cstdint>
 #include <limits>

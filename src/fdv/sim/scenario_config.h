@@ -13,6 +13,7 @@
 /// Frames: W world (z up, gravity -z), B body (x forward, y left, z up), E event camera and
 /// D depth camera (x right, y down, z along the optical axis), I IMU. Times are seconds in the
 /// configuration and int64 nanoseconds (TimeNs) everywhere else.
+/// Thread safety: value types; const access from any thread.
 #include <yaml-cpp/yaml.h>
 
 #include <Eigen/Core>

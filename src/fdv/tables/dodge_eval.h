@@ -14,6 +14,8 @@
 /// scene when the ball reaches the camera). A throw is
 /// a threat when its true miss distance without a manoeuvre is below the safety radius, a
 /// non-threat above 1 m, a near miss in between.
+/// Thread safety: run_dodge_eval may be called from any thread; it runs `jobs` throws at once,
+/// each on its own thread with its own state.
 #include <cstdint>
 #include <map>
 #include <nlohmann/json.hpp>

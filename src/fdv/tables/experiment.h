@@ -12,6 +12,7 @@
 ///   detection_metrics(truth, run.windows);  summarize(run.relative_contrast);
 ///
 /// Timings are wall-clock and depend on the machine's load; they are never unit-tested.
+/// Thread safety: a run shares no state with another; runs may go on in parallel threads.
 #include <cstdint>
 #include <memory>
 #include <string>

@@ -13,6 +13,8 @@
 /// Table II (paper §V-C): APE of the final fusion and monocular estimates of the ball on
 /// fast_forward / swing, and on hover_headon how soon the first fusion estimate came and how well
 /// it predicted the closest approach. Every figure pools all seeds (see the notes in the Markdown).
+/// Thread safety: no state between calls, but two calls sharing a cache_dir from two threads may
+/// simulate the same dataset into it at once: one table at a time per cache folder.
 #include <cstdint>
 #include <optional>
 #include <string>

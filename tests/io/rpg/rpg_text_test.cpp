@@ -1,6 +1,7 @@
 // RPG Event-Camera Dataset text layout. Every folder here is written by the test with values
 // known by hand; expectations are those values, never the reader's output fed back.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <filesystem>
 #include <fstream>
@@ -232,6 +233,23 @@ TEST(RpgText, EventsOnlyFolderAndStreamingInBoundedChunks) {
   for (const auto& c : all.chunks) EXPECT_EQ(c.events.size(), 1000u);
   ASSERT_EQ(all.events.size(), 10'000u);
   EXPECT_EQ(all.events[1234], (Event{100'001'234, 1234 % 240, 1234 % 180, false}));
+}
+
+TEST(RpgText, AFifoOrAFolderInPlaceOfAFileIsAnErrorNotAHang) {
+  // Opening a FIFO blocks until a writer comes: the reader must refuse it before opening.
+  for (const char* name : {"events.txt", "imu.txt", "groundtruth.txt", "calib.txt"}) {
+    const auto dir = test::scratch_dir(std::string("rpg_fifo_") + name);
+    write(dir, "events.txt", "0.1 1 2 1\n");
+    const std::string path = dir + "/" + name;
+    std::filesystem::remove(path);
+    ASSERT_EQ(mkfifo(path.c_str(), 0600), 0) << name;
+    EXPECT_EQ(test::input_error_of(path, [&] { open_recording(dir); }),
+              " | not a regular file (a FIFO or a device cannot be read)")
+        << name;
+    std::filesystem::remove(path);
+    std::filesystem::create_directory(path);
+    EXPECT_EQ(test::input_error_of(path, [&] { open_recording(dir); }), " | is a folder, not a file") << name;
+  }
 }
 
 TEST(RpgText, BadCalibrationIsAnErrorWithFileAndLine) {

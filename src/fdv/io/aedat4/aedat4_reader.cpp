@@ -51,8 +51,8 @@ constexpr const char* kPacketTooLarge = "decompressed packet larger than the 64 
 /// IMU samples held back (waiting for the events to reach their time) before they are handed
 /// out anyway; bounds memory for files with few or no events.
 constexpr std::size_t kMaxPendingImu = 1 << 16;
-/// Largest |time| in microseconds that converts to int64 nanoseconds without overflow.
-constexpr std::int64_t kMaxTimeUs = std::numeric_limits<std::int64_t>::max() / kNsPerUs;
+/// Largest |time| in microseconds that is a valid time in nanoseconds (fdv/core/time.h).
+constexpr std::int64_t kMaxTimeUs = kMaxAbsTimeNs / kNsPerUs;
 
 enum class Compression { kNone = 0, kLz4 = 1, kLz4High = 2, kZstd = 3, kZstdHigh = 4 };
 
@@ -533,14 +533,18 @@ class Aedat4Reader final : public RecordingReader {
     const auto* elements = packet.elements();
     if (!elements || elements->size() == 0) return;
     raw_.resize(elements->size());
-    std::size_t k = 0;
+    index_.resize(elements->size());
+    std::size_t k = 0, i = 0;
     std::uint64_t out_of_range = 0;
+    std::size_t first_out_of_range = 0;
     for (const aedat4::fb::Event* e : *elements) {
       const std::int64_t t_us = e->timestamp_us();
       if (t_us > kMaxTimeUs || t_us < -kMaxTimeUs) {
-        ++out_of_range;
+        if (out_of_range++ == 0) first_out_of_range = i;
+        ++i;
         continue;
       }
+      index_[k] = i++;
       Event& r = raw_[k++];
       r.t = t_us * kNsPerUs;
       // int16 -> uint16: a negative coordinate becomes >= 32768, outside any sensor, and is
@@ -549,9 +553,10 @@ class Aedat4Reader final : public RecordingReader {
       r.y = static_cast<std::uint16_t>(e->y());
       r.polarity = e->polarity();
     }
-    const std::string where = at_byte(at);
-    if (out_of_range) report_.drop("event timestamp out of range", where, out_of_range);
-    sanitizer_->append(raw_.data(), raw_.data() + k, pending_events_, report_, where);
+    const auto where = [&](std::size_t element) { return at_byte(at) + ", event " + std::to_string(element); };
+    if (out_of_range) report_.drop("event timestamp out of range", where(first_out_of_range), out_of_range);
+    sanitizer_->append(raw_.data(), raw_.data() + k, pending_events_, report_,
+                       [&](std::size_t j) { return where(index_[j]); });
   }
 
   void decode_imu(const aedat4::fb::ImuPacket& packet, std::uint64_t at) {
@@ -594,6 +599,7 @@ class Aedat4Reader final : public RecordingReader {
   Decompressor decompressor_;
   std::vector<std::uint8_t> payload_, inflated_;
   std::vector<Event> raw_;
+  std::vector<std::size_t> index_;  ///< raw_[k] is element index_[k] of its packet
   std::optional<EventSanitizer> sanitizer_;
   std::vector<Event> pending_events_;
   std::size_t event_pos_ = 0;

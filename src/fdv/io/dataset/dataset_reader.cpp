@@ -39,7 +39,7 @@ std::string parse_pose(const std::vector<std::string_view>& f, OdometrySample& s
   if (auto why = parse_numbers(f, 14, s.t, v); !why.empty()) return why;
   s.p_W_B = {v[0], v[1], v[2]};
   s.q_W_B = Eigen::Quaterniond(v[6], v[3], v[4], v[5]);
-  if (std::abs(s.q_W_B.norm() - 1.0) > 1e-3) return "quaternion is not unit length";
+  if (std::abs(s.q_W_B.norm() - 1.0) > kUnitQuaternionTolerance) return "quaternion is not unit length";
   s.q_W_B.normalize();
   s.v_W = {v[7], v[8], v[9]};
   s.omega_B = {v[10], v[11], v[12]};
@@ -136,6 +136,7 @@ class EventRecords {
     left_ -= got;
     read_ += got;
     raw_.resize(got);
+    record_.resize(got);
     std::size_t kept = 0;
     for (std::size_t i = 0; i < got; ++i) {  // field by field: the polarity byte may be corrupt
       const char* r = bytes_.data() + i * 16;
@@ -145,6 +146,7 @@ class EventRecords {
         report.drop("events.bin: polarity not 0 or 1, or padding not zero", "byte " + std::to_string(offset + i * 16));
         continue;
       }
+      record_[kept] = i;
       Event& e = raw_[kept++];
       std::memcpy(&e.t, r, 8);
       std::memcpy(&e.x, r + 8, 2);
@@ -152,7 +154,8 @@ class EventRecords {
       e.polarity = r[12] != 0;
     }
     raw_.resize(kept);
-    sanitizer_.append(raw_.data(), raw_.data() + kept, out, report, "byte " + std::to_string(offset));
+    sanitizer_.append(raw_.data(), raw_.data() + kept, out, report,
+                      [&](std::size_t k) { return "byte " + std::to_string(offset + record_[k] * 16); });
     if (!raw_.empty()) last_t_ = std::max(last_t_, raw_.back().t);
   }
 
@@ -163,6 +166,7 @@ class EventRecords {
   std::uint64_t left_ = 0, read_ = 0;
   std::vector<char> bytes_;
   std::vector<Event> raw_;
+  std::vector<std::size_t> record_;  ///< raw_[k] is record record_[k] of the batch
   TimeNs last_t_ = std::numeric_limits<TimeNs>::min();
 };
 
@@ -182,15 +186,8 @@ std::vector<T> read_all(CsvStream<T>&& stream, ReadReport& report) {
 /// FIFO blocks until a writer comes, a device never ends, and a folder is no table.
 const std::string& with_regular_files(const std::string& dir) {
   for (const char* name : {kDatasetManifest, "calibration.yaml", "events.bin", "imu.csv", "odometry.csv",
-                           "depth.csv", "truth/objects.csv"}) {
-    const fs::path path = fs::path(dir) / name;
-    std::error_code ec;
-    const fs::file_status status = fs::status(path, ec);
-    if (fs::exists(status) && !fs::is_regular_file(status))
-      throw InputError(path.string(), "",
-                       fs::is_directory(status) ? "is a folder, not a file"
-                                                : "not a regular file (a FIFO or a device cannot be read)");
-  }
+                           "depth.csv", "truth/objects.csv"})
+    check_regular_file((fs::path(dir) / name).string());
   return dir;
 }
 

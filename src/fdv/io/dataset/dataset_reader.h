@@ -12,6 +12,7 @@
 ///   DIR/truth/body.csv      same columns as odometry.csv      (optional true vehicle motion)
 ///
 /// Every stream file is optional except events.bin.
+/// Thread safety: the reader is not thread-safe (one per thread, as every RecordingReader).
 #include <cstdint>
 #include <istream>
 #include <memory>

@@ -230,8 +230,9 @@ class RawReader final : public RecordingReader {
       account(counts, slice_byte);
       if (offset_ns_ != 0) shift(n, slice_byte);
       if (n > 0)
-        sanitizer_.append(raw_.data(), raw_.data() + n, chunk.events, report_,
-                          "byte " + std::to_string(slice_byte));
+        sanitizer_.append(raw_.data(), raw_.data() + n, chunk.events, report_, [&](std::size_t i) {
+          return "byte " + std::to_string(slice_byte) + " (words from there), event " + std::to_string(i) + " decoded";
+        });
       pos_ += consumed;
     }
     if (chunk.events.empty()) {

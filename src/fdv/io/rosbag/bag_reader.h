@@ -3,6 +3,7 @@
 /// bag's messages (in bag time order) into SensorChunks. The storage layer (rosbag::View for
 /// ROS 1, SQLite for ROS 2) only hands over raw message bytes one at a time.
 /// Internal to src/fdv/io/rosbag; users call open_ros1_bag / open_ros2_bag (rosbag_reader.h).
+/// Thread safety: not thread-safe; one reader per thread (the RecordingReader contract).
 #include <array>
 #include <optional>
 #include <string>

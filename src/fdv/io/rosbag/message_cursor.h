@@ -14,6 +14,7 @@
 /// Both cursors have the same interface so that one decoder template serves both bag kinds.
 /// Reading past the end never reads out of bounds: it sets ok() to false and returns zeros, and
 /// the decoder checks ok() once at the end (no exceptions or allocation per field).
+/// Thread safety: a cursor is used by one thread; the bytes it reads must not change meanwhile.
 #include <bit>
 #include <cstddef>
 #include <cstdint>

@@ -1,8 +1,10 @@
 #include "fdv/io/rosbag/message_decoder.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
+#include "fdv/core/camera.h"
 #include "fdv/io/rosbag/message_cursor.h"
 
 namespace fdv::bag {
@@ -32,6 +34,10 @@ bool MessageDecoder::accept_time(StreamKind stream, TimeNs& t, std::optional<Tim
     }
     t = *fallback_time;
     report.repair(std::string(to_string(stream)) + ": header stamp is zero, bag time used", where);
+  }
+  if (latest_ && t > latest_->first) {
+    report.drop(std::string(to_string(stream)) + ": " + latest_->second, where);
+    return false;
   }
   TimeNs& last = last_t_[index(stream)];
   if (t < last) {
@@ -71,24 +77,40 @@ const char* MessageDecoder::decode_with(Cursor& c, StreamKind stream, MessageTyp
   switch (stream) {
     case StreamKind::kEvents: {
       raw_events_.clear();
-      auto size_fits = [&](std::uint32_t width, std::uint32_t height) {
+      // Why the message's declared sensor size is refused, or nullptr. Above the cap of any
+      // camera it is not taken as the size of a run (image buffers are allocated from it).
+      auto size_refused = [&](std::uint32_t width, std::uint32_t height) -> const char* {
+        static_assert(kMaxCameraSide == 4096, "the reason below names the cap");
+        if (width > kMaxCameraSide || height > kMaxCameraSide) return "events: sensor size above the cap 4096";
         message_size_ = {static_cast<int>(width), static_cast<int>(height)};
-        return !required_size_ || *required_size_ == message_size_;
+        if (required_size_ && *required_size_ != message_size_)
+          return "events: the message's sensor size is not the calibration's";
+        return nullptr;
       };
-      constexpr const char* kWrongSize = "events: the message's sensor size is not the calibration's";
       if (type == MessageType::kEventPacket) {
         EventPacketView p;
         why = decode_event_packet(c, p);
-        if (!why && !size_fits(p.width, p.height)) why = kWrongSize;
+        if (!why) why = size_refused(p.width, p.height);
         if (!why) packet_decoder_.decode(p, raw_events_, report, where);
       } else {
         EventArrayHeader h;
         why = decode_event_array(c, h, raw_events_);
-        if (!why && !size_fits(h.width, h.height)) why = kWrongSize;
+        if (!why) why = size_refused(h.width, h.height);
+      }
+      if (!why && latest_) {
+        const auto late = [&](const Event& e) { return e.t > latest_->first; };
+        const auto kept = std::remove_if(raw_events_.begin(), raw_events_.end(), late);
+        if (kept == raw_events_.begin() && kept != raw_events_.end()) {  // all of them: the message is dropped
+          report.drop("events: " + latest_->second, where, raw_events_.size());
+          break;
+        }
+        if (kept != raw_events_.end())
+          report.drop("events: " + latest_->second, where, static_cast<std::uint64_t>(raw_events_.end() - kept));
+        raw_events_.erase(kept, raw_events_.end());
       }
       if (!why) {
-        sanitizer_.append(raw_events_.data(), raw_events_.data() + raw_events_.size(), out.events,
-                          report, where);
+        sanitizer_.append(raw_events_.data(), raw_events_.data() + raw_events_.size(), out.events, report,
+                          [&](std::size_t i) { return where + ", event " + std::to_string(i); });
         accepted = true;
       }
       break;
@@ -119,7 +141,7 @@ const char* MessageDecoder::decode_with(Cursor& c, StreamKind stream, MessageTyp
       if (type == MessageType::kTransformStamped) why = decode_transform_stamped(c, s);
       if (why) break;
       if (stream == StreamKind::kOdometry) {
-        if (std::abs(s.q_W_B.norm() - 1.0) > 1e-3) {
+        if (std::abs(s.q_W_B.norm() - 1.0) > kUnitQuaternionTolerance) {
           why = "odometry: quaternion is not unit length";
           break;
         }

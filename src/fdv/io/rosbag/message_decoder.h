@@ -40,6 +40,10 @@ class MessageDecoder {
   /// When set, an event message that declares another sensor size is dropped whole (a live
   /// source checked against its calibration).
   void require_event_message_size(int width, int height) { required_size_ = {width, height}; }
+  /// When set, a record or event stamped after `latest` is dropped as `why` (before the stream's
+  /// order checks, so it moves no stream's time): a live node whose outputs must stay within ROS
+  /// time's range.
+  void set_latest_time(TimeNs latest, std::string why) { latest_ = std::pair(latest, std::move(why)); }
   /// The sensor size the last decoded event message declared (0 x 0 before any).
   std::pair<int, int> event_message_size() const { return message_size_; }
 
@@ -66,6 +70,7 @@ class MessageDecoder {
   std::array<TimeNs, 5> last_t_;
   std::optional<std::pair<int, int>> required_size_;
   std::pair<int, int> message_size_{0, 0};
+  std::optional<std::pair<TimeNs, std::string>> latest_;
 };
 
 }  // namespace fdv::bag

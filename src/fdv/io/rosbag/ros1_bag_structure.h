@@ -8,6 +8,7 @@
 ///   uint32 header_len, header (fields: uint32 len, "name=value"), uint32 data_len, data;
 /// the header's `op` field gives the kind: bag header 0x03, chunk 0x05, connection 0x07, chunk
 /// info 0x06, index data 0x04, message data 0x02 (inside chunks, with connection records).
+/// Thread safety: const methods may be called concurrently once built.
 #include <cstdint>
 #include <map>
 #include <optional>

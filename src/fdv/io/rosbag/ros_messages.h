@@ -9,6 +9,7 @@
 ///
 /// Every decoder returns nullptr on success or a short fixed reason for the read report.
 /// Header stamps are returned as they are (0 included); the reader decides what to do with 0.
+/// Thread safety: value types and pure functions; may be used from any thread.
 #include <cstdint>
 #include <string_view>
 #include <vector>

@@ -54,7 +54,7 @@ std::string parse_groundtruth(const std::vector<std::string_view>& f, OdometrySa
   if (auto why = parse_row(f, 8, s.t, v); !why.empty()) return why;
   s.p_W_B = {v[0], v[1], v[2]};
   s.q_W_B = Eigen::Quaterniond(v[6], v[3], v[4], v[5]);
-  if (std::abs(s.q_W_B.norm() - 1.0) > 1e-3) return "quaternion is not unit length";
+  if (std::abs(s.q_W_B.norm() - 1.0) > kUnitQuaternionTolerance) return "quaternion is not unit length";
   s.q_W_B.normalize();
   s.v_W.setZero();
   s.omega_B.setZero();
@@ -112,7 +112,7 @@ class EventLines {
   /// text is exhausted.
   bool read(std::size_t max_lines, std::vector<Event>& out, ReadReport& report) {
     raw_.clear();
-    std::size_t first_line = 0;
+    line_of_.clear();
     std::string_view line;
     bool more = true;
     while (raw_.size() < max_lines) {
@@ -120,19 +120,18 @@ class EventLines {
         more = false;
         break;
       }
-      if (first_line == 0) first_line = lines_.line_number();
       split_fields(line, ' ', fields_);
       Event e;
       if (const char* why = parse_event(fields_, e)) {
         report.drop(std::string("events: ") + why, lines_.path() + ":" + lines_.where());
       } else {
         raw_.push_back(e);
+        line_of_.push_back(lines_.line_number());
       }
     }
     if (!raw_.empty())
       sanitizer_.append(raw_.data(), raw_.data() + raw_.size(), out, report,
-                        lines_.path() + ":lines " + std::to_string(first_line) + "-" +
-                            std::to_string(lines_.line_number()));
+                        [&](std::size_t i) { return lines_.path() + ":line " + std::to_string(line_of_[i]); });
     return more;
   }
 
@@ -141,6 +140,7 @@ class EventLines {
   EventSanitizer sanitizer_;
   std::vector<std::string_view> fields_;
   std::vector<Event> raw_;
+  std::vector<std::uint64_t> line_of_;  ///< the line of each event in raw_
 };
 
 template <typename T>
