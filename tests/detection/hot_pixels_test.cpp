@@ -44,7 +44,7 @@ TEST(HotPixelFilter, ASteadyIsolatedPixelIsHotAfterTheWindowsTheModelGivesAndOnl
     const std::size_t n = ev.size();
     const std::size_t dropped = filter.filter(ev, k);
     SCOPED_TRACE("window " + std::to_string(k));
-    EXPECT_NEAR(filter.firing(30, 20), 1 - std::pow(0.8, static_cast<double>(k + 1)), 1e-5);
+    EXPECT_NEAR(filter.firing(30, 20), 1 - std::pow(0.8, static_cast<double>(k + 1)), 1e-4);  // f is kept in 16 bits
     if (k + 1 < 8) {
       EXPECT_FALSE(filter.is_hot(30, 20));
       EXPECT_EQ(dropped, 0u);
@@ -77,7 +77,7 @@ TEST(HotPixelFilter, ABurstOfNoiseMakesNoPixelHot) {
     EXPECT_EQ(ev.size(), n);
     EXPECT_EQ(filter.hot_pixels(), 0u) << "window " << k;
   }
-  EXPECT_NEAR(filter.firing(40, 40), 0.2 * std::pow(0.8, 19), 1e-6);  // 1 − α, decaying since window 10
+  EXPECT_NEAR(filter.firing(40, 40), 0.2 * std::pow(0.8, 19), 1e-5);  // 1 − α, decaying since window 10
 }
 
 TEST(HotPixelFilter, AFlickeringRegionAndALineOfTextureHaveSpatialSupport) {
@@ -148,7 +148,7 @@ TEST(HotPixelFilter, ALongGapDecaysTheStateAndEventsOutsideTheSensorAreKept) {
   fire(ev, kW + 3, 2, 1000);  // outside: the compensation counts it
   EXPECT_EQ(filter.filter(ev, 1000), 0u);
   EXPECT_EQ(ev.size(), 50u);
-  EXPECT_NEAR(filter.firing(30, 20), 0.2, 1e-6);  // everything before is forgotten: one window's worth
+  EXPECT_NEAR(filter.firing(30, 20), 0.2, 1e-4);  // everything before is forgotten: one window's worth
 }
 
 TEST(HotPixelFilter, InvalidOptionsNameTheirKey) {

@@ -31,13 +31,21 @@ HotPixelFilter::HotPixelFilter(const HotPixelOptions& options, int width, int he
   const std::size_t n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
   state_.resize(n);
   hot_.assign(n, 0);
-  fired_.reserve(n);
+  steady_.reserve(n);
+}
+
+namespace {
+constexpr float kFiringScale = 65535.0f;
 }
 
 float HotPixelFilter::decayed(const PixelState& s) const {
-  if (s.last < 0) return 0;
-  const std::size_t age = static_cast<std::size_t>(now_ - s.last);
-  return age < alpha_pow_.size() ? s.firing * alpha_pow_[age] : 0.0f;
+  const std::size_t age = static_cast<std::uint16_t>(static_cast<std::uint16_t>(now_) - s.last);
+  return age < alpha_pow_.size() ? static_cast<float>(s.firing) / kFiringScale * alpha_pow_[age] : 0.0f;
+}
+
+void HotPixelFilter::forget_old() {
+  for (PixelState& s : state_)
+    if (static_cast<std::uint16_t>(static_cast<std::uint16_t>(now_) - s.last) >= kForgetAge) s.firing = 0;
 }
 
 bool HotPixelFilter::evaluate(std::int32_t pixel) const {
@@ -59,19 +67,27 @@ std::size_t HotPixelFilter::filter(std::vector<Event>& events, std::uint64_t win
   if (now_ < 0) first_window_ = window_index;
   const std::int32_t k = static_cast<std::int32_t>(window_index - first_window_);
   if (k < now_) throw std::logic_error("hot pixel filter: window indices must increase");
+  // Every kForgetAge windows (and after a jump of as many), states that old are zeroed.
+  if (now_ < 0 || k / kForgetAge != now_ / kForgetAge) {
+    now_ = k;
+    forget_old();
+  }
   now_ = k;
 
   // Count this window: f ← f·α^(k − last) + (1 − α) on each pixel's first event.
-  fired_.clear();
+  steady_.clear();
   const float gain = 1.0f - alpha_;
+  const auto this_window = static_cast<std::uint16_t>(k);
+  const auto min_firing = static_cast<float>(options_.min_firing);
   for (const Event& e : events) {
     if (e.x >= width_ || e.y >= height_) continue;
     const std::int32_t p = static_cast<std::int32_t>(e.y) * width_ + e.x;
     PixelState& s = state_[static_cast<std::size_t>(p)];
-    if (s.last == k) continue;
-    s.firing = decayed(s) + gain;
-    s.last = k;
-    fired_.push_back(p);
+    if (s.last == this_window && s.firing != 0) continue;
+    const float f = std::min(1.0f, decayed(s) + gain);
+    s.firing = static_cast<std::uint16_t>(std::lround(f * kFiringScale));
+    s.last = this_window;
+    if (f >= min_firing) steady_.push_back(p);
   }
 
   // The verdicts: the pixels that fired steadily this window, and those hot before (they may have
@@ -80,8 +96,8 @@ std::size_t HotPixelFilter::filter(std::vector<Event>& events, std::uint64_t win
   for (const std::int32_t p : hot_list_) hot_[static_cast<std::size_t>(p)] = 0;
   for (const std::int32_t p : hot_list_)
     if (evaluate(p)) next_hot_.push_back(p);
-  for (const std::int32_t p : fired_)
-    if (state_[static_cast<std::size_t>(p)].firing >= options_.min_firing && evaluate(p)) next_hot_.push_back(p);
+  for (const std::int32_t p : steady_)
+    if (evaluate(p)) next_hot_.push_back(p);
   hot_list_.clear();
   for (const std::int32_t p : next_hot_) {
     std::uint8_t& h = hot_[static_cast<std::size_t>(p)];

@@ -10,7 +10,7 @@
 ///     ...
 ///   }
 ///
-/// Model, per raw pixel p, over the windows k (causal, incremental, memory W·H·9 bytes):
+/// Model, per raw pixel p, over the windows k (causal, incremental, memory W·H·5 bytes):
 ///   f_p ← α·f_p + (1 − α)·[p fired in window k],    α = 1 − 1 / memory_windows,
 /// the pixel's firing fraction (an exponentially decayed share of windows in which it fired,
 /// decayed lazily: O(events) per window). After window k's events are counted, p is hot when
@@ -69,11 +69,16 @@ class HotPixelFilter {
   int windows_to_learn() const;
 
  private:
+  /// 4 bytes, so that a 640x480 sensor's state (1.2 MB) stays in L2: the per-event loop is bound
+  /// by its random reads. A state older than kForgetAge windows is zeroed by a sweep every
+  /// kForgetAge windows, so the 16-bit age never wraps (αⁿ is 0 long before).
   struct PixelState {
-    float firing = 0;           ///< f as of window `last`
-    std::int32_t last = -1;     ///< the window f was last updated in (relative index)
+    std::uint16_t firing = 0;  ///< f · 65535 as of window `last`
+    std::uint16_t last = 0;    ///< the window f was last updated in, mod 2¹⁶
   };
+  static constexpr std::int32_t kForgetAge = 16384;
   float decayed(const PixelState& s) const;
+  void forget_old();
   bool evaluate(std::int32_t pixel) const;
 
   HotPixelOptions options_;
@@ -82,7 +87,7 @@ class HotPixelFilter {
   std::vector<float> alpha_pow_;  ///< αⁿ for n < its size; 0 beyond
   std::vector<PixelState> state_;
   std::vector<std::uint8_t> hot_;  ///< the verdict, per pixel
-  std::vector<std::int32_t> fired_, hot_list_, next_hot_;
+  std::vector<std::int32_t> steady_, hot_list_, next_hot_;  ///< steady_: fired now with f ≥ min_firing
   std::int32_t now_ = -1;  ///< the current window, relative to the first
   std::uint64_t first_window_ = 0;
 };
