@@ -2,6 +2,7 @@
 // the ball is found while it is in flight and the moving person is not reported in its place.
 #include <gtest/gtest.h>
 
+#include <iostream>
 #include <map>
 
 #include "fdv/core/calibration.h"
@@ -56,25 +57,99 @@ TEST(RealRecording, TheThrownBallIsFoundInFlightAndThePersonIsNotReported) {
     EXPECT_LT(index, 10u) << "detection at " << d.center_undistorted.transpose() << " after the ball left";
 }
 
-// davis346_flicker_noise.aedat4 (346x260, 0.13 s, another DAVIS346 than the calibration's): a static
-// workbench where flickering lamps and a screen make most events; nothing moves. The target: a
-// detection in at most 5 % of its windows, so none of its six. Run as `fdv run` runs a recording
-// without a calibration file (pixel coordinates, no compensation).
-TEST(RealRecording, FlickeringLampsAndAScreenAreNoObject) {
-  const std::string path = test::real_data("davis346_flicker_noise.aedat4");
+// The same throw, where the ball leaves through the bottom edge (windows 8-10), labelled by hand
+// in raw pixels: the recording's events in 5 ms slices from the first event, rendered as count
+// images (numpy + matplotlib, grid every 20 px), read by eye. The ball is a ring about 55 px across
+// (x 92-152) falling at ≈ 1.6 px/ms; its leading (bottom) arc reaches the edge (y = 259) at
+// ≈ 0.222 s and its trailing (top) arc at ≈ 0.26 s: 218 at 0.225 s, 235 at 0.2375 s, 252 at 0.25 s.
+// `visible` is the in-view part's box at the window's middle, `in_view` the share of the disc in
+// view at the window's start, middle and end (segment areas of a 55 px disc).
+struct LeavingBallLabel {
+  std::uint64_t window;
+  Box2D visible;
+  double in_view_start, in_view_middle, in_view_end;
+};
+const LeavingBallLabel kBallLeaving[] = {
+    {8, {92, 197, 152, 250}, 1.00, 1.00, 0.97},  // whole; its bottom arc touches the edge at the end
+    {9, {95, 235, 150, 259}, 0.80, 0.41, 0.08},  // cut: ≥ 30 % in view until ≈ 0.241 s
+    {10, {100, 252, 145, 259}, 0.08, 0.0, 0.0},  // the top rim only (< 30 %): not to be found
+};
+
+// fdv eval's rule for an object cut by the border: eligible when ≥ 30 % of it is in view throughout
+// the window (window 8). Window 9, ≥ 30 % in view for its first 64 %, is not found today: the
+// window's detection lies on the streak above the ball (y ≈ 202), 33 px above its visible part
+// (docs/DETECTION.md, "Objects cut by the border"); the test prints what each labelled window got.
+TEST(RealRecording, TheBallLeavingThroughTheBottomEdgeIsFoundWhileAtLeast30PercentIsInView) {
+  const std::string path = test::real_data("davis346_ball_throw_person.aedat4");
+  FDV_REQUIRE_REAL_FILE(path);
+  const Calibration calib = load_calibration(test::real_data("davis346_00000133_calibration.xml"));
+  PerceptionOptions options;
+  options.compensation.method = CompensationMethod::kRotation;
+  std::map<std::uint64_t, std::vector<Detection2D>> detections;
+  PerceptionCallbacks callbacks;
+  callbacks.on_window = [&](const WindowResult& w) {
+    for (const TrackedDetection& d : w.detections) detections[w.index].push_back(d.detection);
+  };
+  replay(open_recording(path), calib, options, callbacks);
+  int eligible = 0;
+  for (const LeavingBallLabel& label : kBallLeaving) {
+    const Box2D near{label.visible.x0 - 4, label.visible.y0 - 4, label.visible.x1 + 4, label.visible.y1 + 4};
+    bool hit = false;
+    for (const Detection2D& d : detections[label.window]) {
+      hit = hit || near.contains(d.center_raw);
+      std::cout << "window " << label.window << ": detection at " << d.center_raw.transpose() << "\n";
+    }
+    std::cout << "window " << label.window << ": in view " << label.in_view_start << " -> " << label.in_view_end
+              << ", on the ball's visible part: " << (hit ? "found" : "missed") << "\n";
+    const bool eligible_in_eval = std::min(label.in_view_start, label.in_view_end) >= 0.3;
+    if (!eligible_in_eval) continue;
+    ++eligible;
+    EXPECT_TRUE(hit) << "window " << label.window << ": no detection on the ball's visible part";
+  }
+  EXPECT_EQ(eligible, 1);
+}
+
+// Recordings in which nothing moves towards the camera, run as `fdv run` runs a recording without a
+// calibration file (pixel coordinates, no compensation): no window may report an object.
+//  - davis346_flicker_noise.aedat4 (346x260, 0.13 s, 6 windows; another DAVIS346 than the
+//    calibration's): a static workbench where flickering lamps and a screen make most events;
+//  - dvxplorer_person_static.aedat4 (320x240, 24 windows): a still camera, a person's head and
+//    shoulders move a little;
+//  - dvxplorer_libcaer_ros2.db3 (640x480, 80 windows; background noise only) and evt3_trigger_ros2.db3
+//    (1280x720, 51 windows; events with external triggers): ROS 2 bags.
+struct StillRecording {
+  const char* file;
+  std::uint64_t windows;
+};
+
+class RealRecordingWithoutObject : public ::testing::TestWithParam<StillRecording> {};
+
+TEST_P(RealRecordingWithoutObject, NoWindowReportsAnObject) {
+  const std::string path = test::real_data(GetParam().file);
   FDV_REQUIRE_REAL_FILE(path);
   auto reader = open_recording(path);
   const SensorPolicy policy = apply_sensor_policy(declared_sensors(reader->info()), PerceptionOptions{});
-  std::uint64_t windows = 0, with_detection = 0;
+  std::uint64_t windows = 0;
   PerceptionCallbacks callbacks;
   callbacks.on_window = [&](const WindowResult& w) {
     ++windows;
-    with_detection += w.detections.empty() ? 0 : 1;
+    for (const TrackedDetection& d : w.detections)
+      ADD_FAILURE() << "window " << w.index << ": " << d.detection.center_raw.transpose() << ", source "
+                    << to_string(d.detection.source);
   };
   replay(std::move(reader), policy.calibration, policy.options, callbacks);
-  EXPECT_EQ(windows, 6u);
-  EXPECT_LE(static_cast<double>(with_detection), 0.05 * static_cast<double>(windows)) << with_detection << " windows";
+  EXPECT_EQ(windows, GetParam().windows);
 }
+
+INSTANTIATE_TEST_SUITE_P(RealRecording, RealRecordingWithoutObject,
+                         ::testing::Values(StillRecording{"davis346_flicker_noise.aedat4", 6},
+                                           StillRecording{"dvxplorer_person_static.aedat4", 24},
+                                           StillRecording{"dvxplorer_libcaer_ros2.db3", 80},
+                                           StillRecording{"evt3_trigger_ros2.db3", 51}),
+                         [](const ::testing::TestParamInfo<StillRecording>& recording) {
+                           const std::string file = recording.param.file;
+                           return file.substr(0, file.find('.'));
+                         });
 
 }  // namespace
 }  // namespace fdv

@@ -100,7 +100,8 @@ std::string DetectorOptions::validate() const {
     why << "max_segmented_fraction must be in (0, 1], got " << max_segmented_fraction;
   if (!why.str().empty()) return why.str();
   for (std::string source_why :
-       {gaussian_fit.validate(), track_aided.validate(), dense_motion.validate(), count_contrast.validate()})
+       {hot_pixels.validate(), gaussian_fit.validate(), track_aided.validate(), dense_motion.validate(),
+        count_contrast.validate()})
     if (!source_why.empty()) return source_why;
   return {};
 }

@@ -15,6 +15,8 @@
 /// Thread safety: value types and pure functions; may be used from any thread.
 #include <string>
 
+#include "fdv/detection/hot_pixels.h"
+
 namespace fdv {
 
 /// Source 1: Algorithm 1 from the strongest patterns of P, with moving-region retrieval when a fit
@@ -275,6 +277,9 @@ struct DetectorOptions {
   /// More than this fraction of the image above θ means the compensation failed or a burst
   /// flooded the window: no detection ("segmentation flooded"), rather than a random one.
   double max_segmented_fraction = 0.25;
+  /// Sensor pixels learned hot (steady firing, no spatial support), whose events Perception drops
+  /// before compensation: kept out of every source (hot_pixels.h; docs/DETECTION.md, "Hot pixels").
+  HotPixelOptions hot_pixels;
 
   // The candidate sources, tried in this order.
   GaussianFitSourceOptions gaussian_fit;
@@ -318,6 +323,7 @@ void describe(V& v, DetectorOptions& o) {
   v("fills_view_fraction", o.fills_view_fraction, "-", "a longer visible side above this × the image's shorter side: \"object fills the view\"");
   v("min_window_events", o.min_window_events, "events", "fewer compensated events in a window: no detection");
   v("max_segmented_fraction", o.max_segmented_fraction, "-", "more of the image above θ: no detection (flooded)");
+  describe(v, o.hot_pixels);
   describe(v, o.gaussian_fit);
   describe(v, o.track_aided);
   describe(v, o.dense_motion);

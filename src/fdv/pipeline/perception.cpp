@@ -77,6 +77,7 @@ void PerceptionCounters::count_window(const WindowResult& w) {
   events_dropped.outside_sensor += r.dropped_outside_sensor;
   events_dropped.no_inverse += r.dropped_no_inverse;
   events_dropped.left_image += r.dropped_left_image;
+  events_dropped.hot_pixel += w.hot_pixel_events;
   windows_flagged.imu_missing += r.imu_missing;
   windows_flagged.imu_gap += r.imu_gap;
   windows_flagged.odometry_missing += r.odometry_missing;
@@ -109,6 +110,8 @@ Perception::Perception(const Calibration& calibration, PerceptionOptions options
       compensator_(make_compensator(calibration, options_.compensation)),
       detector_(options_.detection, calibration.event_camera),
       tracker_(options_.tracking) {
+  if (options_.detection.hot_pixels.enabled)
+    hot_pixels_.emplace(options_.detection.hot_pixels, calibration.event_camera.width, calibration.event_camera.height);
   if (calibration.depth_camera) registrar_.emplace(calibration, options_.depth_registration);
   if (options_.estimate_trajectories && options_.dodge_from != DodgeSource::kNone)
     planner_.emplace(options_.dodge, options_.prediction.safety_radius_m);
@@ -277,6 +280,7 @@ void Perception::process_window(PendingWindow& w) {
   result.decimated = w.decimated;
   result.skipped_before = w.skipped_before;
 
+  result.hot_pixel_events = drop_hot_pixels(w);
   const CompensatedWindow& cw = compensate(w);
   result.compensation = cw.report;
   result.timings.compensation_ms = ms_since(start);
@@ -300,6 +304,12 @@ void Perception::process_window(PendingWindow& w) {
   result.detector = &detector_;
   counters_.count_window(result);
   if (callbacks_.on_window) callbacks_.on_window(result);
+}
+
+// Sensor noise: the events of pixels learned hot leave the window before any stage sees it
+// (docs/DETECTION.md, "Hot pixels").
+std::size_t Perception::drop_hot_pixels(PendingWindow& w) {
+  return hot_pixels_ ? hot_pixels_->filter(w.events, w.index) : 0;
 }
 
 // Ego-motion compensation (paper §IV-A) with the IMU history, the vehicle state at the window's

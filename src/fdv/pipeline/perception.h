@@ -51,6 +51,7 @@
 #include "fdv/depth/depth_registration.h"
 #include "fdv/depth/depth_segmentation.h"
 #include "fdv/detection/detector.h"
+#include "fdv/detection/hot_pixels.h"
 #include "fdv/estimation/collision.h"
 #include "fdv/estimation/collision_risk.h"
 #include "fdv/estimation/trajectory_estimator.h"
@@ -198,6 +199,8 @@ struct WindowResult {
   std::size_t events = 0;        ///< events in the window (after the windower's decimation)
   std::uint64_t decimated = 0;   ///< dropped by the windower's overload policy
   std::uint64_t skipped_before = 0;  ///< empty windows skipped just before (windower's gap policy)
+  /// Events of pixels learned hot, dropped before compensation (DetectorOptions::hot_pixels).
+  std::uint64_t hot_pixel_events = 0;
   CompensationReport compensation;
   DetectionStatus status = DetectionStatus::kTooFewEvents;
   std::vector<TrackedDetection> detections;  ///< in the detector's order (DetectionResult::detections)
@@ -259,7 +262,8 @@ struct PerceptionCounters {
     /// The windower's overload policy (WindowResult::decimated) and the compensation's burst cap.
     std::uint64_t overload = 0;
     std::uint64_t outside_window = 0, outside_sensor = 0, no_inverse = 0, left_image = 0;
-    std::uint64_t total() const { return overload + outside_window + outside_sensor + no_inverse + left_image; }
+    std::uint64_t hot_pixel = 0;  ///< WindowResult::hot_pixel_events
+    std::uint64_t total() const { return overload + outside_window + outside_sensor + no_inverse + left_image + hot_pixel; }
   } events_dropped;
   /// Windows whose compensation raised each fallback flag (CompensationReport).
   struct FallbackFlags {
@@ -336,6 +340,7 @@ class Perception {
 
   /// One window through every stage: the steps below, in this order.
   void process_window(PendingWindow& w);
+  std::size_t drop_hot_pixels(PendingWindow& w);  ///< the events erased
   const CompensatedWindow& compensate(const PendingWindow& w);
   void detector_priors_from_tracks(TimeNs t);  ///< fills priors_
   DetectionResult detect(const CompensatedWindow& cw);
@@ -376,6 +381,7 @@ class Perception {
   EventWindower windower_;
   std::unique_ptr<Compensator> compensator_;
   Detector detector_;
+  std::optional<HotPixelFilter> hot_pixels_;  ///< none when detection.hot_pixels is off
   std::optional<DepthRegistrar> registrar_;
   Tracker tracker_;
   std::vector<ImuSample> imu_;            ///< recent history; contiguous: the compensator takes a span

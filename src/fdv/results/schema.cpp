@@ -39,6 +39,7 @@ constexpr std::pair<const char*, std::uint64_t Dropped::*> kDropReasons[] = {
     {"outside the sensor", &Dropped::outside_sensor},
     {"no lens-model inverse at the pixel", &Dropped::no_inverse},
     {"warped outside the image", &Dropped::left_image},
+    {"hot pixel", &Dropped::hot_pixel},
 };
 constexpr std::pair<const char*, std::uint64_t Flags::*> kFallbackFlags[] = {
     {"imu missing", &Flags::imu_missing},         {"imu gap", &Flags::imu_gap},
