@@ -328,7 +328,7 @@ TEST(ResultsWriter, BeforeAnyWindowTheByReasonAndByFlagCountsAreEmpty) {
   EXPECT_TRUE(windows_by_fallback_flag(none).empty());
   PerceptionCounters one;
   one.windows = 1;
-  EXPECT_EQ(dropped_by_reason(one).size(), 5u);
+  EXPECT_EQ(dropped_by_reason(one).size(), 6u);  // overload, outside window, outside sensor, no inverse, left image, hot pixel
   EXPECT_EQ(windows_by_fallback_flag(one).size(), 6u);
 }
 

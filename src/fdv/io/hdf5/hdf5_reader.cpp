@@ -472,26 +472,40 @@ class Hdf5Reader final : public RecordingReader {
     constexpr std::int64_t kMaxUs = std::numeric_limits<TimeNs>::max() / 1000;
     const std::int64_t offset = layout_->t_offset_us();
     events_.clear();
-    std::uint64_t bad_polarity = 0, outside = 0, overflow = 0;
+    event_rows_.clear();
+    // Each kind of drop is reported at its first row, with the count of the chunk.
+    struct Dropped {
+      std::uint64_t count = 0;
+      hsize_t first_row = 0;
+      void add(hsize_t row) {
+        if (count++ == 0) first_row = row;
+      }
+    } bad_polarity, outside, overflow;
+    hsize_t row = first;
     for (const Row& r : rows_) {
       if (r.p != 0 && r.p != 1) {
-        ++bad_polarity;
+        bad_polarity.add(row);
       } else if (r.x < 0 || r.y < 0 || r.x > 65535 || r.y > 65535) {
-        ++outside;
+        outside.add(row);
       } else if (std::int64_t t = 0; __builtin_add_overflow(r.t, offset, &t) || t > kMaxUs || t < -kMaxUs) {
-        ++overflow;
+        overflow.add(row);
       } else {
         events_.push_back({t * 1000, static_cast<std::uint16_t>(r.x), static_cast<std::uint16_t>(r.y), r.p == 1});
+        event_rows_.push_back(row);
       }
+      ++row;
     }
-    const std::string where = "row " + std::to_string(first);
-    if (bad_polarity) report_.drop("event polarity not 0 or 1", where, bad_polarity);
-    if (outside) report_.drop("event pixel outside the sensor", where, outside);
-    if (overflow) report_.drop("event time beyond the int64 nanosecond range", where, overflow);
-    sanitizer_->append(events_.data(), events_.data() + events_.size(), out, report_, where);
+    auto at = [](hsize_t r) { return "row " + std::to_string(r); };
+    if (bad_polarity.count) report_.drop("event polarity not 0 or 1", at(bad_polarity.first_row), bad_polarity.count);
+    if (outside.count) report_.drop("event pixel outside the sensor", at(outside.first_row), outside.count);
+    if (overflow.count)
+      report_.drop("event time beyond the int64 nanosecond range", at(overflow.first_row), overflow.count);
+    sanitizer_->append(events_.data(), events_.data() + events_.size(), out, report_,
+                       [&](std::size_t i) { return at(event_rows_[i]); });
   }
 
   Source source_;
+  std::vector<hsize_t> event_rows_;  ///< the table row of each of events_
   std::size_t chunk_events_;
   RecordingInfo info_;
   ReadReport report_;
