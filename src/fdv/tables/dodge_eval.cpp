@@ -26,6 +26,8 @@ using Clock = std::chrono::steady_clock;
 constexpr TimeNs kOutcomeStepNs = kNsPerMs;
 constexpr TimeNs kPastTheEndNs = 300 * kNsPerMs;
 
+std::optional<double> seconds_of(std::optional<TimeNs> t) { return t ? std::optional(to_seconds(*t)) : std::nullopt; }
+
 /// What one pipeline run gives the evaluation: its decisions, its window ends, the first
 /// detection of the ball (the oracle starts there) and the first usable fusion estimate of a
 /// track that follows the ball.
@@ -189,10 +191,9 @@ DodgeThrow score_dodge_dataset(const std::string& dataset, const DodgeEvalOption
       const std::optional<TimeNs> in_view = first_window_in_view(truth, ball, run.window_ends);
       decisions["oracle"] = oracle_decisions(truth, ball, run, first_detection, ours);
       decisions["oracle_visible"] = oracle_decisions(truth, ball, run, in_view, ours);
-      auto seconds = [](std::optional<TimeNs> t) { return t ? std::optional(to_seconds(*t)) : std::nullopt; };
-      row.first_in_view_t_s = seconds(in_view);
-      row.first_detection_t_s = seconds(first_detection);
-      row.first_usable_estimate_t_s = seconds(run.first_usable_estimate);
+      row.first_in_view_t_s = seconds_of(in_view);
+      row.first_detection_t_s = seconds_of(first_detection);
+      row.first_usable_estimate_t_s = seconds_of(run.first_usable_estimate);
     }
   }
   for (const std::string& method : kDodgeMethods) {
@@ -304,9 +305,9 @@ nlohmann::json to_json(const DodgeEval& e, const DodgeEvalOptions& options) {
     put("first_in_view_t_s", row.first_in_view_t_s);
     put("first_detection_t_s", row.first_detection_t_s);
     put("first_usable_estimate_t_s", row.first_usable_estimate_t_s);
-    put("decision_t_s", o.decision_t ? std::optional(to_seconds(*o.decision_t)) : std::nullopt);
+    put("decision_t_s", seconds_of(o.decision_t));
     const DodgeOutcome& bound = row.outcomes.at("oracle_visible");
-    put("oracle_visible_decision_t_s", bound.decision_t ? std::optional(to_seconds(*bound.decision_t)) : std::nullopt);
+    put("oracle_visible_decision_t_s", seconds_of(bound.decision_t));
     j["late_against_oracle_visible"].push_back(lag);
   }
   j["oracle_visible_escaped"] = visible_escaped;
