@@ -426,7 +426,7 @@ TEST(ResultsWriter, TimingCsvHoldsEachWindowsStageTimesAsWritten) {
   std::string header;
   std::getline(in, header);
   EXPECT_EQ(header, "window,t_start,compensation,time_images,segmentation,preprocess,gaussian_fit,track_aided,"
-                    "dense_motion,count_contrast,detection_total,tracking,window_total");
+                    "dense_motion,count_contrast,evidence,detection_total,tracking,window_total");
 }
 
 TEST(ResultsReader, MalformedLinesAreErrorsNamingFileAndLine) {

@@ -6,6 +6,7 @@
 #include "fdv/core/error.h"
 #include "fdv/detection/count_contrast_source.h"
 #include "fdv/detection/dense_motion_source.h"
+#include "fdv/detection/evidence_source.h"
 #include "fdv/detection/gaussian_fit_source.h"
 #include "fdv/detection/track_aided_source.h"
 
@@ -22,6 +23,8 @@ std::vector<RegisteredSource> built_in_sources() {
        [](const DetectorOptions& o) { return o.dense_motion.enabled ? make_source<DenseMotionSource>(o) : nullptr; }},
       {CountContrastSource::kName,
        [](const DetectorOptions& o) { return o.count_contrast.enabled ? make_source<CountContrastSource>(o) : nullptr; }},
+      {EvidenceSource::kName,
+       [](const DetectorOptions& o) { return o.evidence.enabled ? make_source<EvidenceSource>(o) : nullptr; }},
   };
 }
 

@@ -80,6 +80,10 @@ class CandidateSource {
   virtual ~CandidateSource() = default;
   /// Sizes the buffers for width × height images.
   virtual void allocate(int width, int height) = 0;
+  /// Called once for every window that reaches the sources, before any find() and whichever
+  /// source wins it: a source that keeps evidence across windows updates it here. Returns whether
+  /// it did any work (the detector then times it under the source's name).
+  virtual bool begin_window(const SourceWindow& /*in*/) { return false; }
   /// The source's candidate in this window, or nothing. Writes its diagnostics to
   /// res.diagnostics_of(its name); may add to res.candidates and set res.track_aided.
   virtual std::optional<Candidate> find(SourceWindow& in, DetectionResult& res) = 0;

@@ -26,6 +26,7 @@ enum class DetectionSource {
   kRegionRetrieval,  ///< connected component chosen after the fit failed (paper §IV-B.3)
   kDenseMotion,      ///< the dense-motion source (DetectorOptions::dense_motion), when N had no pattern
   kCountContrast,    ///< the count-contrast source (DetectorOptions::count_contrast), when nothing else passed
+  kEvidence,         ///< the evidence source (DetectorOptions::evidence): evidence over windows, when nothing else passed
 };
 std::string_view to_string(DetectionSource s);
 

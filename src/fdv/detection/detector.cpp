@@ -34,6 +34,7 @@ std::string_view to_string(DetectionSource s) {
     case DetectionSource::kRegionRetrieval: return "region_retrieval";
     case DetectionSource::kDenseMotion: return "dense_motion";
     case DetectionSource::kCountContrast: return "count_contrast";
+    case DetectionSource::kEvidence: return "evidence";
   }
   return "?";
 }
@@ -101,7 +102,7 @@ std::string DetectorOptions::validate() const {
   if (!why.str().empty()) return why.str();
   for (std::string source_why :
        {hot_pixels.validate(), gaussian_fit.validate(), track_aided.validate(), dense_motion.validate(),
-        count_contrast.validate()})
+        count_contrast.validate(), evidence.validate()})
     if (!source_why.empty()) return source_why;
   return {};
 }
@@ -242,6 +243,7 @@ DetectionResult Detector::detect(const CompensatedEventsView& window, std::span<
     // The diagnostics are the first object's; a later pass adds its candidates and times.
     DetectionResult later;
     DetectionResult& out = pass == 0 ? res : later;
+    if (pass == 0) begin_window(in, res);
     const std::optional<Candidate> found = find_candidate(in, out);
     std::optional<Detection2D> d;
     if (found && !already_found(res.detections, found->center)) d = to_detection(window, *found, out);
@@ -275,6 +277,13 @@ DetectionResult Detector::detect(const CompensatedEventsView& window, std::span<
   }
   if (!res.detections.empty()) return finish(DetectionStatus::kDetected);
   return finish(fills_view ? DetectionStatus::kFillsView : why_not);
+}
+
+void Detector::begin_window(const SourceWindow& in, DetectionResult& res) {
+  for (const Source& s : sources_) {
+    const auto t = std::chrono::steady_clock::now();
+    if (s.source->begin_window(in)) res.timings.add_source_ms(s.name, ms_since(t));
+  }
 }
 
 std::optional<Candidate> Detector::find_candidate(SourceWindow& in, DetectionResult& res) {

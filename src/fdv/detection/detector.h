@@ -7,7 +7,9 @@
 ///   2. TrackAidedSource: the same inside confirmed tracks' gates, at a lower evidence threshold;
 ///   3. DenseMotionSource: a dense patch of I whose mean time rises as a plane, in the gates of
 ///      confirmed tracks and of tentative ones detected in the last window;
-///   4. CountContrastSource: a compact blob of I much denser than its surround, gates then image.
+///   4. CountContrastSource: a compact blob of I much denser than its surround, gates then image;
+///   5. EvidenceSource: a cell whose evidence summed over windows along a path passed a threshold
+///      (track-before-detect), for the far, small object no single window shows.
 /// Each has its own unit, options sub-struct (DetectorOptions), buffers and diagnostics; a program
 /// may register more (candidate_source.h). The detector times each under its registered name.
 ///
@@ -68,6 +70,8 @@ class Detector {
   /// The winning candidate as a detection: centre and time from the events (EventRefiner), the
   /// reported box, and both seen by the camera at the detection's time, in raw pixels too.
   Detection2D to_detection(const CompensatedEventsView& window, const Candidate& found, DetectionResult& res);
+  /// Every source's begin_window, each timed under its name when it worked.
+  void begin_window(const SourceWindow& in, DetectionResult& res);
   /// The first registered source whose candidate passes its gates, each timed under its name.
   std::optional<Candidate> find_candidate(SourceWindow& in, DetectionResult& res);
   /// What a found object's box blanks of P for the next pass, and whether a candidate centre lies

@@ -191,6 +191,50 @@ void describe(V& v, CountContrastSourceOptions& o) {
   v.removed("count_cue_sparse_chance", "renamed count_contrast_sparse_chance");
 }
 
+/// Candidate source 5, evidence over windows (evidence_source.h; docs/DETECTION.md, "Evidence
+/// source"): per C × C cell, the log-likelihood ratio ℓ = δz − δ²/2 of its fired pixels' z against
+/// the cell's own history, summed along paths over windows (L = max(0, ℓ + the best neighbour's L
+/// a window ago)); a cell at L ≥ h is a candidate (evidence_source.h states the model).
+struct EvidenceSourceOptions {
+  /// Off by default until its false detections are tuned down (docs/DETECTION.md, "Evidence
+  /// source": 0-15 false windows of 45-74 on training seeds). YAML `evidence`
+  bool enabled = false;
+  /// C [px]: a far ball (4-10 px) lies in one or two cells and moves about a cell a window.
+  /// YAML `evidence_cell_px`
+  int cell_px = 8;
+  /// δ: the object's excess of fired pixels in σ of the cell's own variation [-]. The best of 9
+  /// predecessors lifts a path by about σ_ℓ·√(2 ln 9) = 2.1δ a window, so δ²/2 must exceed it:
+  /// δ > 4.2 (2-5 left paths through texture growing; 6 measured on training seeds 10, 11, 16).
+  /// YAML `evidence_signal_sigma`
+  double signal_sigma = 6.0;
+  /// h: the path's sum of ℓ at which a cell is a candidate [-]. YAML `evidence_threshold`
+  double threshold = 12.0;
+  /// ℓ_max: the most one window adds [-]; h / ℓ_max windows at least make a candidate, so a single
+  /// window's clump (texture, vibration, a burst) never does. YAML `evidence_max_window_llr`
+  double max_window_llr = 4.0;
+  /// α: the weight of a window in each cell's running mean and variance [-]. YAML `evidence_background_weight`
+  double background_weight = 0.05;
+  /// b_min: added to every cell's variance [fired pixels² per window]: in an empty cell one event
+  /// must not be evidence. YAML `evidence_min_background`
+  double min_background = 1.0;
+  /// Windows in which each cell's mean and variance are learned before any evidence counts.
+  /// YAML `evidence_warmup_windows`
+  int warmup_windows = 8;
+  std::string validate() const;
+};
+
+template <class V>
+void describe(V& v, EvidenceSourceOptions& o) {
+  v("evidence", o.enabled, "-", "source 5, evidence over windows along paths: track-before-detect (false = the paper)");
+  v("evidence_cell_px", o.cell_px, "px", "C: side of a cell of the evidence grid");
+  v("evidence_signal_sigma", o.signal_sigma, "-", "δ: an object's excess of fired pixels, in σ of the cell's own variation");
+  v("evidence_threshold", o.threshold, "-", "h: a path's sum of log-likelihood ratios that makes a candidate; tuned");
+  v("evidence_max_window_llr", o.max_window_llr, "-", "ℓ_max: the most one window adds (h / ℓ_max windows at least)");
+  v("evidence_background_weight", o.background_weight, "-", "α: a window's weight in each cell's running mean and variance");
+  v("evidence_min_background", o.min_background, "px²", "b_min: added to every cell's variance of fired pixels per window");
+  v("evidence_warmup_windows", o.warmup_windows, "-", "windows that learn the background before evidence counts");
+}
+
 struct DetectorOptions {
   // Adaptive threshold θ(ω, v) = mean(N) + a‖ω‖ + b‖v‖ + c (§IV-B.1).
   double threshold_a_s_per_rad = 0.01;  ///< a [1/(rad/s)]: more residual motion blur when rotating fast
@@ -286,6 +330,7 @@ struct DetectorOptions {
   TrackAidedSourceOptions track_aided;
   DenseMotionSourceOptions dense_motion;
   CountContrastSourceOptions count_contrast;
+  EvidenceSourceOptions evidence;
 
   /// The shared fields' rules, then each source's; "" when valid.
   std::string validate() const;
@@ -328,6 +373,7 @@ void describe(V& v, DetectorOptions& o) {
   describe(v, o.track_aided);
   describe(v, o.dense_motion);
   describe(v, o.count_contrast);
+  describe(v, o.evidence);
 }
 
 }  // namespace fdv

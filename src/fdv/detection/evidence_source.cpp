@@ -1,0 +1,222 @@
+#include "fdv/detection/evidence_source.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include <opencv2/imgproc.hpp>
+
+#include "fdv/core/time.h"
+
+namespace fdv {
+
+std::string EvidenceSourceOptions::validate() const {
+  std::ostringstream why;
+  if (!(cell_px >= 2 && cell_px <= 64)) why << "evidence_cell_px must be in [2, 64], got " << cell_px;
+  else if (!(signal_sigma > 0 && signal_sigma <= 100)) why << "evidence_signal_sigma must be in (0, 100], got " << signal_sigma;
+  else if (!(threshold > 0 && std::isfinite(threshold))) why << "evidence_threshold must be finite and > 0, got " << threshold;
+  else if (!(max_window_llr > 0 && std::isfinite(max_window_llr)))
+    why << "evidence_max_window_llr must be finite and > 0, got " << max_window_llr;
+  else if (!(background_weight > 0 && background_weight <= 1))
+    why << "evidence_background_weight must be in (0, 1], got " << background_weight;
+  else if (!(min_background >= 0 && std::isfinite(min_background)))
+    why << "evidence_min_background must be finite and ≥ 0, got " << min_background;
+  else if (!(warmup_windows >= 0 && warmup_windows <= 1000))
+    why << "evidence_warmup_windows must be in [0, 1000], got " << warmup_windows;
+  return why.str();
+}
+
+void EvidenceGrid::reset(int cols, int rows) {
+  for (cv::Mat* m : {&mean_, &variance_, &evidence_, &llr_, &predicted_evidence_, &predicted_mean_, &predicted_variance_,
+                     &dilated_}) {
+    m->create(rows, cols, CV_32F);
+    m->setTo(0);
+  }
+  windows_ = 0;
+}
+
+void EvidenceGrid::break_paths() { evidence_.setTo(0); }
+
+void EvidenceGrid::update(const cv::Mat& fired, const cv::Mat& previous) {
+  CV_Assert(fired.type() == CV_32F && fired.size() == evidence_.size());
+  const EvidenceSourceOptions& o = options_;
+  if (windows_++ == 0) {
+    fired.copyTo(mean_);
+    variance_.setTo(0);
+    return;
+  }
+  // Where a path may have been a window ago: any of the 3 × 3 cells around the scene point's
+  // previous cell (an object moves at most a cell a window), found through the ego-motion.
+  cv::dilate(evidence_, dilated_, cv::Mat());
+  if (previous.empty()) {
+    dilated_.copyTo(predicted_evidence_);
+    mean_.copyTo(predicted_mean_);
+    variance_.copyTo(predicted_variance_);
+  } else {
+    // Nearest cell, not bilinear: resampling every window would blur each cell's history into its
+    // neighbours' (a textured cell's mean sinking towards its empty neighbours').
+    cv::remap(dilated_, predicted_evidence_, previous, cv::noArray(), cv::INTER_NEAREST, cv::BORDER_CONSTANT, 0);
+    cv::remap(mean_, predicted_mean_, previous, cv::noArray(), cv::INTER_NEAREST, cv::BORDER_REPLICATE);
+    cv::remap(variance_, predicted_variance_, previous, cv::noArray(), cv::INTER_NEAREST, cv::BORDER_REPLICATE);
+  }
+  // The window's activity against the expected: the camera speeding up, or a scene-wide change
+  // of light, raises every cell alike and is no object.
+  // b_min a cell in both sums: in a nearly empty scene the object itself must not set g.
+  const double prior = o.min_background * static_cast<double>(fired.total());
+  const float gain = static_cast<float>((cv::sum(fired)[0] + prior) / (cv::sum(predicted_mean_)[0] + prior));
+  const bool learning = windows_ <= o.warmup_windows;
+  const float delta = static_cast<float>(o.signal_sigma), llr_max = static_cast<float>(o.max_window_llr);
+  const float b_min = static_cast<float>(o.min_background);
+  // A path holds at most 2h: the evidence of an object that left fades within a few windows.
+  const float L_max = 2 * static_cast<float>(o.threshold);
+  // A running average over the first 1/α windows, then exponential.
+  const float alpha = std::max(static_cast<float>(o.background_weight), 1.f / static_cast<float>(windows_));
+  for (int y = 0; y < fired.rows; ++y) {
+    const float* n = fired.ptr<float>(y);
+    const float* m = predicted_mean_.ptr<float>(y);
+    const float* v = predicted_variance_.ptr<float>(y);
+    const float* L_prev = predicted_evidence_.ptr<float>(y);
+    float* L = evidence_.ptr<float>(y);
+    float* l = llr_.ptr<float>(y);
+    float* m_next = mean_.ptr<float>(y);
+    float* v_next = variance_.ptr<float>(y);
+    for (int x = 0; x < fired.cols; ++x) {
+      const float mu = gain * m[x];
+      const float sigma = std::sqrt(std::max(gain * gain * v[x], mu) + b_min);
+      const float z = (n[x] - mu) / sigma;
+      l[x] = learning ? 0.f : std::min(delta * z - 0.5f * delta * delta, llr_max);
+      L[x] = std::clamp(L_prev[x] + l[x], 0.f, L_max);
+      // The innovation is clipped at 3σ: an object passing must not teach its cell to expect it.
+      const float e = n[x] - m[x];
+      m_next[x] = m[x] + alpha * e;
+      v_next[x] = (1 - alpha) * (v[x] + alpha * e * e);
+    }
+  }
+}
+
+EvidenceSource::EvidenceSource(const DetectorOptions& options) : options_(options), grid_(options.evidence) {}
+
+void EvidenceSource::allocate(int width, int height) {
+  const int c = options_.evidence.cell_px;
+  width_ = width;
+  height_ = height;
+  cols_ = (width + c - 1) / c;
+  rows_ = (height + c - 1) / c;
+  grid_.reset(cols_, rows_);
+  fired_.create(rows_, cols_, CV_32F);
+  next_previous_.create(rows_, cols_, CV_32FC2);
+  previous_.release();
+  coarse_.create((rows_ + kCoarseStep - 1) / kCoarseStep + 1, (cols_ + kCoarseStep - 1) / kCoarseStep + 1, CV_32FC2);
+  updated_ = false;
+}
+
+bool EvidenceSource::begin_window(const SourceWindow& in) {
+  const CompensatedEventsView& v = in.events;
+  if (v.width != width_ || v.height != height_) allocate(v.width, v.height);
+  // A window that did not reach the sources (too few events, flooded) breaks every path; the
+  // background is kept, without the ego-motion of the windows missed.
+  const bool follows = grid_.windows() > 0 && v.t_start == last_end_;
+  if (grid_.windows() > 0 && !follows) grid_.break_paths();
+  count_fired(in);
+  grid_.update(fired_, follows ? previous_ : cv::Mat());
+  predict_motion(in);
+  last_start_ = v.t_start;
+  last_end_ = v.t_end;
+  updated_ = true;
+  return true;
+}
+
+void EvidenceSource::count_fired(const SourceWindow& in) {
+  // Fired pixels, not events: a hot pixel or a flickering one counts once however often it fires.
+  fired_.setTo(0);
+  const int c = options_.evidence.cell_px;
+  const cv::Mat& I = in.ti.count;
+  for (const std::int32_t p : in.events.pixel) {
+    const int x = p % width_, y = p / width_;
+    const int n = I.at<std::int32_t>(y, x);
+    if (n > 0) fired_.at<float>(y / c, x / c) += 1.f / static_cast<float>(n);
+  }
+}
+
+void EvidenceSource::predict_motion(const SourceWindow& in) {
+  const CompensatedEventsView& v = in.events;
+  if (!v.observed_at) {
+    previous_.release();
+    return;
+  }
+  // The displacement by the next window's start of every kCoarseStep-th cell's centre, then
+  // bilinear between them: the ego-motion's image flow is smooth over a few cells.
+  const double c = options_.evidence.cell_px, length_s = to_seconds(v.t_end - v.t_start);
+  const auto coarse_cell = [&](int k, int cells) { return std::min(k * kCoarseStep, cells - 1); };
+  for (int j = 0; j < coarse_.rows; ++j)
+    for (int i = 0; i < coarse_.cols; ++i) {
+      const Eigen::Vector2d centre((coarse_cell(i, cols_) + 0.5) * c, (coarse_cell(j, rows_) + 0.5) * c);
+      const Eigen::Vector2d moved = v.observed_at(centre, length_s);
+      const Eigen::Vector2d d = moved.allFinite() ? Eigen::Vector2d((moved - centre) / c) : Eigen::Vector2d::Zero();
+      coarse_.at<cv::Vec2f>(j, i) = cv::Vec2f(static_cast<float>(d.x()), static_cast<float>(d.y()));
+    }
+  const auto between = [&](int cell, int cells, int& k, float& f) {
+    k = std::min(cell / kCoarseStep, (cells - 1) / kCoarseStep);
+    const int lo = coarse_cell(k, cells), hi = coarse_cell(k + 1, cells);
+    f = hi > lo ? static_cast<float>(cell - lo) / static_cast<float>(hi - lo) : 0.f;
+  };
+  for (int y = 0; y < rows_; ++y) {
+    int ky;
+    float fy;
+    between(y, rows_, ky, fy);
+    for (int x = 0; x < cols_; ++x) {
+      int kx;
+      float fx;
+      between(x, cols_, kx, fx);
+      const cv::Vec2f d = (1 - fy) * ((1 - fx) * coarse_.at<cv::Vec2f>(ky, kx) + fx * coarse_.at<cv::Vec2f>(ky, kx + 1)) +
+                          fy * ((1 - fx) * coarse_.at<cv::Vec2f>(ky + 1, kx) + fx * coarse_.at<cv::Vec2f>(ky + 1, kx + 1));
+      // Where the next window's cell (x, y) was in this window: first order in the flow.
+      next_previous_.at<cv::Vec2f>(y, x) = cv::Vec2f(static_cast<float>(x) - d[0], static_cast<float>(y) - d[1]);
+    }
+  }
+  cv::swap(previous_, next_previous_);
+  if (next_previous_.empty()) next_previous_.create(rows_, cols_, CV_32FC2);
+}
+
+std::optional<Candidate> EvidenceSource::find(SourceWindow& in, DetectionResult& res) {
+  if (!updated_ || in.events.t_start != last_start_ || in.events.t_end != last_end_) begin_window(in);
+  const EvidenceSourceOptions& o = options_.evidence;
+  const cv::Mat& L = grid_.evidence();
+  double best = 0;
+  cv::Point cell;
+  cv::minMaxLoc(L, nullptr, &best, nullptr, &cell);
+  EvidenceDiagnostics& diag = res.diagnostics_of(kName).write<EvidenceDiagnostics>();
+  diag.evidence = best;
+  diag.cell_x = cell.x;
+  diag.cell_y = cell.y;
+  if (best < o.threshold) return std::nullopt;
+
+  // The object's events: the cell and half a cell around it (it may straddle cells).
+  const int c = o.cell_px;
+  const cv::Rect region = cv::Rect(cell.x * c - c / 2, cell.y * c - c / 2, 2 * c, 2 * c) & cv::Rect(0, 0, width_, height_);
+  const cv::Mat& I = in.ti.count;
+  const cv::Mat& T = in.ti.sum_time_s;
+  double events = 0, sx = 0, sy = 0, st = 0;
+  for (int y = region.y; y < region.y + region.height; ++y)
+    for (int x = region.x; x < region.x + region.width; ++x) {
+      const int n = I.at<std::int32_t>(y, x);
+      if (n == 0) continue;
+      events += n;
+      sx += n * (x + 0.5);
+      sy += n * (y + 0.5);
+      st += T.at<float>(y, x);
+    }
+  if (events < options_.roi_min_events) return std::nullopt;
+  Candidate found;
+  found.center = {sx / events, sy / events};
+  const double half = 0.5 * c;
+  found.box = Box2D{found.center.x() - half, found.center.y() - half, found.center.x() + half, found.center.y() + half};
+  found.source = DetectionSource::kEvidence;
+  found.events = static_cast<int>(events);
+  found.score = best / (best + o.threshold);
+  found.event_density = events / (static_cast<double>(c) * c);
+  found.t_mean_s = st / events;
+  return found;
+}
+
+}  // namespace fdv

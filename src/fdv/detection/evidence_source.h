@@ -1,0 +1,94 @@
+#pragma once
+/// Candidate source 5 (not in the paper; docs/DETECTION.md, "Evidence source"): track-before-detect
+/// for a far, small object that no single window shows convincingly. Every window, each C × C cell
+/// of the compensated count image gives a log-likelihood ratio of "background and an object"
+/// against "background alone" from its fired pixels and their own history; a dynamic programme over windows adds it along the paths an
+/// object can take (≤ 1 cell a window after the ego-motion between windows), and a cell whose
+/// path's sum reaches the threshold h is a candidate. Incremental: one update a window, no history.
+///
+///   EvidenceSource source(options);   // once; allocate(width, height) before the first window
+///   source.begin_window(in);          // every window that reaches the sources, before find()
+///   std::optional<Candidate> c = source.find(in, res);
+///   res.diagnostics<EvidenceDiagnostics>(EvidenceSource::kName)   // the best path's sum
+/// Thread safety: not thread-safe (evidence across windows); owned by one Detector, used by one thread.
+#include <optional>
+#include <string_view>
+
+#include <opencv2/core.hpp>
+
+#include "fdv/detection/candidate_source.h"
+#include "fdv/detection/detector_options.h"
+
+namespace fdv {
+
+/// The evidence model of the source, on a grid of cells (EvidenceSourceOptions states the symbols).
+/// Each cell c has a running mean m_c and variance v_c of its fired pixels per window; in a window
+/// with n_c fired pixels:
+///   μ_c = g·m_c, σ_c² = max(g²·v_c, μ_c) + b_min, with g = (Σ n + N·b_min) / (Σ m + N·b_min)
+///         the window's activity over the expected, N cells (the camera speeding up raises every
+///         cell alike: no object; b_min keeps a small object in an empty scene from setting g);
+///   z_c = (n_c − μ_c) / σ_c, and ℓ_c = min(δ·z_c − δ²/2, ℓ_max): the log-likelihood ratio of a
+///         mean shifted by δσ against none, for a Gaussian z (a cell that fires in bursts has a
+///         large v and needs a large excess; a single window adds at most ℓ_max);
+///   L_c = min(max(0, ℓ_c + max of L over the 3 × 3 cells around where the scene point was a
+///         window ago), 2h): the best path's sum, reset at 0 (Page's CUSUM along paths, a dynamic
+///         programme), held below 2h so that an object that left fades within a few windows;
+///   m_c, v_c ← exponential averages of weight max(α, 1/k) in the k-th window.
+/// No evidence (ℓ = 0) in the first `warmup_windows` windows, while m and v are learned.
+class EvidenceGrid {
+ public:
+  explicit EvidenceGrid(const EvidenceSourceOptions& options) : options_(options) {}
+  /// Starts afresh on a cols × rows grid: no evidence, nothing learned.
+  void reset(int cols, int rows);
+  /// Ends every path (a window was missed), keeping m and v.
+  void break_paths();
+  /// One window: `fired` holds each cell's fired pixels (CV_32F, rows × cols). `previous` maps each
+  /// cell to where its scene point was on the last window's grid, in cells (CV_32FC2: x, y); empty
+  /// when the camera did not move. Does not allocate after the first call.
+  void update(const cv::Mat& fired, const cv::Mat& previous = {});
+  const cv::Mat& evidence() const { return evidence_; }  ///< L, CV_32F
+  const cv::Mat& llr() const { return llr_; }            ///< ℓ of the last window, CV_32F
+  const cv::Mat& mean() const { return mean_; }          ///< m, CV_32F
+  const cv::Mat& variance() const { return variance_; }  ///< v, CV_32F
+  int windows() const { return windows_; }
+
+ private:
+  EvidenceSourceOptions options_;
+  cv::Mat mean_, variance_, evidence_, llr_, predicted_evidence_, predicted_mean_, predicted_variance_, dilated_;
+  int windows_ = 0;
+};
+
+/// The best path's sum and cell in the last window, once the source updated.
+struct EvidenceDiagnostics {
+  double evidence = 0;  ///< max L over the image
+  int cell_x = -1, cell_y = -1;
+};
+
+class EvidenceSource final : public CandidateSource {
+ public:
+  static constexpr std::string_view kName = "evidence";
+  /// `options` must be valid (DetectorOptions::validate).
+  explicit EvidenceSource(const DetectorOptions& options);
+  void allocate(int width, int height) override;
+  bool begin_window(const SourceWindow& in) override;
+  std::optional<Candidate> find(SourceWindow& in, DetectionResult& res) override;
+  const EvidenceGrid& grid() const { return grid_; }
+
+ private:
+  /// Each cell's fired pixels from the window's events: an event adds 1 / I at its pixel.
+  void count_fired(const SourceWindow& in);
+  /// Where each cell's centre goes by the next window's start (the window's observed_at after its
+  /// length), as `previous` for the next update; empty without ego-motion.
+  void predict_motion(const SourceWindow& in);
+
+  static constexpr int kCoarseStep = 4;  ///< the ego-motion is evaluated every this many cells
+
+  DetectorOptions options_;
+  EvidenceGrid grid_;
+  int width_ = 0, height_ = 0, cols_ = 0, rows_ = 0;
+  cv::Mat fired_, previous_, next_previous_, coarse_;
+  TimeNs last_start_ = 0, last_end_ = 0;
+  bool updated_ = false;  ///< this window's update ran (find() of a later pass reuses it)
+};
+
+}  // namespace fdv

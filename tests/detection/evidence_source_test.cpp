@@ -1,0 +1,221 @@
+// The evidence source (track-before-detect, evidence_source.h): its grid against the model's own
+// analytic values on hand-made cell counts, then the source in a Detector on synthetic windows.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "fdv/detection/detector.h"
+#include "fdv/detection/evidence_source.h"
+
+namespace fdv {
+namespace {
+
+constexpr int kCols = 10, kRows = 8;
+
+EvidenceSourceOptions grid_options() {
+  EvidenceSourceOptions o;
+  o.signal_sigma = 2;
+  o.max_window_llr = 100;  // no cap unless a test sets one
+  o.threshold = 12;
+  o.warmup_windows = 8;
+  o.min_background = 1;
+  return o;
+}
+
+cv::Mat uniform_counts(float n) { return cv::Mat(kRows, kCols, CV_32F, cv::Scalar(n)); }
+
+/// Feeds `windows` windows of n fired pixels in every cell.
+void learn(EvidenceGrid& grid, float n, int windows) {
+  for (int k = 0; k < windows; ++k) grid.update(uniform_counts(n));
+}
+
+TEST(EvidenceGrid, AConstantExcessAlongAPathConfirmsWhenTheModelSays) {
+  const EvidenceSourceOptions o = grid_options();
+  EvidenceGrid grid(o);
+  grid.reset(kCols, kRows);
+  learn(grid, 4, o.warmup_windows);
+  // A target adding 6 fired pixels, one cell to the right each window, on cells that fired 4 in
+  // every window (v = 0): μ = 4g with g = (326 + 80)/(320 + 80) (m is still 4 everywhere ahead of
+  // the target; 80 cells of b_min = 1), σ² = μ + b_min, z = (10 − μ)/σ, and ℓ = δz − δ²/2 = 3.28 a
+  // window: L passes h = 12 in the 4th.
+  const double g = 406.0 / 400.0, mu = 4 * g, z = (10 - mu) / std::sqrt(mu + 1), l = 2 * z - 2;
+  ASSERT_NEAR(l, 3.28, 0.01);
+  int confirmed_in = 0;
+  for (int k = 1; k <= 5; ++k) {
+    cv::Mat n = uniform_counts(4);
+    n.at<float>(4, k) = 10;
+    grid.update(n);
+    const double L = grid.evidence().at<float>(4, k);
+    // Each earlier target cell's mean rose, so g is a little lower than above after the first:
+    // within 2 % of k·ℓ.
+    EXPECT_NEAR(L, k * l, 0.02 * k * l) << "window " << k;
+    if (confirmed_in == 0 && L >= o.threshold) confirmed_in = k;
+    // The target's cell holds the most; cells no path of it reaches have none (a path steps a
+    // cell a window, and loses about δ²/2 a window away from the target).
+    cv::Point best;
+    cv::minMaxLoc(grid.evidence(), nullptr, nullptr, nullptr, &best);
+    EXPECT_EQ(best, cv::Point(k, 4));
+    EXPECT_EQ(grid.evidence().at<float>(0, 9), 0.f);
+  }
+  EXPECT_EQ(confirmed_in, 4);
+}
+
+TEST(EvidenceGrid, NoSingleWindowConfirmsHoweverStrongAndEvidenceFades) {
+  EvidenceSourceOptions o = grid_options();
+  o.max_window_llr = 4;  // h / ℓ_max = 3 windows at least
+  EvidenceGrid grid(o);
+  grid.reset(kCols, kRows);
+  learn(grid, 4, o.warmup_windows);
+  cv::Mat burst = uniform_counts(4);
+  burst.at<float>(3, 3) = 1000;
+  grid.update(burst);
+  EXPECT_FLOAT_EQ(grid.evidence().at<float>(3, 3), 4.f);
+  double peak = 0;
+  cv::minMaxLoc(grid.evidence(), nullptr, &peak);
+  EXPECT_LT(peak, o.threshold);
+  // Back to the background: the burst's own cell now expects 115 (m ← m + (1000 − 4)/9), so
+  // g ≈ (320 + 80)/(316 + 115 + 80) = 0.78, z ≈ (4 − 3.1)/2 and ℓ ≈ −1.1 a window: the 4 (which
+  // the neighbours inherit through the 3 × 3 max) is gone within 4 windows.
+  int windows = 0;
+  for (; peak > 0 && windows < 10; ++windows) {
+    learn(grid, 4, 1);
+    cv::minMaxLoc(grid.evidence(), nullptr, &peak);
+  }
+  EXPECT_LE(windows, 4);
+}
+
+TEST(EvidenceGrid, ACellThatFiresInBurstsNeedsAnExcessOfItsOwnVariation) {
+  EvidenceSourceOptions o = grid_options();
+  o.signal_sigma = 6;
+  o.max_window_llr = 4;
+  EvidenceGrid grid(o);
+  grid.reset(kCols, kRows);
+  // Cell (2, 2) alternates 0 and 20 fired pixels (texture swept by a hovering camera): m ≈ 10,
+  // v ≈ 100. Cell (6, 5) fires 1 (a quiet wall).
+  auto window = [](int k, float bursty_extra, float quiet_extra) {
+    cv::Mat n = uniform_counts(1);
+    n.at<float>(2, 2) = (k % 2 ? 20.f : 0.f) + bursty_extra;
+    n.at<float>(5, 6) = 1 + quiet_extra;
+    return n;
+  };
+  int k = 0;
+  for (; k < 60; ++k) grid.update(window(k, 0, 0));
+  EXPECT_NEAR(grid.mean().at<float>(2, 2), 10, 1.5);
+  EXPECT_NEAR(grid.variance().at<float>(2, 2), 100, 15);
+  // The same 20 fired pixels more in both: z ≈ 20/10 = 2 in the bursty cell gives ℓ = 6·2 − 18 < 0,
+  // z ≈ 20/1.4 in the quiet one ℓ_max.
+  grid.update(window(k, 20, 20));
+  EXPECT_LT(grid.llr().at<float>(2, 2), 0.f);
+  EXPECT_FLOAT_EQ(grid.llr().at<float>(5, 6), 4.f);
+  EXPECT_FLOAT_EQ(grid.evidence().at<float>(5, 6), 4.f);
+}
+
+TEST(EvidenceGrid, APathFollowsTheSceneThroughTheEgoMotionMap) {
+  EvidenceSourceOptions o = grid_options();
+  o.max_window_llr = 4;
+  // The camera pans: the scene moves 2 cells right a window, so cell (x, y) was at (x − 2, y). A
+  // target moving 1 cell a window over the scene moves 3 in the image: beyond the 3 × 3 step of a
+  // path without the map, one cell from its scene point's previous cell with it.
+  cv::Mat previous(kRows, kCols, CV_32FC2);
+  for (int y = 0; y < kRows; ++y)
+    for (int x = 0; x < kCols; ++x) previous.at<cv::Vec2f>(y, x) = cv::Vec2f(static_cast<float>(x - 2), static_cast<float>(y));
+  for (const bool with_map : {true, false}) {
+    EvidenceGrid grid(o);
+    grid.reset(kCols, kRows);
+    learn(grid, 0, o.warmup_windows);
+    float at_target = 0;
+    for (int k = 0; k < 4; ++k) {
+      cv::Mat n = uniform_counts(0);
+      n.at<float>(3, 3 * k) = 12;
+      grid.update(n, with_map ? previous : cv::Mat());
+      at_target = grid.evidence().at<float>(3, 3 * k);
+    }
+    if (with_map) EXPECT_FLOAT_EQ(at_target, 16.f);  // 4 windows of ℓ_max
+    else EXPECT_FLOAT_EQ(at_target, 4.f);            // every window starts a new path
+  }
+}
+
+// The source in a Detector: windows of uniform noise, with or without a small dim blob drifting
+// 2 px a window, seen by a still camera ("none" is the exact compensation).
+constexpr int kWidth = 160, kHeight = 120;
+constexpr double kWindowS = 0.025;
+
+struct NoisyWindows {
+  std::vector<std::int32_t> pixel;
+  std::vector<float> t_s;
+  std::mt19937 rng{7};
+
+  CompensatedEventsView make(int k, bool blob, Eigen::Vector2d& blob_at) {
+    pixel.clear();
+    t_s.clear();
+    std::uniform_int_distribution<int> x(0, kWidth - 1), y(0, kHeight - 1);
+    std::uniform_real_distribution<double> t(0, kWindowS), unit(0, 1);
+    std::vector<std::pair<float, std::int32_t>> ev;
+    for (int i = 0; i < 2000; ++i) ev.push_back({static_cast<float>(t(rng)), y(rng) * kWidth + x(rng)});
+    blob_at = {40.0 + 2 * k, 60.0};
+    if (blob)
+      for (int i = 0; i < 45; ++i) {  // radius 3: about 28 px, most of which fire
+        const double r = 3 * std::sqrt(unit(rng)), a = 2 * M_PI * unit(rng);
+        const int u = static_cast<int>(std::lround(blob_at.x() + r * std::cos(a)));
+        const int v = static_cast<int>(std::lround(blob_at.y() + r * std::sin(a)));
+        ev.push_back({static_cast<float>(t(rng)), v * kWidth + u});
+      }
+    std::sort(ev.begin(), ev.end());
+    for (const auto& [when, p] : ev) {
+      t_s.push_back(when);
+      pixel.push_back(p);
+    }
+    const TimeNs start = from_seconds(k * kWindowS);
+    return {start, start + from_seconds(kWindowS), kWidth, kHeight, pixel, t_s};
+  }
+};
+
+PinholeCamera small_camera() { return {.width = kWidth, .height = kHeight, .fx = 150, .fy = 150, .cx = 80, .cy = 60, .distortion = {}}; }
+
+struct BlobRun {
+  int found = 0;  ///< windows after the evidence could exist (warm-up + 3) with the blob found
+  int evidence_hits = 0, evidence_misplaced = 0;
+};
+
+BlobRun run_blob(bool evidence) {
+  DetectorOptions o;
+  o.evidence.enabled = evidence;
+  Detector detector(o, small_camera());
+  NoisyWindows windows;
+  BlobRun out;
+  for (int k = 0; k < 30; ++k) {
+    Eigen::Vector2d blob_at;
+    const DetectionResult r = detector.detect(windows.make(k, true, blob_at));
+    bool found = false;
+    for (const Detection2D& d : r.detections) {
+      const bool on_blob = (d.center_undistorted - blob_at).norm() < 3.0;
+      found = found || on_blob;
+      if (d.source == DetectionSource::kEvidence) ++(on_blob ? out.evidence_hits : out.evidence_misplaced);
+    }
+    if (k >= o.evidence.warmup_windows + 4 && found) ++out.found;
+  }
+  return out;
+}
+
+TEST(EvidenceSource, ADimDriftingBlobIsFoundInMoreWindowsAndNoiseIsNot) {
+  const BlobRun with = run_blob(true), without = run_blob(false);
+  EXPECT_GT(with.evidence_hits, 0);
+  EXPECT_EQ(with.evidence_misplaced, 0);
+  EXPECT_GT(with.found, without.found) << "of 18 windows";
+  EXPECT_EQ(without.evidence_hits, 0);
+  DetectorOptions o;
+  o.evidence.enabled = true;
+  Detector detector(o, small_camera());
+  NoisyWindows windows;
+  int noise_detections = 0;
+  for (int k = 0; k < 60; ++k) {
+    Eigen::Vector2d unused;
+    noise_detections += static_cast<int>(detector.detect(windows.make(k, false, unused)).detections.size());
+  }
+  EXPECT_EQ(noise_detections, 0);
+}
+
+}  // namespace
+}  // namespace fdv
