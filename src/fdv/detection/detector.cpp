@@ -116,6 +116,10 @@ DetectorOptions scaled_to_camera(const DetectorOptions& options, const PinholeCa
   o.min_event_density *= scale;
   const int k = static_cast<int>(std::lround(o.count_contrast.box_px * scale));
   o.count_contrast.box_px = std::clamp(k % 2 == 1 ? k : k + 1, 3, 31);
+  // Up only: the evidence grid's cells grow with the same ball's image at a longer focal length
+  // (finer cells there only gave texture more paths); smaller cells than 8 px split a far ball.
+  const double up = std::max(1.0, camera.fx / o.gate_focal_px);
+  o.evidence.cell_px = std::clamp(static_cast<int>(std::lround(o.evidence.cell_px * up)), 2, 64);
   return o;
 }
 

@@ -196,15 +196,13 @@ void describe(V& v, CountContrastSourceOptions& o) {
 /// the cell's own history, summed along paths over windows (L = max(0, ℓ + the best neighbour's L
 /// a window ago)); a cell at L ≥ h is a candidate (evidence_source.h states the model).
 struct EvidenceSourceOptions {
-  /// Off by default until its false detections are tuned down (docs/DETECTION.md, "Evidence
-  /// source": 0-15 false windows of 45-74 on training seeds). YAML `evidence`
-  bool enabled = false;
-  /// C [px]: a far ball (4-10 px) lies in one or two cells and moves about a cell a window.
-  /// YAML `evidence_cell_px`
+  bool enabled = true;  ///< false = the paper. YAML `evidence`
+  /// C [px] at DetectorOptions::gate_focal_px (a longer focal length scales it up): a far ball
+  /// (4-10 px) lies in one or two cells and moves about a cell a window. YAML `evidence_cell_px`
   int cell_px = 8;
   /// δ: the object's excess of fired pixels in σ of the cell's own variation [-]. The best of 9
   /// predecessors lifts a path by about σ_ℓ·√(2 ln 9) = 2.1δ a window, so δ²/2 must exceed it:
-  /// δ > 4.2 (2-5 left paths through texture growing; 6 measured on training seeds 10, 11, 16).
+  /// δ > 4.2 (δ = 2-5 left paths through texture growing on training seeds 10, 11, 16).
   /// YAML `evidence_signal_sigma`
   double signal_sigma = 6.0;
   /// h: the path's sum of ℓ at which a cell is a candidate [-]. YAML `evidence_threshold`
@@ -217,9 +215,15 @@ struct EvidenceSourceOptions {
   /// b_min: added to every cell's variance [fired pixels² per window]: in an empty cell one event
   /// must not be evidence. YAML `evidence_min_background`
   double min_background = 1.0;
-  /// Windows in which each cell's mean and variance are learned before any evidence counts.
-  /// YAML `evidence_warmup_windows`
-  int warmup_windows = 8;
+  /// The least travel over the scene of a path that makes a candidate [cells]: T ← 0.8·T + the
+  /// path's step over the scene each window (after the ego-motion), so five steps of a cell make
+  /// 3.36 and six 3.69; the static scene's paths hop about their place, and a person's moving
+  /// parts wander (docs/DETECTION.md, "Evidence source"). YAML `evidence_min_travel_cells`
+  double min_travel_cells = 3.5;
+  /// Windows in which each cell's mean and variance are learned before any evidence counts: 1/α,
+  /// where the running average turns exponential (a variance from 8 windows let a moving
+  /// person's head through on a real recording). YAML `evidence_warmup_windows`
+  int warmup_windows = 20;
   std::string validate() const;
 };
 
@@ -232,6 +236,7 @@ void describe(V& v, EvidenceSourceOptions& o) {
   v("evidence_max_window_llr", o.max_window_llr, "-", "ℓ_max: the most one window adds (h / ℓ_max windows at least)");
   v("evidence_background_weight", o.background_weight, "-", "α: a window's weight in each cell's running mean and variance");
   v("evidence_min_background", o.min_background, "px²", "b_min: added to every cell's variance of fired pixels per window");
+  v("evidence_min_travel_cells", o.min_travel_cells, "cells", "a candidate path's recent travel over the scene at least (T ← 0.8 T + step)");
   v("evidence_warmup_windows", o.warmup_windows, "-", "windows that learn the background before evidence counts");
 }
 

@@ -21,21 +21,26 @@ std::string EvidenceSourceOptions::validate() const {
     why << "evidence_background_weight must be in (0, 1], got " << background_weight;
   else if (!(min_background >= 0 && std::isfinite(min_background)))
     why << "evidence_min_background must be finite and ≥ 0, got " << min_background;
+  else if (!(min_travel_cells >= 0 && min_travel_cells <= 5))
+    why << "evidence_min_travel_cells must be in [0, 5] (a path's travel tends to 5 cells at most), got " << min_travel_cells;
   else if (!(warmup_windows >= 0 && warmup_windows <= 1000))
     why << "evidence_warmup_windows must be in [0, 1000], got " << warmup_windows;
   return why.str();
 }
 
 void EvidenceGrid::reset(int cols, int rows) {
-  for (cv::Mat* m : {&mean_, &variance_, &evidence_, &llr_, &predicted_evidence_, &predicted_mean_, &predicted_variance_,
-                     &dilated_}) {
-    m->create(rows, cols, CV_32F);
-    m->setTo(0);
-  }
+  for (cv::Mat* m :
+       {&mean_, &variance_, &evidence_, &llr_, &predicted_evidence_, &predicted_mean_, &predicted_variance_, &best_offer_})
+    m->create(rows, cols, CV_32F), m->setTo(0);
+  offer_from_.create(rows, cols, CV_32SC2);
+  for (cv::Mat* m : {&travel_, &predicted_travel_}) m->create(rows, cols, CV_32FC2), m->setTo(0);
   windows_ = 0;
 }
 
-void EvidenceGrid::break_paths() { evidence_.setTo(0); }
+void EvidenceGrid::break_paths() {
+  std::fill(evidence_.begin<float>(), evidence_.end<float>(), 0.f);  // setTo allocates
+  std::fill(travel_.begin<cv::Vec2f>(), travel_.end<cv::Vec2f>(), cv::Vec2f(0, 0));
+}
 
 void EvidenceGrid::update(const cv::Mat& fired, const cv::Mat& previous) {
   CV_Assert(fired.type() == CV_32F && fired.size() == evidence_.size());
@@ -45,48 +50,89 @@ void EvidenceGrid::update(const cv::Mat& fired, const cv::Mat& previous) {
     variance_.setTo(0);
     return;
   }
-  // Where a path may have been a window ago: any of the 3 × 3 cells around the scene point's
-  // previous cell (an object moves at most a cell a window), found through the ego-motion.
-  cv::dilate(evidence_, dilated_, cv::Mat());
+  // Every map as it was a window ago, moved by the ego-motion onto this window's cells.
   if (previous.empty()) {
-    dilated_.copyTo(predicted_evidence_);
+    evidence_.copyTo(predicted_evidence_);
+    travel_.copyTo(predicted_travel_);
     mean_.copyTo(predicted_mean_);
     variance_.copyTo(predicted_variance_);
   } else {
     // Nearest cell, not bilinear: resampling every window would blur each cell's history into its
-    // neighbours' (a textured cell's mean sinking towards its empty neighbours').
-    cv::remap(dilated_, predicted_evidence_, previous, cv::noArray(), cv::INTER_NEAREST, cv::BORDER_CONSTANT, 0);
-    cv::remap(mean_, predicted_mean_, previous, cv::noArray(), cv::INTER_NEAREST, cv::BORDER_REPLICATE);
-    cv::remap(variance_, predicted_variance_, previous, cv::noArray(), cv::INTER_NEAREST, cv::BORDER_REPLICATE);
+    // neighbours' (a textured cell's mean sinking towards its empty neighbours'). By hand, not
+    // cv::remap, which allocates its buffers on every call.
+    const int rows = fired.rows, cols = fired.cols;
+    for (int y = 0; y < rows; ++y)
+      for (int x = 0; x < cols; ++x) {
+        const cv::Vec2f at = previous.at<cv::Vec2f>(y, x);
+        const int px = static_cast<int>(std::lround(at[0])), py = static_cast<int>(std::lround(at[1]));
+        const bool inside = px >= 0 && py >= 0 && px < cols && py < rows;  // else it entered the view
+        const int cx = std::clamp(px, 0, cols - 1), cy = std::clamp(py, 0, rows - 1);
+        predicted_evidence_.at<float>(y, x) = inside ? evidence_.at<float>(py, px) : 0.f;
+        predicted_travel_.at<cv::Vec2f>(y, x) = inside ? travel_.at<cv::Vec2f>(py, px) : cv::Vec2f(0, 0);
+        predicted_mean_.at<float>(y, x) = mean_.at<float>(cy, cx);
+        predicted_variance_.at<float>(y, x) = variance_.at<float>(cy, cx);
+      }
   }
   // The window's activity against the expected: the camera speeding up, or a scene-wide change
-  // of light, raises every cell alike and is no object.
-  // b_min a cell in both sums: in a nearly empty scene the object itself must not set g.
+  // of light, raises every cell alike and is no object. b_min a cell in both sums: in a nearly
+  // empty scene the object itself must not set g. Never below 1: when the scene quietens (a
+  // moving person stopping), the cells still firing must not look raised.
   const double prior = o.min_background * static_cast<double>(fired.total());
-  const float gain = static_cast<float>((cv::sum(fired)[0] + prior) / (cv::sum(predicted_mean_)[0] + prior));
+  double fired_sum = prior, expected_sum = prior;  // by hand: cv::sum allocates its buffers
+  for (int y = 0; y < fired.rows; ++y)
+    for (int x = 0; x < fired.cols; ++x) {
+      fired_sum += fired.at<float>(y, x);
+      expected_sum += predicted_mean_.at<float>(y, x);
+    }
+  const float gain = static_cast<float>(std::max(1.0, fired_sum / expected_sum));
   const bool learning = windows_ <= o.warmup_windows;
   const float delta = static_cast<float>(o.signal_sigma), llr_max = static_cast<float>(o.max_window_llr);
-  const float b_min = static_cast<float>(o.min_background);
+  const float b_min = static_cast<float>(o.min_background), keep = static_cast<float>(kTravelMemory);
   // A path holds at most 2h: the evidence of an object that left fades within a few windows.
   const float L_max = 2 * static_cast<float>(o.threshold);
   // A running average over the first 1/α windows, then exponential.
   const float alpha = std::max(static_cast<float>(o.background_weight), 1.f / static_cast<float>(windows_));
-  for (int y = 0; y < fired.rows; ++y) {
+  const int rows = fired.rows, cols = fired.cols;
+  // Each path a window ago offers itself to the 3 × 3 cells around where it goes next over the
+  // scene: its own cell moved by its recent step, (1 − 0.8)·T (an object moves at most a cell a
+  // window from where its motion predicts it). Each cell takes the best offer, its own cell's on a tie.
+  // std::fill, not setTo, which allocates a buffer for the scalar on every call.
+  std::fill(best_offer_.begin<float>(), best_offer_.end<float>(), 0.f);
+  std::fill(offer_from_.begin<cv::Vec2i>(), offer_from_.end<cv::Vec2i>(), cv::Vec2i(-1, -1));
+  for (int y = 0; y < rows; ++y)
+    for (int x = 0; x < cols; ++x) {
+      const float offer = predicted_evidence_.at<float>(y, x);
+      if (!(offer > 0)) continue;
+      const cv::Vec2f step = (1 - keep) * predicted_travel_.at<cv::Vec2f>(y, x);
+      const int cx = x + static_cast<int>(std::lround(step[0])), cy = y + static_cast<int>(std::lround(step[1]));
+      for (int ty = std::max(cy - 1, 0); ty <= std::min(cy + 1, rows - 1); ++ty)
+        for (int tx = std::max(cx - 1, 0); tx <= std::min(cx + 1, cols - 1); ++tx) {
+          float& best = best_offer_.at<float>(ty, tx);
+          const bool own = tx == x && ty == y;
+          if (offer > best || (own && offer == best)) best = offer, offer_from_.at<cv::Vec2i>(ty, tx) = cv::Vec2i(x, y);
+        }
+    }
+  for (int y = 0; y < rows; ++y) {
     const float* n = fired.ptr<float>(y);
     const float* m = predicted_mean_.ptr<float>(y);
     const float* v = predicted_variance_.ptr<float>(y);
-    const float* L_prev = predicted_evidence_.ptr<float>(y);
+    const float* offer = best_offer_.ptr<float>(y);
+    const cv::Vec2i* from = offer_from_.ptr<cv::Vec2i>(y);
     float* L = evidence_.ptr<float>(y);
+    cv::Vec2f* travel = travel_.ptr<cv::Vec2f>(y);
     float* l = llr_.ptr<float>(y);
     float* m_next = mean_.ptr<float>(y);
     float* v_next = variance_.ptr<float>(y);
-    for (int x = 0; x < fired.cols; ++x) {
+    for (int x = 0; x < cols; ++x) {
       const float mu = gain * m[x];
       const float sigma = std::sqrt(std::max(gain * gain * v[x], mu) + b_min);
       const float z = (n[x] - mu) / sigma;
       l[x] = learning ? 0.f : std::min(delta * z - 0.5f * delta * delta, llr_max);
-      L[x] = std::clamp(L_prev[x] + l[x], 0.f, L_max);
-      // The innovation is clipped at 3σ: an object passing must not teach its cell to expect it.
+      L[x] = std::clamp(offer[x] + l[x], 0.f, L_max);
+      const cv::Vec2i f = from[x];
+      const bool continues = L[x] > 0 && f[0] >= 0;
+      const cv::Vec2f step(static_cast<float>(x - (continues ? f[0] : x)), static_cast<float>(y - (continues ? f[1] : y)));
+      travel[x] = continues ? keep * predicted_travel_.at<cv::Vec2f>(f[1], f[0]) + step : cv::Vec2f(0, 0);
       const float e = n[x] - m[x];
       m_next[x] = m[x] + alpha * e;
       v_next[x] = (1 - alpha) * (v[x] + alpha * e * e);
@@ -128,7 +174,7 @@ bool EvidenceSource::begin_window(const SourceWindow& in) {
 
 void EvidenceSource::count_fired(const SourceWindow& in) {
   // Fired pixels, not events: a hot pixel or a flickering one counts once however often it fires.
-  fired_.setTo(0);
+  std::fill(fired_.begin<float>(), fired_.end<float>(), 0.f);  // setTo allocates
   const int c = options_.evidence.cell_px;
   const cv::Mat& I = in.ti.count;
   for (const std::int32_t p : in.events.pixel) {
@@ -182,9 +228,19 @@ std::optional<Candidate> EvidenceSource::find(SourceWindow& in, DetectionResult&
   if (!updated_ || in.events.t_start != last_start_ || in.events.t_end != last_end_) begin_window(in);
   const EvidenceSourceOptions& o = options_.evidence;
   const cv::Mat& L = grid_.evidence();
+  // The best path that has travelled over the scene: the static scene's paths (texture that a
+  // hovering camera sweeps, a person's slow sway) hop about their place.
   double best = 0;
-  cv::Point cell;
-  cv::minMaxLoc(L, nullptr, &best, nullptr, &cell);
+  cv::Point cell(-1, -1);
+  const float min_travel2 = static_cast<float>(o.min_travel_cells * o.min_travel_cells);
+  // Not in the two outermost rings of cells: content entering the view (and the compensation's
+  // worst part) is there; a ball entering is found by the other sources once it is in.
+  for (int y = kBorderCells; y + kBorderCells < rows_; ++y) {
+    const float* Ly = L.ptr<float>(y);
+    const cv::Vec2f* travel = grid_.travel().ptr<cv::Vec2f>(y);
+    for (int x = kBorderCells; x + kBorderCells < cols_; ++x)
+      if (Ly[x] > best && travel[x].dot(travel[x]) >= min_travel2) best = Ly[x], cell = {x, y};
+  }
   EvidenceDiagnostics& diag = res.diagnostics_of(kName).write<EvidenceDiagnostics>();
   diag.evidence = best;
   diag.cell_x = cell.x;

@@ -2,9 +2,11 @@
 /// Candidate source 5 (not in the paper; docs/DETECTION.md, "Evidence source"): track-before-detect
 /// for a far, small object that no single window shows convincingly. Every window, each C × C cell
 /// of the compensated count image gives a log-likelihood ratio of "background and an object"
-/// against "background alone" from its fired pixels and their own history; a dynamic programme over windows adds it along the paths an
-/// object can take (≤ 1 cell a window after the ego-motion between windows), and a cell whose
-/// path's sum reaches the threshold h is a candidate. Incremental: one update a window, no history.
+/// against "background alone" from its fired pixels and their own history; a dynamic programme
+/// over windows adds it along the paths an object can take (a cell a window from where its recent
+/// motion over the scene predicts it, after the ego-motion between windows), and the best cell
+/// whose path's sum reaches the threshold h and that has travelled over the scene is a candidate.
+/// Incremental: one update a window, no history.
 ///
 ///   EvidenceSource source(options);   // once; allocate(width, height) before the first window
 ///   source.begin_window(in);          // every window that reaches the sources, before find()
@@ -24,15 +26,18 @@ namespace fdv {
 /// The evidence model of the source, on a grid of cells (EvidenceSourceOptions states the symbols).
 /// Each cell c has a running mean m_c and variance v_c of its fired pixels per window; in a window
 /// with n_c fired pixels:
-///   μ_c = g·m_c, σ_c² = max(g²·v_c, μ_c) + b_min, with g = (Σ n + N·b_min) / (Σ m + N·b_min)
+///   μ_c = g·m_c, σ_c² = max(g²·v_c, μ_c) + b_min, with g = max(1, (Σ n + N·b_min) / (Σ m + N·b_min))
 ///         the window's activity over the expected, N cells (the camera speeding up raises every
-///         cell alike: no object; b_min keeps a small object in an empty scene from setting g);
+///         cell alike: no object; b_min keeps a small object in an empty scene from setting g; a
+///         quietening scene does not make the cells still firing look raised);
 ///   z_c = (n_c − μ_c) / σ_c, and ℓ_c = min(δ·z_c − δ²/2, ℓ_max): the log-likelihood ratio of a
 ///         mean shifted by δσ against none, for a Gaussian z (a cell that fires in bursts has a
 ///         large v and needs a large excess; a single window adds at most ℓ_max);
-///   L_c = min(max(0, ℓ_c + max of L over the 3 × 3 cells around where the scene point was a
-///         window ago), 2h): the best path's sum, reset at 0 (Page's CUSUM along paths, a dynamic
+///   L_c = min(max(0, ℓ_c + L_p), 2h), where p is the best path a window ago (moved by the
+///         ego-motion) among those whose cell moved by their recent step (1 − 0.8)·T_p lands within
+///         a cell of c: the best path's sum, reset at 0 (Page's CUSUM along paths, a dynamic
 ///         programme), held below 2h so that an object that left fades within a few windows;
+///   T_c = 0.8·T_p + (c − p): the path's recent travel over the scene [cells];
 ///   m_c, v_c ← exponential averages of weight max(α, 1/k) in the k-th window.
 /// No evidence (ℓ = 0) in the first `warmup_windows` windows, while m and v are learned.
 class EvidenceGrid {
@@ -51,10 +56,16 @@ class EvidenceGrid {
   const cv::Mat& mean() const { return mean_; }          ///< m, CV_32F
   const cv::Mat& variance() const { return variance_; }  ///< v, CV_32F
   int windows() const { return windows_; }
+  /// Each path's recent travel over the scene [cells] (CV_32FC2): T ← 0.8·T(predecessor) + the
+  /// step from it; a consistently moving object's grows to 5 cells at a cell a window.
+  const cv::Mat& travel() const { return travel_; }
+  static constexpr double kTravelMemory = 0.8;
 
  private:
   EvidenceSourceOptions options_;
-  cv::Mat mean_, variance_, evidence_, llr_, predicted_evidence_, predicted_mean_, predicted_variance_, dilated_;
+  cv::Mat mean_, variance_, evidence_, llr_, predicted_evidence_, predicted_mean_, predicted_variance_;
+  cv::Mat travel_, predicted_travel_;  ///< CV_32FC2
+  cv::Mat best_offer_, offer_from_;    ///< the best predecessor's L (CV_32F) and cell (CV_32SC2)
   int windows_ = 0;
 };
 
@@ -81,7 +92,8 @@ class EvidenceSource final : public CandidateSource {
   /// length), as `previous` for the next update; empty without ego-motion.
   void predict_motion(const SourceWindow& in);
 
-  static constexpr int kCoarseStep = 4;  ///< the ego-motion is evaluated every this many cells
+  static constexpr int kCoarseStep = 4;   ///< the ego-motion is evaluated every this many cells
+  static constexpr int kBorderCells = 2;  ///< rings of cells at the border that make no candidate
 
   DetectorOptions options_;
   EvidenceGrid grid_;
