@@ -196,7 +196,9 @@ void describe(V& v, CountContrastSourceOptions& o) {
 /// the cell's own history, summed along paths over windows (L = max(0, ℓ + the best neighbour's L
 /// a window ago)); a cell at L ≥ h is a candidate (evidence_source.h states the model).
 struct EvidenceSourceOptions {
-  bool enabled = true;  ///< false = the paper. YAML `evidence`
+  /// Off by default: on Table I's scenes with a moving background (scene2_ball, swing) it adds
+  /// false detections (docs/DETECTION.md, "Evidence source"). YAML `evidence`
+  bool enabled = false;
   /// C [px] at DetectorOptions::gate_focal_px (a longer focal length scales it up): a far ball
   /// (4-10 px) lies in one or two cells and moves about a cell a window. YAML `evidence_cell_px`
   int cell_px = 8;
