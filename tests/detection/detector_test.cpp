@@ -762,6 +762,14 @@ TEST_F(DetectorTest, InvalidOptionsAreRejected) {
       {"count_contrast_still_motion_z", [](DetectorOptions& x) { x.count_contrast.still_min_motion_z = NAN; }},
       {"count_contrast_sparse_chance", [](DetectorOptions& x) { x.count_contrast.sparse_chance = 1; }},
       {"count_contrast_sparse_chance", [](DetectorOptions& x) { x.count_contrast.sparse_chance = NAN; }},
+      {"evidence_cell_px", [](DetectorOptions& x) { x.evidence.cell_px = 1; }},
+      {"evidence_signal_sigma", [](DetectorOptions& x) { x.evidence.signal_sigma = 0; }},
+      {"evidence_threshold", [](DetectorOptions& x) { x.evidence.threshold = NAN; }},
+      {"evidence_max_window_llr", [](DetectorOptions& x) { x.evidence.max_window_llr = -1; }},
+      {"evidence_background_weight", [](DetectorOptions& x) { x.evidence.background_weight = 0; }},
+      {"evidence_min_background", [](DetectorOptions& x) { x.evidence.min_background = -1; }},
+      {"evidence_min_travel_cells", [](DetectorOptions& x) { x.evidence.min_travel_cells = 6; }},
+      {"evidence_warmup_windows", [](DetectorOptions& x) { x.evidence.warmup_windows = -1; }},
   };
   for (const auto& [name, make_bad] : cases) {
     DetectorOptions bad;

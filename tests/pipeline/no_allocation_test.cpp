@@ -205,6 +205,17 @@ TEST(NoAllocation, DetectorAfterWarmUp) {
   EXPECT_EQ(c.detector, c.detected) << "allocations in " << c.windows << " windows";
 }
 
+TEST(NoAllocation, EvidenceSourceToo) {
+  // The evidence source (off by default) updates its grids every window: its cell counts, the
+  // ego-motion map and the paths work in buffers sized once.
+  DetectorOptions o;
+  o.evidence.enabled = true;
+  o.evidence.warmup_windows = 0;  // its evidence pass too, not only the learning
+  const Counts c = run("rotation_translation", 1'000'000, o);
+  ASSERT_EQ(c.windows, kWindows - kWarmUp - 1);
+  EXPECT_EQ(c.detector, c.detected) << "allocations in " << c.windows << " windows";
+}
+
 TEST(NoAllocation, DetectorRetrievalBlankingAndPriorsToo) {
   // The paths a clean blob does not take: a fit that never converges (one iteration) sends every
   // candidate to region retrieval, an unreachable event density fails them all (blanking and the

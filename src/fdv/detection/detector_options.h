@@ -232,7 +232,7 @@ struct EvidenceSourceOptions {
 template <class V>
 void describe(V& v, EvidenceSourceOptions& o) {
   v("evidence", o.enabled, "-", "source 5, evidence over windows along paths: track-before-detect (false = the paper)");
-  v("evidence_cell_px", o.cell_px, "px", "C: side of a cell of the evidence grid");
+  v("evidence_cell_px", o.cell_px, "px", "C: side of a cell of the evidence grid, at gate_focal_px (a longer fx scales it up)");
   v("evidence_signal_sigma", o.signal_sigma, "-", "δ: an object's excess of fired pixels, in σ of the cell's own variation");
   v("evidence_threshold", o.threshold, "-", "h: a path's sum of log-likelihood ratios that makes a candidate; tuned");
   v("evidence_max_window_llr", o.max_window_llr, "-", "ℓ_max: the most one window adds (h / ℓ_max windows at least)");

@@ -22,7 +22,7 @@ std::string EvidenceSourceOptions::validate() const {
   else if (!(min_background >= 0 && std::isfinite(min_background)))
     why << "evidence_min_background must be finite and ≥ 0, got " << min_background;
   else if (!(min_travel_cells >= 0 && min_travel_cells <= 5))
-    why << "evidence_min_travel_cells must be in [0, 5] (a path's travel tends to 5 cells at most), got " << min_travel_cells;
+    why << "evidence_min_travel_cells must be in [0, 5] cells, got " << min_travel_cells;
   else if (!(warmup_windows >= 0 && warmup_windows <= 1000))
     why << "evidence_warmup_windows must be in [0, 1000], got " << warmup_windows;
   return why.str();
@@ -150,8 +150,8 @@ void EvidenceSource::allocate(int width, int height) {
   rows_ = (height + c - 1) / c;
   grid_.reset(cols_, rows_);
   fired_.create(rows_, cols_, CV_32F);
-  next_previous_.create(rows_, cols_, CV_32FC2);
-  previous_.release();
+  previous_.create(rows_, cols_, CV_32FC2);
+  moved_ = false;
   coarse_.create((rows_ + kCoarseStep - 1) / kCoarseStep + 1, (cols_ + kCoarseStep - 1) / kCoarseStep + 1, CV_32FC2);
   updated_ = false;
 }
@@ -164,7 +164,7 @@ bool EvidenceSource::begin_window(const SourceWindow& in) {
   const bool follows = grid_.windows() > 0 && v.t_start == last_end_;
   if (grid_.windows() > 0 && !follows) grid_.break_paths();
   count_fired(in);
-  grid_.update(fired_, follows ? previous_ : cv::Mat());
+  grid_.update(fired_, follows && moved_ ? previous_ : cv::Mat());
   predict_motion(in);
   last_start_ = v.t_start;
   last_end_ = v.t_end;
@@ -186,10 +186,8 @@ void EvidenceSource::count_fired(const SourceWindow& in) {
 
 void EvidenceSource::predict_motion(const SourceWindow& in) {
   const CompensatedEventsView& v = in.events;
-  if (!v.observed_at) {
-    previous_.release();
-    return;
-  }
+  moved_ = static_cast<bool>(v.observed_at);
+  if (!moved_) return;
   // The displacement by the next window's start of every kCoarseStep-th cell's centre, then
   // bilinear between them: the ego-motion's image flow is smooth over a few cells.
   const double c = options_.evidence.cell_px, length_s = to_seconds(v.t_end - v.t_start);
@@ -217,11 +215,9 @@ void EvidenceSource::predict_motion(const SourceWindow& in) {
       const cv::Vec2f d = (1 - fy) * ((1 - fx) * coarse_.at<cv::Vec2f>(ky, kx) + fx * coarse_.at<cv::Vec2f>(ky, kx + 1)) +
                           fy * ((1 - fx) * coarse_.at<cv::Vec2f>(ky + 1, kx) + fx * coarse_.at<cv::Vec2f>(ky + 1, kx + 1));
       // Where the next window's cell (x, y) was in this window: first order in the flow.
-      next_previous_.at<cv::Vec2f>(y, x) = cv::Vec2f(static_cast<float>(x) - d[0], static_cast<float>(y) - d[1]);
+      previous_.at<cv::Vec2f>(y, x) = cv::Vec2f(static_cast<float>(x) - d[0], static_cast<float>(y) - d[1]);
     }
   }
-  cv::swap(previous_, next_previous_);
-  if (next_previous_.empty()) next_previous_.create(rows_, cols_, CV_32FC2);
 }
 
 std::optional<Candidate> EvidenceSource::find(SourceWindow& in, DetectionResult& res) {

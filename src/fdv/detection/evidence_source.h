@@ -83,13 +83,12 @@ class EvidenceSource final : public CandidateSource {
   void allocate(int width, int height) override;
   bool begin_window(const SourceWindow& in) override;
   std::optional<Candidate> find(SourceWindow& in, DetectionResult& res) override;
-  const EvidenceGrid& grid() const { return grid_; }
 
  private:
   /// Each cell's fired pixels from the window's events: an event adds 1 / I at its pixel.
   void count_fired(const SourceWindow& in);
   /// Where each cell's centre goes by the next window's start (the window's observed_at after its
-  /// length), as `previous` for the next update; empty without ego-motion.
+  /// length), into previous_ for the next update; moved_ false without ego-motion.
   void predict_motion(const SourceWindow& in);
 
   static constexpr int kCoarseStep = 4;   ///< the ego-motion is evaluated every this many cells
@@ -98,7 +97,11 @@ class EvidenceSource final : public CandidateSource {
   DetectorOptions options_;
   EvidenceGrid grid_;
   int width_ = 0, height_ = 0, cols_ = 0, rows_ = 0;
-  cv::Mat fired_, previous_, next_previous_, coarse_;
+  cv::Mat fired_, coarse_;
+  /// Where each cell's scene point was in the last window (EvidenceGrid::update's `previous`),
+  /// written after each update for the next; valid when `moved_` (the window had ego-motion).
+  cv::Mat previous_;
+  bool moved_ = false;
   TimeNs last_start_ = 0, last_end_ = 0;
   bool updated_ = false;  ///< this window's update ran (find() of a later pass reuses it)
 };
