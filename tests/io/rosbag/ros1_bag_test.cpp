@@ -604,6 +604,32 @@ TEST_F(Ros1BagTest, ImplausibleChunkSizeIsAnErrorNotAnAllocation) {
       << what;
 }
 
+TEST_F(Ros1BagTest, EmptyRecordHeaderInAChunkEndsTheReadAndIsCounted) {
+  // The first record inside the first (uncompressed) chunk with header length 0: it has no `op`
+  // field. Reading its zero header bytes once passed a null pointer to memcpy (UBSan, CI fuzz).
+  // The read stops there and counts it, as for any damaged chunk.
+  std::string b = file_string(bag_);
+  const auto records = top_records(b);
+  const auto chunk =
+      std::find_if(records.begin(), records.end(), [](const TopRecord& r) { return r.op == 5; });
+  ASSERT_NE(chunk, records.end());
+  const std::uint32_t zero = 0;
+  std::memcpy(b.data() + chunk->data, &zero, 4);
+  const std::string path = dir_ + "/empty_header.bag";
+  write_string(path, b);
+  auto reader = open_ros1_bag(path);
+  Everything got;
+  ASSERT_NO_THROW(got = read_all(*reader));
+  const auto& dropped = reader->report().dropped();
+  ASSERT_EQ(dropped.size(), 1u);
+  EXPECT_EQ(dropped.begin()->first,
+            "bag damaged, the rest is unreadable: record in a chunk: record header is empty (no "
+            "`op` field)");
+  EXPECT_EQ(dropped.begin()->second.first_where.rfind("byte " + std::to_string(chunk->data), 0),
+            0u)
+      << dropped.begin()->second.first_where;
+}
+
 TEST_F(Ros1BagTest, RandomCorruptionIsAnInputErrorOrAReadableStream) {
   // Bytes changed anywhere, in plain and compressed bags: an InputError naming where, or a read
   // that keeps the stream contract; never another exception or a crash (the sanitizer build

@@ -89,6 +89,7 @@ std::optional<std::string> parse_record(std::uint64_t pos, std::uint64_t size, R
   read(pos, &header_len, 4);
   if (header_len > kMaxHeaderLength || header_len > size - pos - 4)
     return "record header length " + std::to_string(header_len) + " runs past the end";
+  if (header_len == 0) return "record header is empty (no `op` field)";
   std::vector<std::uint8_t> header(header_len);
   read(pos + 4, header.data(), header_len);
   if (!parse_fields(header.data(), header.size(), r.fields))
