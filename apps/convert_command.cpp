@@ -1,18 +1,21 @@
-// `fdv convert INPUT --to evt3|hdf5|ros1-bag OUT [--start S] [--end S]` (alias `fdv export`):
+// `fdv convert INPUT --to aedat4|evt3|hdf5|ros1-bag OUT [--start S] [--end S]` (alias `fdv export`):
 // any recording open_recording reads (a simulated dataset folder, aedat4, RAW, HDF5, a bag, ...)
 // written in a format other tools read. ROS 1 bag: events, IMU, depth and odometry on the node's
-// default topics, for `rosbag play`; EVT 3.0 RAW and HDF5 (Metavision layout): events only.
+// default topics, for `rosbag play`; AEDAT 4.0: events and IMU; EVT 3.0 RAW and HDF5 (Metavision
+// layout): events only.
 // What the format cannot hold is left out and counted. Prints a JSON summary of what it wrote.
 #include <iostream>
 #include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <span>
 
 #include "apps/commands.h"
 #include "apps/reader_flags.h"
 #include "fdv/core/error.h"
 #include "fdv/core/time.h"
+#include "fdv/io/aedat4/aedat4_writer.h"
 #include "fdv/io/hdf5/hdf5_writer.h"
 #include "fdv/io/prophesee/evt3_writer.h"
 #include "fdv/io/recording.h"
@@ -26,6 +29,7 @@ struct ExportArgs {
   ReaderOptions reader;
   std::optional<double> start_s, end_s;  ///< after the recording's first time
   int gzip_level = 0;
+  std::string compression = "lz4";
   ros1::BagExportOptions bag;
   double event_message_ms = 1.0;
   std::optional<std::int64_t> time_offset_ns;
@@ -125,7 +129,8 @@ void check_window(const ExportArgs& a) {
     throw ConfigError("--start/--end: expected 0 <= start < end seconds after the recording's first time");
 }
 
-/// Events-only formats (EVT 3.0 RAW, HDF5): everything else is counted as not written.
+/// Formats of events, and of IMU samples when the writer takes them (AEDAT 4.0): everything else
+/// is counted as not written.
 template <typename Writer>
 void convert_events(ExportArgs& a, RecordingReader& reader, Writer& writer, nlohmann::json& out) {
   SensorChunk chunk;
@@ -135,7 +140,10 @@ void convert_events(ExportArgs& a, RecordingReader& reader, Writer& writer, nloh
   while (more) {
     window.apply(chunk);
     writer.add(chunk.events);
-    left_out["imu"] += chunk.imu.size();
+    if constexpr (requires { writer.add(std::span<const ImuSample>(chunk.imu)); })
+      writer.add(std::span<const ImuSample>(chunk.imu));
+    else
+      left_out["imu"] += chunk.imu.size();
     left_out["depth"] += chunk.depth.size();
     left_out["odometry"] += chunk.odometry.size();
     left_out["ground_truth"] += chunk.ground_truth.size();
@@ -143,7 +151,12 @@ void convert_events(ExportArgs& a, RecordingReader& reader, Writer& writer, nloh
   }
   writer.close();
   out["events"] = writer.events();
-  out["times_floored_to_us"] = writer.floored_events();
+  if constexpr (requires { writer.imu_samples(); }) {
+    out["imu"] = writer.imu_samples();
+    out["times_floored_to_us"] = writer.floored_times();
+  } else {
+    out["times_floored_to_us"] = writer.floored_events();
+  }
   out["not_written"] = left_out;
   out["outside_start_end"] = window.outside();
 }
@@ -164,7 +177,13 @@ void run_convert(ExportArgs& a) {
   auto reader = open_recording(a.input, a.reader);
   const auto [w, h] = sensor_size(a, *reader);
   nlohmann::json out = {{"input", a.input}, {"output", a.out}, {"format", a.to}};
-  if (a.to == "evt3") {
+  if (a.to == "aedat4") {
+    const Aedat4Compression c = a.compression == "none"   ? Aedat4Compression::kNone
+                                : a.compression == "zstd" ? Aedat4Compression::kZstd
+                                                          : Aedat4Compression::kLz4;
+    Aedat4Writer writer(a.out, w, h, c);
+    convert_events(a, *reader, writer, out);
+  } else if (a.to == "evt3") {
     Evt3Writer writer(a.out, w, h);
     convert_events(a, *reader, writer, out);
   } else {
@@ -235,19 +254,23 @@ void run_ros1_bag(ExportArgs& a) {
 
 void add_convert_command(CLI::App& app) {
   auto* cmd = app.add_subcommand(
-      "convert", "write a recording (dataset folder, aedat4, RAW, HDF5, bag, ...) as EVT 3.0 RAW, HDF5 or a ROS 1 bag");
+      "convert", "write a recording (dataset folder, aedat4, RAW, HDF5, bag, ...) as AEDAT 4.0, EVT 3.0 RAW, HDF5 or "
+      "a ROS 1 bag");
   cmd->alias("export");
   static ExportArgs a;
   cmd->add_option("input", a.input, "recording file or dataset folder")->required();
-  cmd->add_option("--to", a.to, "output format: evt3 (events), hdf5 (events, Metavision layout), ros1-bag "
-                                "(events, IMU, depth, odometry)")
+  cmd->add_option("--to", a.to, "output format: aedat4 (events, IMU), evt3 (events), hdf5 (events, Metavision "
+                                "layout), ros1-bag (events, IMU, depth, odometry)")
       ->required()
-      ->check(CLI::IsMember({"evt3", "hdf5", "ros1-bag"}));
+      ->check(CLI::IsMember({"aedat4", "evt3", "hdf5", "ros1-bag"}));
   cmd->add_option("output", a.out, "file to write")->required();
   cmd->add_option("--start", a.start_s, "seconds after the recording's first time: write from here");
   cmd->add_option("--end", a.end_s, "seconds after the recording's first time: write up to here");
   cmd->add_option("--gzip", a.gzip_level, "hdf5: gzip level 1..9 (0: uncompressed)")
       ->check(CLI::Range(0, 9))
+      ->capture_default_str();
+  cmd->add_option("--compression", a.compression, "aedat4: packet compression (DV records LZ4)")
+      ->check(CLI::IsMember({"lz4", "zstd", "none"}))
       ->capture_default_str();
   cmd->add_option("--events-as", a.bag.events_as,
                   "event message: event_array (dvs_msgs/EventArray) or event_packet "

@@ -116,3 +116,23 @@ def test_convert_to_a_format_that_cannot_hold_the_sensor_is_an_error(tmp_path):
     r = cli("convert", tmp_path / "big.h5", "--to", "evt3", tmp_path / "out.raw", check=False)
     assert r.returncode == 1
     assert "EVT 3.0 addresses pixels with 11 bits: sensor size 4096x3072 is outside 1..2048" in r.stderr
+
+
+def test_convert_to_aedat4_keeps_events_and_imu(tmp_path, dataset):
+    # a DAVIS346 recording: events event for event, IMU sample for sample (float32 g and deg/s)
+    aedat = real_file("davis346_ball_throw_person.aedat4")
+    summary = cli_json("convert", aedat, "--to", "aedat4", tmp_path / "copy.aedat4", "--compression", "zstd")
+    original, copy = fdv.open(aedat), fdv.open(str(tmp_path / "copy.aedat4"))
+    assert summary["events"] == len(events_of(aedat)) and summary["imu"] == len(original.imu()) > 0
+    assert np.array_equal(events_of(tmp_path / "copy.aedat4"), events_of(aedat))
+    a, b = original.imu(), copy.imu()
+    assert np.array_equal(a["t"], b["t"])
+    for field in ("gx", "gy", "gz", "ax", "ay", "az"):
+        assert np.allclose(a[field], b[field], rtol=1e-6, atol=1e-6)
+    # a simulated dataset: depth and odometry are what AEDAT 4.0 cannot hold, and are counted
+    summary = cli_json("convert", dataset, "--to", "aedat4", tmp_path / "sim.aedat4")
+    info = cli_json("info", dataset)
+    assert summary["not_written"]["depth"] == info["depth"]["count"] > 0
+    assert summary["not_written"]["odometry"] == info["odometry"]["count"] > 0
+    assert summary["imu"] == info["imu"]["count"]
+    assert np.array_equal(events_of(tmp_path / "sim.aedat4"), events_of(dataset))

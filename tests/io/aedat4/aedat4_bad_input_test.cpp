@@ -121,11 +121,11 @@ TEST(Aedat4BadInput, HeaderIsNotAValidFlatBuffer) {
 
 TEST(Aedat4BadInput, UnusableStreamDescription) {
   const std::string dir = test::scratch_dir("aedat4_bad_xml");
-  Aedat4Writer no_size(0, {{0, "EVTS", 0, 0}});
+  Aedat4Synthesizer no_size(0, {{0, "EVTS", 0, 0}});
   write_bytes(dir + "/no_size.aedat4", no_size.file());
   expect_input_error(dir + "/no_size.aedat4", "byte 14", "sizeX/sizeY");
 
-  Bytes f = Aedat4Writer(0, {{0, "EVTS", 10, 10}}).file();
+  Bytes f = Aedat4Synthesizer(0, {{0, "EVTS", 10, 10}}).file();
   const std::string xml = info_xml({{0, "EVTS", 10, 10}});
   // Break the XML in place (same length): an unclosed tag.
   const auto pos = std::search(f.begin(), f.end(), xml.begin(), xml.end()) - f.begin();
@@ -236,7 +236,7 @@ class Aedat4Compression : public ::testing::TestWithParam<int> {};
 
 TEST_P(Aedat4Compression, SynthesisedFileDecodes) {
   const int c = GetParam();
-  Aedat4Writer w(c, {{0, "EVTS", 346, 260}, {1, "FRME", 346, 260}, {2, "IMUS"}});
+  Aedat4Synthesizer w(c, {{0, "EVTS", 346, 260}, {1, "FRME", 346, 260}, {2, "IMUS"}});
   w.packet(0, events_payload({kEvents[0], kEvents[1]}));
   w.raw_packet(1, Bytes(40, 0x55));  // frames are skipped without being decoded
   w.packet(2, imu_payload({{1'000'005, {0, 0, -1}, {90, 0, -180}}}));
@@ -264,7 +264,7 @@ TEST_P(Aedat4Compression, SynthesisedFileDecodes) {
 INSTANTIATE_TEST_SUITE_P(AllCompressions, Aedat4Compression, ::testing::Values(0, 1, 2, 3, 4));
 
 TEST(Aedat4BadInput, CorruptZstdPacketIsDroppedAndReadingContinues) {
-  Aedat4Writer w(3, {{0, "EVTS", 346, 260}});
+  Aedat4Synthesizer w(3, {{0, "EVTS", 346, 260}});
   w.packet(0, events_payload({kEvents[0]}));
   const std::size_t bad = w.packet(0, events_payload({kEvents[1], kEvents[2]}));
   w.packet(0, events_payload({kEvents[3]}));
@@ -284,7 +284,7 @@ TEST(Aedat4BadInput, CorruptZstdPacketIsDroppedAndReadingContinues) {
 TEST(Aedat4BadInput, TruncatedCompressedFrameIsDropped) {
   // A packet whose LZ4 frame lost its last bytes (size field consistent with the shorter
   // payload): the frame ends early.
-  Aedat4Writer w(1, {{0, "EVTS", 346, 260}});
+  Aedat4Synthesizer w(1, {{0, "EVTS", 346, 260}});
   Bytes payload = compress(1, events_payload({kEvents[0], kEvents[1]}));
   payload.resize(payload.size() - 6);
   const std::size_t bad = w.raw_packet(0, payload);
@@ -298,7 +298,7 @@ TEST(Aedat4BadInput, TruncatedCompressedFrameIsDropped) {
 }
 
 TEST(Aedat4BadInput, PayloadThatIsNotAFlatBufferIsDropped) {
-  Aedat4Writer w(0, {{0, "EVTS", 346, 260}, {2, "IMUS"}});
+  Aedat4Synthesizer w(0, {{0, "EVTS", 346, 260}, {2, "IMUS"}});
   const std::size_t bad = w.raw_packet(0, Bytes(64, 0xEE));
   const std::size_t imu_as_events = w.packet(0, imu_payload({{5, {0, 0, 1}, {0, 0, 0}}}));
   w.packet(0, events_payload({kEvents[0]}));
@@ -314,7 +314,7 @@ TEST(Aedat4BadInput, PayloadThatIsNotAFlatBufferIsDropped) {
 
 TEST(Aedat4BadInput, NanImuSampleIsDropped) {
   const float nan = std::numeric_limits<float>::quiet_NaN();
-  Aedat4Writer w(1, {{0, "EVTS", 346, 260}, {2, "IMUS"}});
+  Aedat4Synthesizer w(1, {{0, "EVTS", 346, 260}, {2, "IMUS"}});
   const std::size_t imu_at = w.packet(2, imu_payload({{10, {0, 0, -1}, {0, 0, 0}},
                                                       {20, {nan, 0, -1}, {0, 0, 0}},
                                                       {30, {0.5f, 0, 0}, {0, -45, 0}}}));
@@ -332,7 +332,7 @@ TEST(Aedat4BadInput, NanImuSampleIsDropped) {
 }
 
 TEST(Aedat4BadInput, EventsOutsideTheSensorOrGoingBackwardsAreDropped) {
-  Aedat4Writer w(0, {{0, "EVTS", 346, 260}, {2, "IMUS"}});
+  Aedat4Synthesizer w(0, {{0, "EVTS", 346, 260}, {2, "IMUS"}});
   w.packet(0, events_payload({{100, 10, 10, 1},
                               {110, 346, 5, 1},  // x = width: outside
                               {120, -1, 5, 0},   // negative x: outside
@@ -358,7 +358,7 @@ TEST(Aedat4BadInput, DataTableIsNeverNeeded) {
   // header gives an unknown stream id and a negative size.
   const Bytes table = {0x04, 0x22, 0x4D, 0x18, 0x40, 0x40, 0xC0, 0x9C, 1, 2, 3, 4, 5, 6, 7, 8};
   const auto make = [&](std::int64_t table_position, bool with_table) {
-    Aedat4Writer w(1, {{0, "EVTS", 346, 260}});
+    Aedat4Synthesizer w(1, {{0, "EVTS", 346, 260}});
     w.packet(0, events_payload({kEvents[0], kEvents[1]}));
     w.packet(0, events_payload({kEvents[2], kEvents[3]}));
     return w.file(with_table ? table : Bytes{}, table_position);
@@ -376,7 +376,7 @@ TEST(Aedat4BadInput, DataTableIsNeverNeeded) {
   EXPECT_EQ(r.report.total_dropped(), 0u);
   // Wrong positions (inside a packet; before the last packet's header would be: at the header
   // end): every packet is still read; the unlocated table bytes are counted.
-  Aedat4Writer probe(1, {{0, "EVTS", 346, 260}});
+  Aedat4Synthesizer probe(1, {{0, "EVTS", 346, 260}});
   for (std::int64_t wrong :
        {std::int64_t{-1}, std::int64_t{40}, static_cast<std::int64_t>(probe.header_end())}) {
     write_bytes(dir + "/wrong.aedat4", make(wrong, true));
@@ -391,7 +391,7 @@ TEST(Aedat4Streaming, BigPacketIsHandedOutInChunks) {
   for (int i = 0; i < 5000; ++i)
     many.push_back({1000 + i, static_cast<std::int16_t>(i % 300),
                     static_cast<std::int16_t>(i % 200), static_cast<std::uint8_t>(i % 2)});
-  Aedat4Writer w(4, {{0, "EVTS", 346, 260}, {2, "IMUS"}});
+  Aedat4Synthesizer w(4, {{0, "EVTS", 346, 260}, {2, "IMUS"}});
   w.packet(2, imu_payload({{1500, {0, 0, 1}, {0, 0, 0}},
                            {5999, {0, 0, 1}, {0, 0, 0}},
                            {7000, {0, 0, 1}, {0, 0, 0}}}));

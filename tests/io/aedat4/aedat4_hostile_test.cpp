@@ -171,7 +171,7 @@ Bytes lz4_frame(const Bytes& in, bool declare_size) {
 /// A file of three events packets: valid, `bomb`, valid. Reading stops at the bomb with an
 /// InputError naming the name and the packet's byte.
 void expect_bomb_refused(int compression, const Bytes& bomb, const std::string& name) {
-  Aedat4Writer w(compression, {{0, "EVTS", 346, 260}});
+  Aedat4Synthesizer w(compression, {{0, "EVTS", 346, 260}});
   w.packet(0, events_payload({kTwo[0]}));
   const std::size_t bad = w.raw_packet(0, bomb);
   w.packet(0, events_payload({kTwo[1]}));
@@ -203,12 +203,12 @@ TEST(Aedat4Hostile, Lz4BombOfUnknownSizeStopsAtTheLimit) {
 
 TEST(Aedat4Hostile, FramesOfUnknownAndDeclaredSizeStillDecode) {
   for (const bool declare : {false, true}) {
-    Aedat4Writer zw(3, {{0, "EVTS", 346, 260}});
+    Aedat4Synthesizer zw(3, {{0, "EVTS", 346, 260}});
     zw.raw_packet(0, zstd_frame(events_payload(kTwo), declare));
     const Result z = read_all(open_bytes(zw.file(), "zstd"));
     EXPECT_EQ(z.events.size(), 2u) << declare;
     EXPECT_TRUE(z.report.dropped().empty()) << declare;
-    Aedat4Writer lw(1, {{0, "EVTS", 346, 260}});
+    Aedat4Synthesizer lw(1, {{0, "EVTS", 346, 260}});
     lw.raw_packet(0, lz4_frame(events_payload(kTwo), declare));
     const Result l = read_all(open_bytes(lw.file(), "lz4"));
     EXPECT_EQ(l.events.size(), 2u) << declare;
@@ -217,7 +217,7 @@ TEST(Aedat4Hostile, FramesOfUnknownAndDeclaredSizeStillDecode) {
 }
 
 TEST(Aedat4Hostile, UncompressedPacketAboveTheLimitIsSkippedUnread) {
-  Aedat4Writer w(0, {{0, "EVTS", 346, 260}});
+  Aedat4Synthesizer w(0, {{0, "EVTS", 346, 260}});
   w.packet(0, events_payload({kTwo[0]}));
   const std::size_t bad = w.raw_packet(0, just_too_large());
   w.packet(0, events_payload({kTwo[1]}));

@@ -2,7 +2,7 @@
 // Test-only tools for AEDAT 4.0, independent of the reader under test:
 //  - IndependentDecode: walks a file's packets by hand, decompresses with LZ4 / Zstd directly and
 //    reads the FlatBuffers by raw offsets (no generated schema code, no XML parser);
-//  - Aedat4Writer: synthesises small files byte by byte with FlatBuffers' generic builder;
+//  - Aedat4Synthesizer: synthesises small files byte by byte with FlatBuffers' generic builder;
 //  - read_all: what a reader under test hands out, gathered.
 #include <flatbuffers/flatbuffers.h>
 #include <lz4frame.h>
@@ -309,9 +309,9 @@ inline Bytes compress(int compression, const Bytes& in) {
 }
 
 /// Builds a file: magic, IOHeader, packets, optional trailing data-table bytes.
-class Aedat4Writer {
+class Aedat4Synthesizer {
  public:
-  Aedat4Writer(int compression, std::vector<TestStream> streams)
+  Aedat4Synthesizer(int compression, std::vector<TestStream> streams)
       : compression_(compression), streams_(std::move(streams)) {}
   /// Appends a packet; returns its offset relative to the end of the header.
   std::size_t packet(std::int32_t stream_id, const Bytes& flatbuffer) {

@@ -29,9 +29,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-/// Standard gravity [m/s^2]: the unit "g" of the IMUS accelerometer fields (3rd CGPM, 1901).
-constexpr double kStandardGravity_m_s2 = 9.80665;
-constexpr double kRadPerDeg = std::numbers::pi / 180.0;
 /// The IOHeader is a size-prefixed FlatBuffer right after the magic.
 constexpr std::uint64_t kHeaderAt = kAedat4Magic.size();
 /// Packet header: int32 stream id, int32 payload size (little-endian).
@@ -54,7 +51,7 @@ constexpr std::size_t kMaxPendingImu = 1 << 16;
 /// Largest |time| in microseconds that is a valid time in nanoseconds (fdv/core/time.h).
 constexpr std::int64_t kMaxTimeUs = kMaxAbsTimeNs / kNsPerUs;
 
-enum class Compression { kNone = 0, kLz4 = 1, kLz4High = 2, kZstd = 3, kZstdHigh = 4 };
+using Compression = Aedat4Compression;
 
 const char* to_string(Compression c) {
   switch (c) {
@@ -575,8 +572,8 @@ class Aedat4Reader final : public RecordingReader {
       } else {
         ImuSample& out = pending_imu_.emplace_back();
         out.t = last_imu_t_ = t_us * kNsPerUs;
-        out.accel_m_s2 = Eigen::Vector3d(v[0], v[1], v[2]) * kStandardGravity_m_s2;
-        out.gyro_rad_s = Eigen::Vector3d(v[3], v[4], v[5]) * kRadPerDeg;
+        out.accel_m_s2 = Eigen::Vector3d(v[0], v[1], v[2]) * kAedat4Gravity_m_s2;
+        out.gyro_rad_s = Eigen::Vector3d(v[3], v[4], v[5]) * kAedat4RadPerDeg;
       }
     }
   }

@@ -27,12 +27,10 @@
 #include <string>
 #include <string_view>
 
+#include "fdv/io/aedat4/aedat4_format.h"
 #include "fdv/io/recording.h"
 
 namespace fdv {
-
-/// The first 14 bytes of every AEDAT 4.0 file.
-inline constexpr std::string_view kAedat4Magic{"#!AER-DAT4.0\r\n", 14};
 
 /// Largest events or IMU packet the reader decodes [bytes, after decompression]: about 370x the
 /// largest packet of the real recordings (172 KiB, 11,020 events), room for 4 M events (25 ms of
