@@ -52,10 +52,12 @@ def options(value=None):
 
 
 def run(path, calib=None, options=None, *, out=None, events_topic="", imu_topic="", depth_topic="",
-        odometry_topic="", ground_truth_topic=""):
+        odometry_topic="", ground_truth_topic="", resolution=None):
     """The whole pipeline over a recording, as `fdv run`: the same sensor policy (fallbacks and
     warnings) and, with `out`, the same results folder. `calib`: a path or a Calibration (default:
-    the recording's own); `options`: see fdv.options(). Returns Results."""
+    the recording's own); `options`: see fdv.options(); `resolution=(width, height)`: the sensor
+    size of a file that does not give it (HDF5's DSEC layout), as `fdv run --resolution WxH`.
+    Returns Results."""
     calibration, name = None, ""
     if isinstance(calib, Calibration):
         calibration, name = calib, "<Calibration>"
@@ -66,6 +68,7 @@ def run(path, calib=None, options=None, *, out=None, events_topic="", imu_topic=
     reader_options.events_topic, reader_options.imu_topic = events_topic, imu_topic
     reader_options.depth_topic, reader_options.odometry_topic = depth_topic, odometry_topic
     reader_options.ground_truth_topic = ground_truth_topic
+    reader_options.set_resolution(resolution)
     d = _fdv._run(os.fspath(path), calibration, name, _options(options), os.fspath(out) if out else "", reader_options)
     return Results(**d)
 

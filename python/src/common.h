@@ -10,6 +10,8 @@
 #include <cstdint>
 #include <memory>
 #include <mutex>
+#include <optional>
+#include <utility>
 #include <nlohmann/json.hpp>
 #include <span>
 #include <stdexcept>
@@ -17,6 +19,7 @@
 #include <vector>
 
 #include "fdv/core/sensor_data.h"
+#include "fdv/io/recording.h"
 
 namespace fdv::python {
 namespace py = pybind11;
@@ -85,6 +88,10 @@ inline std::int64_t from_ns(TimeNs t, TimeUnit u) {
   return t >= 0 ? t / d : -((-t + d - 1) / d);
 }
 TimeNs to_ns(std::int64_t t, TimeUnit u);  ///< throws ValueError on overflow
+
+/// Sets the sensor size of a file that does not give it (HDF5's DSEC layout) from Python's
+/// `resolution=(width, height)`; None leaves it to the file. ValueError outside 1..65535.
+void set_resolution(ReaderOptions& o, const std::optional<std::pair<int, int>>& resolution);
 
 void fill_events(std::span<const Event> events, EventCD* out, TimeUnit u);
 py::array_t<ImuRecord> imu_array(const std::vector<ImuSample>& samples, TimeUnit u);

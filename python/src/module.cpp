@@ -25,6 +25,15 @@ TimeNs to_ns(std::int64_t t, TimeUnit u) {
   return out;
 }
 
+void set_resolution(ReaderOptions& o, const std::optional<std::pair<int, int>>& resolution) {
+  if (!resolution) return;
+  const auto [w, h] = *resolution;
+  if (w < 1 || h < 1 || w > 65535 || h > 65535)
+    throw py::value_error("resolution must be (width, height) with sides in 1..65535");
+  o.width = w;
+  o.height = h;
+}
+
 void fill_events(std::span<const Event> events, EventCD* out, TimeUnit u) {
   if (u == TimeUnit::kNs) {
     for (const Event& e : events) *out++ = {e.x, e.y, static_cast<std::int16_t>(e.polarity), e.t};

@@ -318,7 +318,8 @@ void register_perception(py::module_& m) {
       .def_readwrite("imu_topic", &ReaderOptions::imu_topic)
       .def_readwrite("depth_topic", &ReaderOptions::depth_topic)
       .def_readwrite("odometry_topic", &ReaderOptions::odometry_topic)
-      .def_readwrite("ground_truth_topic", &ReaderOptions::ground_truth_topic);
+      .def_readwrite("ground_truth_topic", &ReaderOptions::ground_truth_topic)
+      .def("set_resolution", [](ReaderOptions& o, std::optional<std::pair<int, int>> r) { set_resolution(o, r); });
 }
 
 }  // namespace fdv::python

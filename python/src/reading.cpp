@@ -381,13 +381,7 @@ void register_reading(py::module_& m) {
          std::size_t chunk_events, const std::string& time_unit,
          std::optional<std::pair<int, int>> resolution) {
         ReaderOptions o;
-        if (resolution) {
-          if (resolution->first < 1 || resolution->second < 1 || resolution->first > 65535 ||
-              resolution->second > 65535)
-            throw py::value_error("resolution must be (width, height) with sides in 1..65535");
-          o.width = resolution->first;
-          o.height = resolution->second;
-        }
+        set_resolution(o, resolution);
         o.events_topic = events_topic;
         o.imu_topic = imu_topic;
         o.depth_topic = depth_topic;

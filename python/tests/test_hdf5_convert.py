@@ -65,6 +65,13 @@ def test_h5py_dsec_file_needs_the_resolution(tmp_path):
     expected["t"] += EPOCH_US
     assert np.array_equal(got, expected)
     assert cli_json("info", path, "--resolution", "640x480")["events"] == len(ev)
+    # the pipeline too, as `fdv run --resolution`: every event reaches a window
+    with pytest.raises(fdv.InputError, match="--resolution WxH"):
+        fdv.run(path)
+    results = fdv.run(path, resolution=(640, 480))
+    assert sum(w["events"] for w in results.windows) == len(ev)
+    with pytest.raises(ValueError, match="sides in 1..65535"):
+        fdv.run(path, resolution=(0, 480))
 
 
 def test_convert_raw_to_hdf5_reads_the_same_with_h5py_and_fdv(tmp_path):
