@@ -147,7 +147,13 @@ struct NoisyWindows {
   std::vector<float> t_s;
   std::mt19937 rng{7};
 
+  /// An edge: a 48 px bar across the motion, 2 px wide, as the moving contour of a large object.
+  enum class Object { kNone, kBlob, kEdge };
   CompensatedEventsView make(int k, bool blob, Eigen::Vector2d& blob_at) {
+    return make(k, blob ? Object::kBlob : Object::kNone, blob_at);
+  }
+  CompensatedEventsView make(int k, Object object, Eigen::Vector2d& blob_at) {
+    const bool blob = object == Object::kBlob;
     pixel.clear();
     t_s.clear();
     std::uniform_int_distribution<int> x(0, kWidth - 1), y(0, kHeight - 1);
@@ -162,6 +168,14 @@ struct NoisyWindows {
         const int v = static_cast<int>(std::lround(blob_at.y() + r * std::sin(a)));
         ev.push_back({static_cast<float>(t(rng)), v * kWidth + u});
       }
+    if (object == Object::kEdge)
+      for (int i = -24; i < 24; ++i)  // along (−3, 5), perpendicular to the motion (5, 3)
+        for (int w = 0; w < 2; ++w) {
+          const double along = i / std::sqrt(34.0);
+          const int u = static_cast<int>(std::lround(blob_at.x() - 3 * along + w));
+          const int v = static_cast<int>(std::lround(blob_at.y() + 5 * along));
+          if (u >= 0 && v >= 0 && u < kWidth && v < kHeight) ev.push_back({static_cast<float>(t(rng)), v * kWidth + u});
+        }
     std::sort(ev.begin(), ev.end());
     for (const auto& [when, p] : ev) {
       t_s.push_back(when);
@@ -180,15 +194,17 @@ struct BlobRun {
   double worst_px = 0;  ///< the evidence detections' largest distance from the blob's centre
 };
 
-BlobRun run_blob(bool evidence) {
+BlobRun run_blob(bool evidence, NoisyWindows::Object object = NoisyWindows::Object::kBlob,
+               double max_surround_ratio = EvidenceSourceOptions{}.max_surround_ratio) {
   DetectorOptions o;
   o.evidence.enabled = evidence;
+  o.evidence.max_surround_ratio = max_surround_ratio;
   Detector detector(o, small_camera());
   NoisyWindows windows;
   BlobRun out;
   for (int k = 0; k < 50; ++k) {
     Eigen::Vector2d blob_at;
-    const DetectionResult r = detector.detect(windows.make(k, true, blob_at));
+    const DetectionResult r = detector.detect(windows.make(k, object, blob_at));
     bool found = false;
     for (const Detection2D& d : r.detections) {
       const bool on_blob = (d.center_undistorted - blob_at).norm() < 3.0;
@@ -221,6 +237,18 @@ TEST(EvidenceSource, ADimDriftingBlobIsFoundInMoreWindowsAndNoiseIsNot) {
     noise_detections += static_cast<int>(detector.detect(windows.make(k, false, unused)).detections.size());
   }
   EXPECT_EQ(noise_detections, 0);
+}
+
+TEST(EvidenceSource, AMovingEdgeRunsThroughTheSurroundAndIsNoCandidate) {
+  // The same motion as the blob's: without the surround test the edge's path gathers evidence
+  // like the blob's; with κ = 0.5 (the edge puts about as many pixels in the ring 2-3 cells away
+  // as in its own 3 × 3 cells) it makes none, and the blob still does.
+  const BlobRun edge_unchecked = run_blob(true, NoisyWindows::Object::kEdge, 1e9);
+  const BlobRun edge = run_blob(true, NoisyWindows::Object::kEdge, 0.5);
+  const BlobRun blob = run_blob(true, NoisyWindows::Object::kBlob, 0.5);
+  EXPECT_GT(edge_unchecked.evidence_hits + edge_unchecked.evidence_misplaced, 0);
+  EXPECT_EQ(edge.evidence_hits + edge.evidence_misplaced, 0);
+  EXPECT_GT(blob.evidence_hits, 0);
 }
 
 }  // namespace

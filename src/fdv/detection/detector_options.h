@@ -226,6 +226,13 @@ struct EvidenceSourceOptions {
   /// where the running average turns exponential (a variance from 8 windows let a moving
   /// person's head through on a real recording). YAML `evidence_warmup_windows`
   int warmup_windows = 20;
+  /// κ: a candidate's surround (the ring of cells 2-3 away) may hold at most κ times the excess
+  /// of its own 3 × 3 cells [-], the excess being the fired pixels beyond μ + σ. A far ball is a
+  /// blob on its own; the moving edge of a person or of a swinging object runs on through the
+  /// ring (a line through 7 × 7 cells puts 4/3 of its centre's pixels there). 0.3 kept both real
+  /// recordings with a moving person clean with 8 warm-up windows (docs/DETECTION.md).
+  /// YAML `evidence_max_surround_ratio`
+  double max_surround_ratio = 0.3;
   std::string validate() const;
 };
 
@@ -240,6 +247,7 @@ void describe(V& v, EvidenceSourceOptions& o) {
   v("evidence_min_background", o.min_background, "px²", "b_min: added to every cell's variance of fired pixels per window");
   v("evidence_min_travel_cells", o.min_travel_cells, "cells", "a candidate path's recent travel over the scene at least (T ← 0.8 T + step)");
   v("evidence_warmup_windows", o.warmup_windows, "-", "windows that learn the background before evidence counts");
+  v("evidence_max_surround_ratio", o.max_surround_ratio, "-", "κ: a candidate's excess (beyond μ + σ) in the ring 2-3 cells away, at most this times its 3x3 cells'");
 }
 
 struct DetectorOptions {

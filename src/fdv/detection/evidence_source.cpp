@@ -25,12 +25,15 @@ std::string EvidenceSourceOptions::validate() const {
     why << "evidence_min_travel_cells must be in [0, 5] cells, got " << min_travel_cells;
   else if (!(warmup_windows >= 0 && warmup_windows <= 1000))
     why << "evidence_warmup_windows must be in [0, 1000], got " << warmup_windows;
+  else if (!(max_surround_ratio >= 0 && std::isfinite(max_surround_ratio)))
+    why << "evidence_max_surround_ratio must be finite and ≥ 0, got " << max_surround_ratio;
   return why.str();
 }
 
 void EvidenceGrid::reset(int cols, int rows) {
   for (cv::Mat* m :
-       {&mean_, &variance_, &evidence_, &llr_, &predicted_evidence_, &predicted_mean_, &predicted_variance_, &best_offer_})
+       {&mean_, &variance_, &evidence_, &llr_, &excess_, &predicted_evidence_, &predicted_mean_, &predicted_variance_,
+        &best_offer_})
     m->create(rows, cols, CV_32F), m->setTo(0);
   offer_from_.create(rows, cols, CV_32SC2);
   for (cv::Mat* m : {&travel_, &predicted_travel_}) m->create(rows, cols, CV_32FC2), m->setTo(0);
@@ -47,6 +50,7 @@ void EvidenceGrid::update(const cv::Mat& fired, const cv::Mat& previous) {
   const EvidenceSourceOptions& o = options_;
   if (windows_++ == 0) {
     fired.copyTo(mean_);
+    std::fill(excess_.begin<float>(), excess_.end<float>(), 0.f);
     variance_.setTo(0);
     return;
   }
@@ -121,12 +125,14 @@ void EvidenceGrid::update(const cv::Mat& fired, const cv::Mat& previous) {
     float* L = evidence_.ptr<float>(y);
     cv::Vec2f* travel = travel_.ptr<cv::Vec2f>(y);
     float* l = llr_.ptr<float>(y);
+    float* excess = excess_.ptr<float>(y);
     float* m_next = mean_.ptr<float>(y);
     float* v_next = variance_.ptr<float>(y);
     for (int x = 0; x < cols; ++x) {
       const float mu = gain * m[x];
       const float sigma = std::sqrt(std::max(gain * gain * v[x], mu) + b_min);
       const float z = (n[x] - mu) / sigma;
+      excess[x] = std::max(n[x] - mu - sigma, 0.f);
       l[x] = learning ? 0.f : std::min(delta * z - 0.5f * delta * delta, llr_max);
       L[x] = std::clamp(offer[x] + l[x], 0.f, L_max);
       const cv::Vec2i f = from[x];
@@ -220,6 +226,17 @@ void EvidenceSource::predict_motion(const SourceWindow& in) {
   }
 }
 
+bool EvidenceSource::isolated(int x, int y) const {
+  // The excess of the 3 × 3 cells around (x, y) and of the ring at Chebyshev distance 2-3 (the
+  // 7 × 7 cells less those 3 × 3), clipped at the grid.
+  const cv::Mat& e = grid_.excess();
+  float centre = 0, surround = 0;
+  for (int j = std::max(y - 3, 0); j <= std::min(y + 3, rows_ - 1); ++j)
+    for (int i = std::max(x - 3, 0); i <= std::min(x + 3, cols_ - 1); ++i)
+      (std::abs(i - x) <= 1 && std::abs(j - y) <= 1 ? centre : surround) += e.at<float>(j, i);
+  return surround <= options_.evidence.max_surround_ratio * centre;
+}
+
 std::optional<Candidate> EvidenceSource::find(SourceWindow& in, DetectionResult& res) {
   if (!updated_ || in.events.t_start != last_start_ || in.events.t_end != last_end_) begin_window(in);
   const EvidenceSourceOptions& o = options_.evidence;
@@ -235,7 +252,7 @@ std::optional<Candidate> EvidenceSource::find(SourceWindow& in, DetectionResult&
     const float* Ly = L.ptr<float>(y);
     const cv::Vec2f* travel = grid_.travel().ptr<cv::Vec2f>(y);
     for (int x = kBorderCells; x + kBorderCells < cols_; ++x)
-      if (Ly[x] > best && travel[x].dot(travel[x]) >= min_travel2) best = Ly[x], cell = {x, y};
+      if (Ly[x] > best && travel[x].dot(travel[x]) >= min_travel2 && isolated(x, y)) best = Ly[x], cell = {x, y};
   }
   EvidenceDiagnostics& diag = res.diagnostics_of(kName).write<EvidenceDiagnostics>();
   diag.evidence = best;

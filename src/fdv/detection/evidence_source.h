@@ -5,7 +5,8 @@
 /// against "background alone" from its fired pixels and their own history; a dynamic programme
 /// over windows adds it along the paths an object can take (a cell a window from where its recent
 /// motion over the scene predicts it, after the ego-motion between windows), and the best cell
-/// whose path's sum reaches the threshold h and that has travelled over the scene is a candidate.
+/// whose path's sum reaches the threshold h, that has travelled over the scene and that stands
+/// alone (little excess in the ring of cells around it) is a candidate.
 /// Incremental: one update a window, no history.
 ///
 ///   EvidenceSource source(options);   // once; allocate(width, height) before the first window
@@ -38,6 +39,8 @@ namespace fdv {
 ///         a cell of c: the best path's sum, reset at 0 (Page's CUSUM along paths, a dynamic
 ///         programme), held below 2h so that an object that left fades within a few windows;
 ///   T_c = 0.8·T_p + (c − p): the path's recent travel over the scene [cells];
+///   e_c = max(0, n_c − μ_c − σ_c): the cell's excess beyond its usual variation, for the
+///         candidate's surround test (EvidenceSourceOptions::max_surround_ratio);
 ///   m_c, v_c ← exponential averages of weight max(α, 1/k) in the k-th window.
 /// No evidence (ℓ = 0) in the first `warmup_windows` windows, while m and v are learned.
 class EvidenceGrid {
@@ -53,6 +56,9 @@ class EvidenceGrid {
   void update(const cv::Mat& fired, const cv::Mat& previous = {});
   const cv::Mat& evidence() const { return evidence_; }  ///< L, CV_32F
   const cv::Mat& llr() const { return llr_; }            ///< ℓ of the last window, CV_32F
+  /// The excess e_c = max(0, n_c − μ_c − σ_c) of the last window [fired pixels], CV_32F: what a
+  /// cell fired beyond its usual variation (the surround test's measure).
+  const cv::Mat& excess() const { return excess_; }
   const cv::Mat& mean() const { return mean_; }          ///< m, CV_32F
   const cv::Mat& variance() const { return variance_; }  ///< v, CV_32F
   int windows() const { return windows_; }
@@ -63,7 +69,7 @@ class EvidenceGrid {
 
  private:
   EvidenceSourceOptions options_;
-  cv::Mat mean_, variance_, evidence_, llr_, predicted_evidence_, predicted_mean_, predicted_variance_;
+  cv::Mat mean_, variance_, evidence_, llr_, excess_, predicted_evidence_, predicted_mean_, predicted_variance_;
   cv::Mat travel_, predicted_travel_;  ///< CV_32FC2
   cv::Mat best_offer_, offer_from_;    ///< the best predecessor's L (CV_32F) and cell (CV_32SC2)
   int windows_ = 0;
@@ -90,6 +96,8 @@ class EvidenceSource final : public CandidateSource {
   /// Where each cell's centre goes by the next window's start (the window's observed_at after its
   /// length), into previous_ for the next update; moved_ false without ego-motion.
   void predict_motion(const SourceWindow& in);
+  /// The surround test of EvidenceSourceOptions::max_surround_ratio at cell (x, y).
+  bool isolated(int x, int y) const;
 
   static constexpr int kCoarseStep = 4;   ///< the ego-motion is evaluated every this many cells
   static constexpr int kBorderCells = 2;  ///< rings of cells at the border that make no candidate
