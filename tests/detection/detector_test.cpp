@@ -770,6 +770,7 @@ TEST_F(DetectorTest, InvalidOptionsAreRejected) {
       {"evidence_min_background", [](DetectorOptions& x) { x.evidence.min_background = -1; }},
       {"evidence_min_travel_cells", [](DetectorOptions& x) { x.evidence.min_travel_cells = 6; }},
       {"evidence_warmup_windows", [](DetectorOptions& x) { x.evidence.warmup_windows = -1; }},
+      {"evidence_max_surround_ratio", [](DetectorOptions& x) { x.evidence.max_surround_ratio = -0.1; }},
   };
   for (const auto& [name, make_bad] : cases) {
     DetectorOptions bad;
