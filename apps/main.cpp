@@ -11,6 +11,7 @@
 
 int main(int argc, char** argv) {
   CLI::App app{"fast-dynamic-vision: detect and track fast-moving objects with event + depth sensing"};
+  app.set_version_flag("--version", "fdv " FDV_VERSION);
   app.require_subcommand(1);
   // Log to stderr: stdout carries the commands' JSON (info, simulate) for pipes.
   spdlog::set_default_logger(spdlog::stderr_color_mt("fdv"));

@@ -303,6 +303,12 @@ TEST(CliRealRecording, ABareRawFileIsDetectedInPixelCoordinatesAndSaysSo) {
   EXPECT_TRUE(has_warning(d, "--assume-static ignored")) << d.at("warnings");
 }
 
+TEST(CliVersion, PrintsTheProjectVersionAndNeedsNoSubcommand) {
+  const Ran r = fdv("--version");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.output, "fdv " FDV_PROJECT_VERSION "\n");
+}
+
 TEST(CliBadInput, AMissingInputIsAClearErrorNamingThePath) {
   const fs::path out = test::scratch_dir("cli_missing");
   const Ran r = fdv("run " + (out / "no_such_recording.aedat4").string() + " --out " + (out / "o").string());
