@@ -8,13 +8,13 @@
 #include <filesystem>
 #include <optional>
 #include <string>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "apps/commands.h"
 #include "apps/reader_flags.h"
 #include "fdv/core/error.h"
 #include "fdv/core/field_list.h"
+#include "fdv/io/dataset/depth_image.h"
 #include "fdv/pipeline/options_yaml.h"
 #include "fdv/pipeline/perception.h"
 #include "fdv/results/run.h"
@@ -87,7 +87,8 @@ void write_visualization(const WindowResult& w, const fs::path& dir) {
   cv::hconcat(std::vector<cv::Mat>{n_color, s_color, c_color}, panel);
   cv::putText(panel, fmt::format("window {} t={:.3f}s {}", w.index, to_seconds(w.t_start), to_string(w.status)),
               cv::Point(4, 14), cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(255, 255, 255), 1);
-  cv::imwrite((dir / fmt::format("window_{:06d}.png", w.index)).string(), panel);
+  write_png_bgr8((dir / fmt::format("window_{:06d}.png", w.index)).string(), panel.data, panel.cols,
+                 panel.rows, panel.step);
 }
 
 /// `fdv run`: the pipeline over a recording, results into args.out (docs/FORMATS.md "`fdv run` outputs").

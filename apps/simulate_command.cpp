@@ -25,6 +25,7 @@ struct SimulateArgs {
   std::optional<double> duration_s;
   std::optional<int> threads;
   bool print_config = false;
+  std::string depth_format = "zstd";
 };
 
 /// Writes the dataset and keeps the truth in memory for the visibility summary.
@@ -140,7 +141,8 @@ void run_simulate(const SimulateArgs& args) {
   fmt::print(stderr, "simulating {} (seed {}) for {} s at {}x{} into {}\n", config.name,
              config.seed, config.duration_s, config.event_camera.width, config.event_camera.height,
              args.out);
-  RecordingSink sink(args.out, simulator.calibration());
+  RecordingSink sink(args.out, simulator.calibration(),
+                     args.depth_format == "png" ? DepthEncoding::kPng : DepthEncoding::kZstd);
   const sim::SimulationSummary summary = simulator.run(sink);
 
   nlohmann::json balls = nlohmann::json::array();
@@ -212,6 +214,10 @@ void add_simulate_command(CLI::App& app) {
                   "YAML file overriding any parameter (see `--print-config`)");
   cmd->add_option("--threads", args.threads, "worker threads (default: all cores)");
   cmd->add_option("--out", args.out, "output dataset folder");
+  cmd->add_option("--depth-format", args.depth_format,
+                  "depth frame files: zstd (default; raw millimetres in a Zstandard frame) or png "
+                  "(16-bit, viewable; decodes several times slower)")
+      ->check(CLI::IsMember({"zstd", "png"}));
   cmd->add_flag("--print-config", args.print_config,
                 "print the resolved configuration as YAML and exit");
   cmd->callback([] { run_simulate(args); });

@@ -10,12 +10,16 @@
 //    and event_camera_msgs EVT 3.0 packets);
 //  - HDF5 against EVT 3.0 on the same events: the real `gen41_street_evt3.raw`, and its events
 //    written here with Hdf5EventWriter (Metavision layout), uncompressed and gzip level 4.
+//  - depth frames: the simulator's (`fast_forward` seed 1, 640x480 depth camera, 31 frames)
+//    decoded from PNG (written by OpenCV, as the simulator wrote them) with OpenCV's codec (the reader's decoder before libpng), PNG with libpng,
+//    and Zstandard, through decode_dataset_depth (bytes to metres).
 // The synthetic inputs are written once per run into a temporary folder, removed at exit.
 // Run: build-*/bench/reader_bench [--benchmark_repetitions=3]
 #include <benchmark/benchmark.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
@@ -23,9 +27,14 @@
 #include <string>
 #include <vector>
 
+#include <opencv2/imgcodecs.hpp>
+
+#include "fdv/io/dataset/dataset_reader.h"
 #include "fdv/io/dataset/dataset_writer.h"
+#include "fdv/io/dataset/depth_image.h"
 #include "fdv/io/hdf5/hdf5_writer.h"
 #include "fdv/io/recording.h"
+#include "fdv/sim/simulator.h"
 #ifdef FDV_BENCH_ROS1
 #include "tests/io/rosbag/ros1_bag_writer.h"
 #endif
@@ -109,6 +118,77 @@ void BM_DatasetReader(benchmark::State& state) {
   read_all(state, dir);
 }
 BENCHMARK(BM_DatasetReader)->Unit(benchmark::kMillisecond);
+
+/// The simulator's depth frames in millimetres, as DatasetWriter rounds them.
+struct DepthFrames {
+  int width = 0, height = 0;
+  std::vector<std::vector<std::uint16_t>> millimetres;
+};
+const DepthFrames& simulated_depth() {
+  static const DepthFrames frames = [] {
+    struct DepthSink : fdv::sim::SimulationSink {
+      void on_depth(const fdv::DepthFrame& f) override { frames.push_back(f); }
+      std::vector<fdv::DepthFrame> frames;
+    } sink;
+    fdv::sim::ScenarioConfig config = fdv::sim::make_preset("fast_forward", 1);
+    fdv::sim::set_event_resolution(config, 64, 48);  // the events are not the subject here
+    fdv::sim::Simulator(config).run(sink);
+    DepthFrames out;
+    out.width = sink.frames.at(0).width;
+    out.height = sink.frames.at(0).height;
+    for (const fdv::DepthFrame& f : sink.frames) {
+      auto& mm = out.millimetres.emplace_back(f.depth_m.size());
+      std::transform(f.depth_m.begin(), f.depth_m.end(), mm.begin(), [](float d) {
+        return static_cast<std::uint16_t>(std::isfinite(d) && d > 0 ? std::min(std::round(d * 1000.0), 65535.0) : 0.0);
+      });
+    }
+    return out;
+  }();
+  return frames;
+}
+
+/// One depth frame a iteration, bytes to metres: arg 0 OpenCV's PNG decoder, 1 libpng, 2 Zstandard.
+void BM_DepthDecode(benchmark::State& state) {
+  const DepthFrames& frames = simulated_depth();
+  const int codec = static_cast<int>(state.range(0));
+  std::vector<std::vector<std::uint8_t>> files;
+  std::size_t bytes = 0;
+  for (const auto& mm : frames.millimetres) {
+    if (codec == 2) {
+      files.push_back(fdv::encode_depth_zstd(mm));
+    } else {  // as the simulator wrote them before the Zstandard layout: OpenCV's PNG writer
+      files.emplace_back();
+      cv::imencode(".png", cv::Mat(frames.height, frames.width, CV_16UC1, const_cast<std::uint16_t*>(mm.data())),
+                   files.back());
+    }
+    bytes += files.back().size();
+  }
+  const fdv::PinholeCamera camera{frames.width, frames.height, 385.7, 385.7, 320, 240, {}};
+  fdv::ReadReport report;
+  std::size_t i = 0;
+  for (auto _ : state) {
+    const std::vector<std::uint8_t>& file = files[i++ % files.size()];
+    if (codec == 0) {
+      const cv::Mat mm = cv::imdecode(cv::Mat(1, static_cast<int>(file.size()), CV_8UC1,
+                                              const_cast<std::uint8_t*>(file.data())),
+                                      cv::IMREAD_UNCHANGED);
+      fdv::DepthFrame f;
+      f.width = mm.cols;
+      f.height = mm.rows;
+      f.depth_m.resize(mm.total());
+      for (int v = 0; v < mm.rows; ++v)
+        for (int u = 0; u < mm.cols; ++u)
+          f.depth_m[static_cast<std::size_t>(v) * mm.cols + u] = static_cast<float>(mm.at<std::uint16_t>(v, u)) * 0.001f;
+      benchmark::DoNotOptimize(f.depth_m.data());
+    } else {
+      auto f = fdv::decode_dataset_depth(file, 0, camera, "bench", report);
+      if (!f) state.SkipWithError("a frame did not decode");
+      benchmark::DoNotOptimize(f);
+    }
+  }
+  state.counters["file_kB"] = static_cast<double>(bytes) / static_cast<double>(files.size()) / 1000.0;
+}
+BENCHMARK(BM_DepthDecode)->ArgName("codec")->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
 
 void BM_RpgTextReader(benchmark::State& state) {
   static const std::string dir = [] {

@@ -2,7 +2,8 @@
 # the installed package's fdvConfig.cmake (a downstream project links the static modules, so it
 # needs their private dependencies too). Debian package names: DESIGN.md's table.
 find_package(Eigen3 3.4 REQUIRED NO_MODULE)
-find_package(OpenCV REQUIRED COMPONENTS core imgproc imgcodecs)
+find_package(OpenCV REQUIRED COMPONENTS core imgproc)
+find_package(PNG REQUIRED)
 find_package(Ceres REQUIRED)
 find_package(yaml-cpp REQUIRED)
 find_package(nlohmann_json REQUIRED)

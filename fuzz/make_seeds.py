@@ -289,16 +289,25 @@ def main():
 
     # Folder formats: one seed per file kind, from a short simulated dataset (and its calibration).
     with tempfile.TemporaryDirectory() as tmp:
-        subprocess.run([str(fdv), "simulate", "--scenario", "fast_forward", "--duration", "0.03",
-                        "--resolution", "64x48", "--out", tmp], check=True, capture_output=True)
-        shutil.copy(Path(tmp) / "calibration.yaml", build / "fuzz" / "seeds" / "fuzz_calibration")
+        # A 64x48 depth camera (fuzz/dataset_fuzzer.cpp's), so that a whole depth frame fits a seed;
+        # its frames in both encodings.
+        config = Path(tmp) / "small_depth.yaml"
+        config.write_text("depth_camera: {width: 64, height: 48, fx: 38.57, fy: 38.57, cx: 32, cy: 24}\n")
+        data = Path(tmp) / "dataset"
+        for depth_format, folder in [("png", Path(tmp) / "png"), ("zstd", data)]:
+            subprocess.run([str(fdv), "simulate", "--scenario", "fast_forward", "--duration", "0.03",
+                            "--resolution", "64x48", "--config", str(config), "--depth-format", depth_format,
+                            "--out", str(folder)], check=True, capture_output=True)
+        for f in sorted((Path(tmp) / "png" / "depth").glob("*.png")):
+            shutil.copy(f, data / "depth")
+        shutil.copy(data / "calibration.yaml", build / "fuzz" / "seeds" / "fuzz_calibration")
         # Byte 0 picks the parser (fuzz/dataset_fuzzer.cpp).
         out = target_dir(build, "fuzz_dataset")
         kinds = {"dataset.yaml": 0, "events.bin": 1, "imu.csv": 2, "odometry.csv": 3, "truth/body.csv": 3,
                  "truth/objects.csv": 4, "depth.csv": 5}
-        for f in sorted(Path(tmp).rglob("*")):
-            name = str(f.relative_to(tmp))
-            kind = kinds.get(name, 6 if name.endswith(".png") else None)
+        for f in sorted(data.rglob("*")):
+            name = str(f.relative_to(data))
+            kind = kinds.get(name, 6 if name.endswith((".png", ".zst")) else None)
             if f.is_file() and kind is not None:
                 seed = bytes([kind]) + f.read_bytes()[:16 * 1024]
                 (out / name.replace("/", "__")).write_bytes(seed)

@@ -26,7 +26,7 @@ esac
 PACKAGES=(
   build-essential cmake ninja-build pkg-config
   libeigen3-dev libopencv-dev libceres-dev libyaml-cpp-dev libcli11-dev
-  nlohmann-json3-dev libspdlog-dev libfmt-dev liblz4-dev libzstd-dev
+  nlohmann-json3-dev libspdlog-dev libfmt-dev liblz4-dev libzstd-dev libpng-dev
   libflatbuffers-dev flatbuffers-compiler libsqlite3-dev libtinyxml2-dev
   libhdf5-dev hdf5-filter-plugin hdf5-filter-plugin-blosc-serial python3-h5py
   libgtest-dev libgmock-dev libbenchmark-dev

@@ -5,18 +5,23 @@
 #include <fstream>
 #include <functional>
 #include <nlohmann/json.hpp>
+#include <limits>
 #include <opencv2/imgcodecs.hpp>
+#include <span>
 #include <sstream>
+#include <zstd.h>
 
 #include "fdv/core/config_text.h"
 #include "fdv/core/error.h"
 #include "fdv/io/dataset/dataset_reader.h"
 #include "fdv/io/dataset/dataset_writer.h"
+#include "fdv/io/dataset/depth_image.h"
 #include "fdv/io/table_stream.h"
 #include "test_support.h"
 
 namespace fdv {
 namespace {
+namespace fs = std::filesystem;
 
 Calibration small_calibration() {
   Calibration c;
@@ -304,17 +309,109 @@ TEST(DatasetInMemory, DepthPngIsCheckedBeforeDecoding) {
   std::memcpy(&huge[20], side, 4);
   EXPECT_FALSE(decode_dataset_depth(huge, 0, std::nullopt, "d.png", report));
   EXPECT_EQ(report.dropped().at("depth: image larger than 4194304 pixels").count, 1u);
-  // Not a PNG (OpenCV would decode a TIFF, a JPEG, ... with their own decoders).
+  // Neither encoding: a TIFF, nothing.
   std::vector<std::uint8_t> tiff;
   cv::imencode(".tiff", mm, tiff);
   EXPECT_FALSE(decode_dataset_depth(tiff, 0, std::nullopt, "d.png", report));
   EXPECT_FALSE(decode_dataset_depth({}, 0, std::nullopt, "d.png", report));
-  EXPECT_EQ(report.dropped().at("depth: image is not a PNG").count, 2u);
+  EXPECT_EQ(report.dropped().at("depth: file is neither a PNG nor a Zstandard frame").count, 2u);
   // A valid header with a corrupt body.
   std::vector<std::uint8_t> cut = png_of(mm);
   cut.resize(40);
   EXPECT_FALSE(decode_dataset_depth(cut, 0, std::nullopt, "d.png", report));
   EXPECT_EQ(report.dropped().at("depth: image missing or unreadable").count, 1u);
+}
+
+// The two encodings against an independent codec: OpenCV's PNG writer and reader.
+TEST(DepthImage, PngFromEitherWriterDecodesToTheSameMillimetres) {
+  cv::Mat mm(7, 9, CV_16UC1);
+  for (int v = 0; v < mm.rows; ++v)
+    for (int u = 0; u < mm.cols; ++u) mm.at<std::uint16_t>(v, u) = static_cast<std::uint16_t>(v * 9000 + u * 7 + 1);
+  mm.at<std::uint16_t>(3, 4) = 65535;
+  const std::span<const std::uint16_t> values(mm.ptr<std::uint16_t>(), mm.total());
+  std::vector<std::uint16_t> decoded(mm.total());
+  ASSERT_EQ(decode_depth_png(png_of(mm), 9, 7, decoded), "");
+  EXPECT_TRUE(std::equal(decoded.begin(), decoded.end(), values.begin()));
+  const std::vector<std::uint8_t> ours = encode_depth_png(values, 9, 7);
+  const cv::Mat by_opencv = cv::imdecode(ours, cv::IMREAD_UNCHANGED);
+  ASSERT_EQ(by_opencv.type(), CV_16UC1);
+  EXPECT_EQ(cv::countNonZero(by_opencv != mm), 0);
+  std::fill(decoded.begin(), decoded.end(), 0);
+  ASSERT_EQ(decode_depth_png(ours, 9, 7, decoded), "");
+  EXPECT_TRUE(std::equal(decoded.begin(), decoded.end(), values.begin()));
+  // The size the caller expects is the image's, or it is an error (never a write past the span).
+  EXPECT_NE(decode_depth_png(ours, 9, 6, std::span(decoded).first(54)), "");
+}
+
+TEST(DepthImage, ZstdFrameHoldsTheLittleEndianMillimetres) {
+  const std::vector<std::uint16_t> values = {0, 1, 1500, 65535, 258, 7};
+  const std::vector<std::uint8_t> frame = encode_depth_zstd(values);
+  std::vector<std::uint8_t> raw(values.size() * 2);
+  ASSERT_EQ(ZSTD_decompress(raw.data(), raw.size(), frame.data(), frame.size()), raw.size());
+  EXPECT_EQ(raw[6], 0xFF);  // 65535
+  EXPECT_EQ(raw[8], 2);     // 258 = 0x0102, low byte first
+  EXPECT_EQ(raw[9], 1);
+  std::vector<std::uint16_t> decoded(values.size());
+  ASSERT_EQ(decode_depth_zstd(frame, decoded), "");
+  EXPECT_EQ(decoded, values);
+  std::vector<std::uint16_t> larger(values.size() + 1);
+  EXPECT_NE(decode_depth_zstd(frame, larger).find("frame holds 12 bytes"), std::string::npos);
+  std::vector<std::uint8_t> cut = frame;
+  cut.resize(cut.size() - 2);
+  EXPECT_NE(decode_depth_zstd(cut, decoded), "");
+}
+
+TEST(DatasetInMemory, DepthZstdFrameTakesItsSizeFromTheCalibration) {
+  const std::vector<std::uint16_t> values = {1500, 0, 2000, 250, 65535, 1};  // 3 x 2
+  const std::vector<std::uint8_t> frame = encode_depth_zstd(values);
+  ReadReport report;
+  const auto f = decode_dataset_depth(frame, 7, PinholeCamera{3, 2, 1, 1, 1, 1, {}}, "d.zst", report);
+  ASSERT_TRUE(f.has_value());
+  EXPECT_EQ(f->width, 3);
+  EXPECT_EQ(f->height, 2);
+  EXPECT_FLOAT_EQ(f->at(0, 0), 1.5f);
+  EXPECT_FLOAT_EQ(f->at(1, 0), 0.0f);
+  EXPECT_FLOAT_EQ(f->at(1, 1), 65.535f);
+  EXPECT_FALSE(decode_dataset_depth(frame, 7, std::nullopt, "d.zst", report));
+  EXPECT_EQ(report.dropped().at("depth: a Zstandard frame needs the depth camera's size (calibration.yaml)").count, 1u);
+  EXPECT_FALSE(decode_dataset_depth(frame, 7, PinholeCamera{4, 2, 1, 1, 1, 1, {}}, "d.zst", report));
+  EXPECT_EQ(report.dropped().at("depth: image missing or unreadable").first_where,
+            "d.zst: frame holds 12 bytes, not the 16 of the depth camera's image");
+}
+
+// The writer's two encodings read back to the same frame, rounded to millimetres.
+TEST(Dataset, DepthFramesRoundTripInBothEncodings) {
+  Calibration calib = small_calibration();
+  DepthFrame frame;
+  frame.t = 5000;
+  frame.width = calib.depth_camera->width;
+  frame.height = calib.depth_camera->height;
+  frame.depth_m.resize(static_cast<std::size_t>(frame.width) * frame.height);
+  for (std::size_t i = 0; i < frame.depth_m.size(); ++i) frame.depth_m[i] = 0.25f + 0.0137f * static_cast<float>(i % 997);
+  frame.depth_m[3] = std::numeric_limits<float>::quiet_NaN();
+  frame.depth_m[4] = -1.0f;
+  frame.depth_m[5] = 100.0f;  // beyond 65.535 m: the largest value
+  for (const auto& [encoding, ext] : {std::pair{DepthEncoding::kZstd, ".zst"}, std::pair{DepthEncoding::kPng, ".png"}}) {
+    const auto dir = test::scratch_dir(std::string("dataset_depth_round_trip") + ext);
+    {
+      DatasetWriter w(dir, calib, encoding);
+      w.add_events(std::vector<Event>{{0, 1, 1, true}, {10000, 2, 2, false}});
+      w.add_depth(frame);
+      w.finish();
+    }
+    EXPECT_TRUE(fs::exists(fs::path(dir) / ("depth/000000" + std::string(ext))));
+    auto reader = open_recording(dir);
+    const auto all = read_everything(*reader);
+    ASSERT_EQ(all.depth.size(), 1u) << ext;
+    const DepthFrame& back = all.depth[0];
+    EXPECT_EQ(back.t, 5000);
+    ASSERT_EQ(back.depth_m.size(), frame.depth_m.size());
+    for (std::size_t i = 6; i < frame.depth_m.size(); ++i)
+      ASSERT_NEAR(back.depth_m[i], frame.depth_m[i], 0.0005f + 1e-6f) << ext << " pixel " << i;
+    EXPECT_EQ(back.depth_m[3], 0.0f);
+    EXPECT_EQ(back.depth_m[4], 0.0f);
+    EXPECT_FLOAT_EQ(back.depth_m[5], 65.535f);
+  }
 }
 
 // The folder reader runs the same checks: a depth row naming a device or a folder is dropped.

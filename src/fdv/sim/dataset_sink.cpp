@@ -4,8 +4,8 @@
 
 namespace fdv::sim {
 
-DatasetSink::DatasetSink(const std::string& dir, const Calibration& calib)
-    : writer_(dir, calib), labels_((std::filesystem::path(dir) / kLabelsFile).string()) {}
+DatasetSink::DatasetSink(const std::string& dir, const Calibration& calib, DepthEncoding depth_encoding)
+    : writer_(dir, calib, depth_encoding), labels_((std::filesystem::path(dir) / kLabelsFile).string()) {}
 
 void DatasetSink::on_events(std::span<const Event> events, std::span<const std::int16_t> labels) {
   writer_.add_events(events);

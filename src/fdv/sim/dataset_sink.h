@@ -18,7 +18,8 @@ namespace fdv::sim {
 class DatasetSink : public SimulationSink {
  public:
   /// Creates `dir` (and depth/, truth/) and writes calibration.yaml. Throws InputError.
-  DatasetSink(const std::string& dir, const Calibration& calib);
+  DatasetSink(const std::string& dir, const Calibration& calib,
+              DepthEncoding depth_encoding = DepthEncoding::kZstd);
   void on_events(std::span<const Event> events, std::span<const std::int16_t> labels) override;
   void on_imu(const ImuSample& s) override { writer_.add_imu(s); }
   void on_depth(const DepthFrame& f) override { writer_.add_depth(f); }

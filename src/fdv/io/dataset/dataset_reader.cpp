@@ -2,18 +2,18 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
 #include <limits>
-#include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <optional>
 
 #include "fdv/core/config_text.h"
 #include "fdv/core/error.h"
+#include "fdv/io/dataset/depth_image.h"
 #include "fdv/io/table_stream.h"
 #include "fdv/io/text_fields.h"
 
@@ -351,63 +351,67 @@ std::vector<DepthIndexRow> read_dataset_depth_index(std::unique_ptr<std::istream
       CsvStream<DepthIndexRow>(LineReader(std::move(in), name), "depth", parse_depth_row), report);
 }
 
-std::optional<DepthFrame> decode_dataset_depth(std::span<const std::uint8_t> png, TimeNs t,
+std::optional<DepthFrame> decode_dataset_depth(std::span<const std::uint8_t> bytes, TimeNs t,
                                                const std::optional<PinholeCamera>& camera,
                                                const std::string& name, ReadReport& report) {
-  // The PNG signature and IHDR chunk (PNG spec, section 11.2.2) give the size and pixel type
-  // before the decoder allocates: width and height big-endian at bytes 16 and 20, bit depth at
-  // 24, colour type at 25 (0 = greyscale).
-  static constexpr std::uint8_t kPngStart[16] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n',
-                                                 0,    0,   0,   13,  'I',  'H',  'D',  'R'};
-  if (png.size() < 26 || std::memcmp(png.data(), kPngStart, sizeof kPngStart) != 0) {
-    report.drop("depth: image is not a PNG", name);
+  DepthEncoding encoding{};
+  if (!sniff_depth_encoding(bytes, encoding)) {
+    report.drop("depth: file is neither a PNG nor a Zstandard frame", name);
     return std::nullopt;
   }
-  const auto be32 = [&](std::size_t at) {
-    return std::uint32_t{png[at]} << 24 | std::uint32_t{png[at + 1]} << 16 |
-           std::uint32_t{png[at + 2]} << 8 | std::uint32_t{png[at + 3]};
-  };
-  const std::uint32_t width = be32(16), height = be32(20);
-  if (png[24] != 16 || png[25] != 0) {
-    report.drop("depth: image is not 16-bit single channel", name);
+  std::int64_t width = 0, height = 0;
+  if (encoding == DepthEncoding::kPng) {
+    // The IHDR chunk (PNG spec, section 11.2.2) gives the size and pixel type before anything is
+    // allocated: width and height big-endian at bytes 16 and 20, bit depth at 24, colour type at
+    // 25 (0 = greyscale).
+    static constexpr std::uint8_t kIhdr[8] = {0, 0, 0, 13, 'I', 'H', 'D', 'R'};
+    if (bytes.size() < 26 || std::memcmp(bytes.data() + 8, kIhdr, sizeof kIhdr) != 0) {
+      report.drop("depth: image missing or unreadable", name);
+      return std::nullopt;
+    }
+    const auto be32 = [&](std::size_t at) {
+      return std::uint32_t{bytes[at]} << 24 | std::uint32_t{bytes[at + 1]} << 16 |
+             std::uint32_t{bytes[at + 2]} << 8 | std::uint32_t{bytes[at + 3]};
+    };
+    width = be32(16);
+    height = be32(20);
+    if (bytes[24] != 16 || bytes[25] != 0) {
+      report.drop("depth: image is not 16-bit single channel", name);
+      return std::nullopt;
+    }
+  } else if (camera) {  // a Zstandard frame is as large as the depth camera's image
+    width = camera->width;
+    height = camera->height;
+  } else {
+    report.drop("depth: a Zstandard frame needs the depth camera's size (calibration.yaml)", name);
     return std::nullopt;
   }
-  if (width == 0 || height == 0 ||
-      static_cast<std::uint64_t>(width) * height > static_cast<std::uint64_t>(kMaxDepthPixels)) {
+  if (width <= 0 || height <= 0 || width * height > kMaxDepthPixels) {
     report.drop("depth: image larger than " + std::to_string(kMaxDepthPixels) + " pixels", name);
     return std::nullopt;
   }
-  if (camera && (static_cast<std::int64_t>(width) != camera->width ||
-                 static_cast<std::int64_t>(height) != camera->height)) {
+  if (camera && (width != camera->width || height != camera->height)) {
     report.drop("depth: image size differs from the depth camera calibration", name);
     return std::nullopt;
   }
-  cv::Mat mm;
-  try {
-    const cv::Mat buffer(1, static_cast<int>(png.size()), CV_8UC1,
-                         const_cast<std::uint8_t*>(png.data()));
-    mm = cv::imdecode(buffer, cv::IMREAD_UNCHANGED);
-  } catch (const cv::Exception&) {
-    mm.release();
-  }
-  if (mm.empty()) {
-    report.drop("depth: image missing or unreadable", name);
-    return std::nullopt;
-  }
-  if (mm.type() != CV_16UC1 || static_cast<std::uint32_t>(mm.cols) != width ||
-      static_cast<std::uint32_t>(mm.rows) != height) {
-    report.drop("depth: image is not 16-bit single channel", name);
+  // One buffer a thread, reused: a frame is decoded at the depth camera's rate.
+  thread_local std::vector<std::uint16_t> millimetres;
+  millimetres.resize(static_cast<std::size_t>(width * height));
+  const std::string error =
+      encoding == DepthEncoding::kPng
+          ? decode_depth_png(bytes, static_cast<int>(width), static_cast<int>(height), millimetres)
+          : decode_depth_zstd(bytes, millimetres);
+  if (!error.empty()) {
+    report.drop("depth: image missing or unreadable", name + ": " + error);
     return std::nullopt;
   }
   DepthFrame f;
   f.t = t;
-  f.width = mm.cols;
-  f.height = mm.rows;
-  f.depth_m.resize(static_cast<std::size_t>(mm.total()));
-  for (int v = 0; v < mm.rows; ++v)
-    for (int u = 0; u < mm.cols; ++u)
-      f.depth_m[static_cast<std::size_t>(v) * mm.cols + u] =
-          static_cast<float>(mm.at<std::uint16_t>(v, u)) * 0.001f;
+  f.width = static_cast<int>(width);
+  f.height = static_cast<int>(height);
+  f.depth_m.resize(millimetres.size());
+  std::transform(millimetres.begin(), millimetres.end(), f.depth_m.begin(),
+                 [](std::uint16_t mm) { return static_cast<float>(mm) * 0.001f; });
   return f;
 }
 

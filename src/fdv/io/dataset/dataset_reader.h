@@ -7,7 +7,7 @@
 ///                           little-endian records {i64 t_ns, u16 x, u16 y, u8 polarity, 3 pad}
 ///   DIR/imu.csv             t_ns,gx,gy,gz,ax,ay,az            (rad/s, m/s^2, IMU frame)
 ///   DIR/odometry.csv        t_ns,px,py,pz,qx,qy,qz,qw,vx,vy,vz,wx,wy,wz   (T_W_B, v in W, w in B)
-///   DIR/depth.csv           t_ns,file                         (16-bit PNG, millimetres, 0 invalid)
+///   DIR/depth.csv           t_ns,file                         (depth/*.zst or *.png: depth_image.h)
 ///   DIR/truth/objects.csv   t_ns,id,px,py,pz,vx,vy,vz         (optional ground truth, W frame)
 ///   DIR/truth/body.csv      same columns as odometry.csv      (optional true vehicle motion)
 ///
@@ -38,7 +38,7 @@ inline constexpr int kMaxDatasetSensorSide = kMaxCameraSide;
 /// Pixels of one depth frame, checked in the PNG header before decoding: 4x the 1280x720 of
 /// common depth cameras; 16 MiB as floats.
 inline constexpr std::int64_t kMaxDepthPixels = std::int64_t{2048} * 2048;
-/// A depth PNG is read whole before decoding: 2048x2048 16-bit stored uncompressed is 8 MiB.
+/// A depth file is read whole before decoding: 2048x2048 16-bit stored uncompressed is 8 MiB.
 inline constexpr std::uint64_t kMaxDepthFileBytes = 16 << 20;
 /// Depth frames per chunk at most (each up to 16 MiB), whatever the chunk's time horizon.
 inline constexpr std::size_t kMaxDepthFramesPerChunk = 8;
@@ -83,9 +83,9 @@ struct DepthIndexRow {
 };
 std::vector<DepthIndexRow> read_dataset_depth_index(std::unique_ptr<std::istream> in,
                                                     const std::string& name, ReadReport& report);
-/// One depth PNG's bytes: 16-bit single channel, millimetres. A frame that is not such a PNG,
-/// has more than kMaxDepthPixels, or differs from `camera`'s size (when given) is dropped and
-/// counted (nullopt).
+/// One depth file's bytes, either encoding (depth_image.h). A frame that is neither, is not
+/// 16-bit greyscale, has more than kMaxDepthPixels, or differs from `camera`'s size (when given;
+/// a Zstandard frame needs it) is dropped and counted (nullopt).
 std::optional<DepthFrame> decode_dataset_depth(std::span<const std::uint8_t> png, TimeNs t,
                                                const std::optional<PinholeCamera>& camera,
                                                const std::string& name, ReadReport& report);

@@ -2,14 +2,15 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fmt/format.h>
-#include <opencv2/imgcodecs.hpp>
 
 #include "fdv/core/error.h"
 #include "fdv/io/dataset/dataset_reader.h"
+#include "fdv/io/dataset/depth_image.h"
 
 namespace fdv {
 namespace fs = std::filesystem;
@@ -33,8 +34,12 @@ constexpr const char* kPoseHeader = "# t_ns,px,py,pz,qx,qy,qz,qw,vx,vy,vz,wx,wy,
 
 }  // namespace
 
-DatasetWriter::DatasetWriter(const std::string& dir, const Calibration& calib)
-    : dir_(dir), width_(calib.event_camera.width), height_(calib.event_camera.height) {
+DatasetWriter::DatasetWriter(const std::string& dir, const Calibration& calib,
+                             DepthEncoding depth_encoding)
+    : dir_(dir),
+      width_(calib.event_camera.width),
+      height_(calib.event_camera.height),
+      depth_encoding_(depth_encoding) {
   fs::create_directories(fs::path(dir) / "depth");
   fs::create_directories(fs::path(dir) / "truth");
   save_calibration(calib, (fs::path(dir) / "calibration.yaml").string());
@@ -91,16 +96,20 @@ void DatasetWriter::add_object_truth(const ObjectState& s) {
 }
 
 void DatasetWriter::add_depth(const DepthFrame& frame) {
-  cv::Mat mm(frame.height, frame.width, CV_16UC1);
-  for (int v = 0; v < frame.height; ++v)
-    for (int u = 0; u < frame.width; ++u) {
-      const float d = frame.at(u, v);
-      const double m = std::isfinite(d) && d > 0 ? std::round(d * 1000.0) : 0.0;
-      mm.at<std::uint16_t>(v, u) = static_cast<std::uint16_t>(std::min(m, 65535.0));
-    }
-  const std::string name = fmt::format("depth/{:06d}.png", depth_count_++);
-  if (!cv::imwrite((fs::path(dir_) / name).string(), mm))
-    throw InputError((fs::path(dir_) / name).string(), "", "cannot write depth PNG");
+  millimetres_.resize(frame.depth_m.size());
+  std::transform(frame.depth_m.begin(), frame.depth_m.end(), millimetres_.begin(), [](float d) {
+    const double m = std::isfinite(d) && d > 0 ? std::round(d * 1000.0) : 0.0;
+    return static_cast<std::uint16_t>(std::min(m, 65535.0));
+  });
+  const bool png = depth_encoding_ == DepthEncoding::kPng;
+  const std::string name = fmt::format("depth/{:06d}.{}", depth_count_++, png ? "png" : "zst");
+  const std::vector<std::uint8_t> bytes =
+      png ? encode_depth_png(millimetres_, frame.width, frame.height) : encode_depth_zstd(millimetres_);
+  const fs::path path = fs::path(dir_) / name;
+  std::ofstream out(path, std::ios::binary);
+  out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  out.close();
+  if (!out) throw InputError(path.string(), "", "cannot write depth frame (disk full?)");
   depth_index_ << frame.t << "," << name << "\n";
 }
 

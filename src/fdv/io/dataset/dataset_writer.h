@@ -9,15 +9,19 @@
 #include <fstream>
 #include <span>
 #include <string>
+#include <vector>
 
 #include "fdv/core/calibration.h"
 #include "fdv/core/sensor_data.h"
+#include "fdv/io/dataset/depth_image.h"
 
 namespace fdv {
 
 class DatasetWriter {
  public:
-  DatasetWriter(const std::string& dir, const Calibration& calib);
+  /// Depth frames go to depth/NNNNNN.zst (Zstandard) or depth/NNNNNN.png (depth_image.h).
+  DatasetWriter(const std::string& dir, const Calibration& calib,
+                DepthEncoding depth_encoding = DepthEncoding::kZstd);
   ~DatasetWriter();
   DatasetWriter(const DatasetWriter&) = delete;
   DatasetWriter& operator=(const DatasetWriter&) = delete;
@@ -25,7 +29,7 @@ class DatasetWriter {
   void add_events(std::span<const Event> events);
   void add_imu(const ImuSample& s);
   void add_odometry(const OdometrySample& s);
-  void add_depth(const DepthFrame& frame);  ///< metres -> 16-bit PNG millimetres (0 invalid)
+  void add_depth(const DepthFrame& frame);  ///< metres -> 16-bit millimetres (0 invalid)
   void add_object_truth(const ObjectState& s);
   void add_body_truth(const OdometrySample& s);
   /// Completes events.bin and writes dataset.yaml; `manifest_extra` is a YAML mapping text
@@ -38,6 +42,8 @@ class DatasetWriter {
   int width_, height_;
   std::ofstream events_, imu_, odometry_, depth_index_, objects_, body_;
   std::uint64_t event_count_ = 0;
+  DepthEncoding depth_encoding_;
+  std::vector<std::uint16_t> millimetres_;
   int depth_count_ = 0;
   bool finished_ = false;
 };
