@@ -39,6 +39,11 @@ class CMakeBuild(build_ext):
         target = Path(self.get_ext_fullpath(ext.name))
         target.parent.mkdir(parents=True, exist_ok=True)
         shutil.copy(built[0], target)
+        # The format plugins (HDF5, ROS 1 bags), loaded from fdv_plugins/ beside the extension.
+        plugins = target.parent / "fdv_plugins"
+        plugins.mkdir(exist_ok=True)
+        for plugin in sorted((build / "fdv_plugins").glob("libfdv_*.so")):
+            shutil.copy(plugin, plugins)
 
 
 setup(

@@ -4,13 +4,13 @@
 #include <cstdint>
 #include <string>
 
-#include "fdv/io/rosbag/rosbag_reader.h"
+#include "fdv/io/rosbag/ros1_plugin_api.h"
 #include "fuzz/fuzz_support.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   fdv::fuzz::expect_contract([&] {
     const std::string bytes(reinterpret_cast<const char*>(data), size);
-    fdv::fuzz::drain(*fdv::open_ros1_bag_bytes(bytes, fdv::fuzz::kInputName));
+    fdv::fuzz::drain(*fdv::ros1::open_reader_bytes(bytes, fdv::fuzz::kInputName, {}));
   });
   return 0;
 }

@@ -1,6 +1,7 @@
 """HDF5 events and `fdv convert`, checked with foreign tools: h5py writes the inputs fdv reads and
 reads the HDF5 files fdv writes; `fdv convert` round trips through fdv's own readers."""
 import json
+from pathlib import Path
 
 import h5py
 import numpy as np
@@ -143,3 +144,17 @@ def test_convert_to_aedat4_keeps_events_and_imu(tmp_path, dataset):
     assert summary["not_written"]["odometry"] == info["odometry"]["count"] > 0
     assert summary["imu"] == info["imu"]["count"]
     assert np.array_equal(events_of(tmp_path / "sim.aedat4"), events_of(dataset))
+
+
+def test_hdf5_is_read_through_the_plugin_the_package_carries(tmp_path):
+    """The HDF5 reader is a plugin (docs/BUILDING.md "Format plugins"): an installed package
+    loads the copy in its own fdv_plugins folder, the build tree's package the build's."""
+    write_metavision(tmp_path / "cd.h5", some_events(100))
+    assert len(events_of(tmp_path / "cd.h5")) == 100
+    loaded = {line.split()[-1] for line in open("/proc/self/maps") if line.rstrip().endswith("/libfdv_hdf5.so")}
+    assert len(loaded) == 1, loaded
+    carried = Path(fdv.__file__).resolve().parent / "fdv_plugins" / "libfdv_hdf5.so"
+    if carried.exists():
+        assert loaded == {str(carried)}
+    else:
+        assert next(iter(loaded)).endswith("/fdv_plugins/libfdv_hdf5.so")

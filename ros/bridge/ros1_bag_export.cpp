@@ -1,5 +1,6 @@
 // Compiled as C++17: see ros1_bag_export.h.
 #include "ros/bridge/ros1_bag_export.h"
+#include "ros/bridge/ros1_export_plugin_api.h"
 
 #include <dvs_msgs/EventArray.h>
 #include <event_camera_msgs/EventPacket.h>
@@ -59,10 +60,23 @@ long exact_mm(float d) {
 
 }  // namespace
 
-struct BagExporter::Impl {
+namespace {
+
+/// BagExporter's work, through rosbag::Bag.
+class RosbagExport final : public BagExportBackend {
+ public:
+  RosbagExport(const std::string& path, const BagExportOptions& options);
+  void add_events(const EventRecord* events, std::size_t n) override;
+  void add_imu(const ImuRecord& imu) override;
+  std::string add_depth(const DepthRecord& depth) override;
+  void add_odometry(const OdometryRecord& odometry) override;
+  void close() override;
+  std::vector<TopicCount> topics() const override { return topic_counts; }
+
+ private:
   BagExportOptions o;
   rosbag::Bag bag;
-  std::vector<TopicCount> topics;
+  std::vector<TopicCount> topic_counts;
   std::map<std::string, std::size_t> topic_index;
   std::vector<EventRecord> pending;  ///< the event message being filled
   std::int64_t last_event_ns = std::numeric_limits<std::int64_t>::min();
@@ -71,9 +85,9 @@ struct BagExporter::Impl {
   template <class M>
   void write(const std::string& topic, const char* type, const ros::Time& t, const M& m) {
     bag.write(topic, t, m);
-    auto [it, added] = topic_index.emplace(topic, topics.size());
-    if (added) topics.push_back({topic, type, 0});
-    ++topics[it->second].messages;
+    auto [it, added] = topic_index.emplace(topic, topic_counts.size());
+    if (added) topic_counts.push_back({topic, type, 0});
+    ++topic_counts[it->second].messages;
   }
 
   std_msgs::Header header(const ros::Time& t, const std::string& frame) const {
@@ -86,10 +100,9 @@ struct BagExporter::Impl {
   void flush_events();
 };
 
-BagExporter::BagExporter(const std::string& path, const BagExportOptions& options)
-    : impl_(new Impl) {
-  impl_->o = options;
-  const auto& o = impl_->o;
+}  // namespace
+
+RosbagExport::RosbagExport(const std::string& path, const BagExportOptions& options) : o(options) {
   if (o.events_as != "event_array" && o.events_as != "event_packet")
     throw std::invalid_argument("events as '" + o.events_as +
                                 "': expected event_array or event_packet");
@@ -104,42 +117,32 @@ BagExporter::BagExporter(const std::string& path, const BagExportOptions& option
     throw std::invalid_argument("event message span " + std::to_string(o.event_message_ns) +
                                 " ns: expected 1 ns .. 4.29 s");
   try {
-    impl_->bag.open(path, rosbag::bagmode::Write);
+    bag.open(path, rosbag::bagmode::Write);
   } catch (const std::exception& e) {
     throw std::runtime_error(path + ": cannot write the bag: " + e.what());
   }
 }
 
-BagExporter::~BagExporter() {
-  try {
-    close();
-  } catch (...) {  // a destructor must not throw; close() explicitly to see errors
-  }
+void RosbagExport::close() {
+  if (!bag.isOpen()) return;
+  flush_events();
+  bag.close();
 }
 
-void BagExporter::close() {
-  if (!impl_->bag.isOpen()) return;
-  impl_->flush_events();
-  impl_->bag.close();
-}
-
-std::vector<TopicCount> BagExporter::topics() const { return impl_->topics; }
-
-void BagExporter::add_events(const EventRecord* events, std::size_t n) {
-  auto& s = *impl_;
+void RosbagExport::add_events(const EventRecord* events, std::size_t n) {
   for (std::size_t i = 0; i < n; ++i) {
     const EventRecord& e = events[i];
-    if (e.t_ns < s.last_event_ns)
+    if (e.t_ns < last_event_ns)
       throw std::invalid_argument("events must come in time order: " + std::to_string(e.t_ns) +
-                                  " ns after " + std::to_string(s.last_event_ns) + " ns");
-    s.last_event_ns = e.t_ns;
-    if (!s.pending.empty() && e.t_ns - s.pending.front().t_ns >= s.o.event_message_ns)
-      s.flush_events();
-    s.pending.push_back(e);
+                                  " ns after " + std::to_string(last_event_ns) + " ns");
+    last_event_ns = e.t_ns;
+    if (!pending.empty() && e.t_ns - pending.front().t_ns >= o.event_message_ns)
+      flush_events();
+    pending.push_back(e);
   }
 }
 
-void BagExporter::Impl::flush_events() {
+void RosbagExport::flush_events() {
   if (pending.empty()) return;
   const std::int64_t t0 = pending.front().t_ns;
   const ros::Time stamp = ros_time(t0, o.events_topic);
@@ -200,11 +203,10 @@ void BagExporter::Impl::flush_events() {
   pending.clear();
 }
 
-void BagExporter::add_imu(const ImuRecord& r) {
-  auto& s = *impl_;
-  const ros::Time t = ros_time(r.t_ns, s.o.imu_topic);
+void RosbagExport::add_imu(const ImuRecord& r) {
+  const ros::Time t = ros_time(r.t_ns, o.imu_topic);
   sensor_msgs::Imu m;
-  m.header = s.header(t, s.o.imu_frame);
+  m.header = header(t, o.imu_frame);
   m.orientation.w = 1;
   m.orientation_covariance[0] = -1;  // REP 145: no orientation estimate
   m.angular_velocity.x = r.gyro_rad_s[0];
@@ -213,22 +215,21 @@ void BagExporter::add_imu(const ImuRecord& r) {
   m.linear_acceleration.x = r.accel_m_s2[0];
   m.linear_acceleration.y = r.accel_m_s2[1];
   m.linear_acceleration.z = r.accel_m_s2[2];
-  s.write(s.o.imu_topic, "sensor_msgs/Imu", t, m);
+  write(o.imu_topic, "sensor_msgs/Imu", t, m);
 }
 
-std::string BagExporter::add_depth(const DepthRecord& r) {
-  auto& s = *impl_;
-  const ros::Time t = ros_time(r.t_ns, s.o.depth_topic);
+std::string RosbagExport::add_depth(const DepthRecord& r) {
+  const ros::Time t = ros_time(r.t_ns, o.depth_topic);
   if (r.width <= 0 || r.height <= 0 || !r.depth_m)
     throw std::invalid_argument("depth frame at " + std::to_string(r.t_ns) + " ns is empty");
   const std::size_t n = static_cast<std::size_t>(r.width) * static_cast<std::size_t>(r.height);
-  bool mm = s.o.depth_encoding == "16UC1";
-  if (s.o.depth_encoding == "auto") {
+  bool mm = o.depth_encoding == "16UC1";
+  if (o.depth_encoding == "auto") {
     mm = true;
     for (std::size_t i = 0; i < n && mm; ++i) mm = exact_mm(r.depth_m[i]) >= 0;
   }
   sensor_msgs::Image m;
-  m.header = s.header(t, s.o.depth_frame);
+  m.header = header(t, o.depth_frame);
   m.width = static_cast<std::uint32_t>(r.width);
   m.height = static_cast<std::uint32_t>(r.height);
   m.is_bigendian = host_is_big_endian();
@@ -244,16 +245,15 @@ std::string BagExporter::add_depth(const DepthRecord& r) {
       append_bytes(m.data, d);
     }
   }
-  s.write(s.o.depth_topic, "sensor_msgs/Image", t, m);
+  write(o.depth_topic, "sensor_msgs/Image", t, m);
   return m.encoding;
 }
 
-void BagExporter::add_odometry(const OdometryRecord& r) {
-  auto& s = *impl_;
-  const ros::Time t = ros_time(r.t_ns, s.o.odometry_topic);
+void RosbagExport::add_odometry(const OdometryRecord& r) {
+  const ros::Time t = ros_time(r.t_ns, o.odometry_topic);
   nav_msgs::Odometry m;
-  m.header = s.header(t, s.o.odometry_frame);
-  m.child_frame_id = s.o.odometry_child_frame;
+  m.header = header(t, o.odometry_frame);
+  m.child_frame_id = o.odometry_child_frame;
   m.pose.pose.position.x = r.p_W_B[0];
   m.pose.pose.position.y = r.p_W_B[1];
   m.pose.pose.position.z = r.p_W_B[2];
@@ -267,7 +267,11 @@ void BagExporter::add_odometry(const OdometryRecord& r) {
   m.twist.twist.angular.x = r.omega_B[0];
   m.twist.twist.angular.y = r.omega_B[1];
   m.twist.twist.angular.z = r.omega_B[2];
-  s.write(s.o.odometry_topic, "nav_msgs/Odometry", t, m);
+  write(o.odometry_topic, "nav_msgs/Odometry", t, m);
+}
+
+std::unique_ptr<BagExportBackend> create_rosbag_export(const std::string& path, const BagExportOptions& options) {
+  return std::make_unique<RosbagExport>(path, options);
 }
 
 }  // namespace fdv::ros1

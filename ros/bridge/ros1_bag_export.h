@@ -1,6 +1,8 @@
 #pragma once
 /// Writes sensor records as a ROS 1 bag with the node's default topics, through ROS's own
-/// rosbag library: what `fdv export --to ros1-bag` calls (apps/export_command.cpp).
+/// rosbag library: what `fdv export --to ros1-bag` calls (apps/convert_command.cpp). The writing
+/// happens in the plugin libfdv_ros1_export.so (fdv/io/format_plugin.h), loaded by the first
+/// BagExporter: a program that never writes a bag does not load ROS's libraries.
 ///
 ///   fdv::ros1::BagExportOptions o;            // /dvs/events as dvs_msgs/EventArray, 1 ms each
 ///   fdv::ros1::BagExporter bag("out.bag", o);
@@ -85,8 +87,8 @@ struct TopicCount {
 
 class BagExporter {
  public:
-  /// Opens `path` for writing; throws std::runtime_error naming the path when it cannot, and
-  /// std::invalid_argument for options out of range.
+  /// Opens `path` for writing; throws std::runtime_error naming the path when it cannot,
+  /// std::invalid_argument for options out of range, fdv::InputError when the plugin is missing.
   BagExporter(const std::string& path, const BagExportOptions& options);
   ~BagExporter();
   BagExporter(const BagExporter&) = delete;
@@ -105,8 +107,7 @@ class BagExporter {
   std::vector<TopicCount> topics() const;
 
  private:
-  struct Impl;
-  std::unique_ptr<Impl> impl_;
+  std::unique_ptr<class BagExportBackend> backend_;  // in the plugin libfdv_ros1_export.so
 };
 
 }  // namespace fdv::ros1

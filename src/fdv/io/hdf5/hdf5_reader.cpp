@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "fdv/core/error.h"
+#include "fdv/io/hdf5/hdf5_plugin_api.h"
 #include "fdv/io/hdf5/hdf5_support.h"
 
 namespace fdv {
@@ -527,14 +528,14 @@ Id open_file(const std::string& name, hid_t fapl) {
 
 }  // namespace
 
-bool looks_like_hdf5(std::string_view head) { return head.starts_with(kHdf5Magic); }
+namespace hdf5 {
 
-std::unique_ptr<RecordingReader> open_hdf5(const std::string& path, const ReaderOptions& options) {
+std::unique_ptr<RecordingReader> open_reader(const std::string& path, const ReaderOptions& options) {
   return std::make_unique<Hdf5Reader>(open_file(path, H5P_DEFAULT), path, options);
 }
 
-std::unique_ptr<RecordingReader> open_hdf5_image(std::string image, const std::string& name,
-                                                 const ReaderOptions& options) {
+std::unique_ptr<RecordingReader> open_reader_image(std::string image, const std::string& name,
+                                                   const ReaderOptions& options) {
   hdf5::quiet_errors();
   Id fapl(H5Pcreate(H5P_FILE_ACCESS));
   // The core driver reads from memory; the image is copied into HDF5's own buffer.
@@ -544,4 +545,5 @@ std::unique_ptr<RecordingReader> open_hdf5_image(std::string image, const std::s
   return std::make_unique<Hdf5Reader>(open_file(name, fapl.get()), name, options);
 }
 
+}  // namespace hdf5
 }  // namespace fdv

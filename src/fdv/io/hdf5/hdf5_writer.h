@@ -19,6 +19,9 @@
 #include "fdv/core/sensor_data.h"
 
 namespace fdv {
+namespace hdf5 {
+class EventWriterBackend;
+}
 
 struct Hdf5WriterOptions {
   int gzip_level = 0;                 ///< 0: uncompressed; 1..9: gzip (built into HDF5)
@@ -42,8 +45,7 @@ class Hdf5EventWriter {
   std::uint64_t floored_events() const;
 
  private:
-  struct State;
-  std::unique_ptr<State> state_;
+  std::unique_ptr<hdf5::EventWriterBackend> backend_;  // in the HDF5 plugin
 };
 
 }  // namespace fdv

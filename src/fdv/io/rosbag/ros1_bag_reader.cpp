@@ -20,6 +20,7 @@
 #include "fdv/core/error.h"
 #include "fdv/io/rosbag/bag_reader.h"
 #include "fdv/io/rosbag/ros1_bag_structure.h"
+#include "fdv/io/rosbag/ros1_plugin_api.h"
 #include "fdv/io/rosbag/rosbag_reader.h"
 #include "fdv/io/text_fields.h"
 
@@ -275,8 +276,7 @@ class Ros1BagReader final : public rosbag_impl_reader {
 
 }  // namespace
 
-std::unique_ptr<RecordingReader> open_ros1_bag(const std::string& path,
-                                               const ReaderOptions& options) {
+std::unique_ptr<RecordingReader> ros1::open_reader(const std::string& path, const ReaderOptions& options) {
   return std::make_unique<Ros1BagReader>(path, "", options);
 }
 
@@ -326,9 +326,8 @@ class MemoryRos1BagReader final : public RecordingReader {
 
 }  // namespace
 
-std::unique_ptr<RecordingReader> open_ros1_bag_bytes(const std::string& bytes,
-                                                     const std::string& name,
-                                                     const ReaderOptions& options) {
+std::unique_ptr<RecordingReader> ros1::open_reader_bytes(const std::string& bytes, const std::string& name,
+                                                         const ReaderOptions& options) {
   return std::make_unique<MemoryRos1BagReader>(bytes, name, options);
 }
 

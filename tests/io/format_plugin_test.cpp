@@ -1,0 +1,90 @@
+// Loading the format plugins (fdv/io/format_plugin.h): where they are looked for, what a missing
+// or foreign plugin gives, and that the program itself links none of their libraries.
+#include <gtest/gtest.h>
+#include <stdlib.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <string>
+
+#include "fdv/core/error.h"
+#include "fdv/io/format_plugin.h"
+#include "fdv/io/hdf5/hdf5_writer.h"
+#include "fdv/io/recording.h"
+#include "test_support.h"
+
+namespace fdv {
+namespace {
+
+/// Sets FDV_PLUGIN_PATH for one test.
+class PluginPath {
+ public:
+  explicit PluginPath(const std::string& value) { ::setenv("FDV_PLUGIN_PATH", value.c_str(), 1); }
+  ~PluginPath() { ::unsetenv("FDV_PLUGIN_PATH"); }
+};
+
+std::string load_error(const std::string& name, const char* entry) {
+  try {
+    load_plugin_api(name, entry, "input.xyz");
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(FormatPlugin, SearchPathIsTheEnvironmentThenBesideThenTheBuildAndInstallFolders) {
+  const PluginPath env("/first/a:/first/b");
+  const std::vector<std::string> path = plugin_search_path();
+  ASSERT_GE(path.size(), 4u);
+  EXPECT_EQ(path[0], "/first/a");
+  EXPECT_EQ(path[1], "/first/b");
+  EXPECT_NE(std::find(path.begin(), path.end(), FDV_TEST_PLUGIN_BUILD_DIR), path.end());
+  // The test program's own folder: fdv_plugins beside it.
+  EXPECT_NE(std::find(path.begin(), path.end(), std::string(FDV_TEST_BINARY_DIR) + "/fdv_plugins"), path.end());
+}
+
+TEST(FormatPlugin, AMissingPluginIsAnErrorNamingTheInputThePluginAndTheFolders) {
+  const PluginPath env("/no/such/folder");
+  const std::string what = load_error("no_such_format", "fdv_no_such_format_plugin_api");
+  EXPECT_NE(what.find("input.xyz"), std::string::npos) << what;
+  EXPECT_NE(what.find("libfdv_no_such_format.so"), std::string::npos) << what;
+  EXPECT_NE(what.find("/no/such/folder"), std::string::npos) << what;
+}
+
+TEST(FormatPlugin, APluginBuiltForAnotherVersionIsRefused) {
+  const PluginPath env(FDV_TEST_STALE_PLUGIN_DIR);
+  const std::string what = load_error("stale", "fdv_stale_plugin_api");
+  EXPECT_NE(what.find("built for fdv 0.0.0/0, not " + std::string(plugin_abi())), std::string::npos) << what;
+}
+
+// Through the public functions: the HDF5 writer and reader load libfdv_hdf5.so.
+TEST(FormatPlugin, Hdf5GoesThroughItsPlugin) {
+  const std::string file = test::scratch_dir("format_plugin") + "/events.h5";
+  {
+    Hdf5EventWriter out(file, 8, 4);
+    out.add(std::vector<Event>{{1000, 1, 2, true}, {2000, 7, 3, false}});
+    out.close();
+  }
+  auto reader = open_recording(file);
+  SensorChunk chunk;
+  std::size_t events = 0;
+  while (reader->read(chunk)) events += chunk.events.size();
+  EXPECT_EQ(events, 2u);
+  EXPECT_EQ(reader->info().width, 8);
+}
+
+// The point of the plugins: the command line links neither HDF5 nor ROS, and only the plugins do.
+TEST(FormatPlugin, TheProgramLinksNoneOfThePluginsLibraries) {
+  const auto ldd = [](const std::string& file) {
+    return test::run_command("ldd " + file, "format_plugin_ldd").out;
+  };
+  const std::string program = ldd(FDV_TEST_CLI);
+  for (const char* library : {"libhdf5", "librosbag_storage", "libroslib", "libpython", "libcurl", "libgdal"})
+    EXPECT_EQ(program.find(library), std::string::npos) << library << " in\n" << program;
+  EXPECT_NE(ldd(std::string(FDV_TEST_PLUGIN_BUILD_DIR) + "/libfdv_hdf5.so").find("libhdf5"), std::string::npos);
+  EXPECT_NE(ldd(std::string(FDV_TEST_PLUGIN_BUILD_DIR) + "/libfdv_ros1.so").find("librosbag_storage"),
+            std::string::npos);
+}
+
+}  // namespace
+}  // namespace fdv
