@@ -72,20 +72,25 @@ def test_a_signal_stops_fdv_run_and_leaves_the_earlier_results(dataset, workdir,
 
 def test_ctrl_c_raises_keyboard_interrupt_in_fdv_run_and_leaves_the_folder(dataset, workdir):
     out = workdir / "python_interrupted"
+    # The child signals itself from a thread of its own as soon as the run's partial folder exists:
+    # within a millisecond of the run's start, so always before its last window (a parent polling
+    # from outside could be scheduled too late on a loaded machine and find the run finished).
     script = textwrap.dedent(f"""
-        import fdv, sys
+        import os, pathlib, signal, threading, time, fdv
+        def interrupt_when_started():
+            while not list(pathlib.Path({str(out.parent)!r}).glob({f".{out.name}.partial-*"!r})):
+                time.sleep(0.001)
+            os.kill(os.getpid(), signal.SIGINT)
+        threading.Thread(target=interrupt_when_started, daemon=True).start()
         try:
             fdv.run({str(dataset)!r}, options={{"compensation": {{"method": "contrast_max"}}}}, out={str(out)!r})
             print("finished")
         except KeyboardInterrupt:
             print("KeyboardInterrupt")
         """)
-    child = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                             text=True, env=os.environ)
-    wait_for(lambda: partial_folders(out), "the run's partial folder")
-    child.send_signal(signal.SIGINT)
-    stdout, stderr = child.communicate(timeout=120)
-    assert stdout.strip() == "KeyboardInterrupt", stderr
+    child = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, env=os.environ,
+                           timeout=120)
+    assert child.stdout.strip() == "KeyboardInterrupt", child.stderr
     assert not out.exists() and partial_folders(out) == []
 
 
