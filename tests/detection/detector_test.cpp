@@ -63,6 +63,24 @@ void expect_on_blob(const DetectionResult& r, const test::BlobScene& s, double t
   EXPECT_LE(d.score, 1.0);
 }
 
+// The time images are made at construction, so that the first window does not pay for them; it
+// then writes into those same buffers.
+TEST_F(DetectorTest, TimeImagesAreMadeAtConstructionAndKeptByTheFirstWindow) {
+  Detector fresh(DetectorOptions{}, lens());
+  ASSERT_EQ(fresh.time_images().count.size(), cv::Size(lens().width, lens().height));
+  const void* count_data = fresh.time_images().count.data;
+  test::BlobScene s;
+  const auto ev = test::make_scene(lens(), s);
+  Calibration c;
+  c.event_camera = lens();
+  CompensationOptions none;
+  none.method = CompensationMethod::kNone;
+  const auto comp = make_compensator(c, none);
+  (void)fresh.detect(detector_input(comp->compensate({.events = ev, .t_start = s.t0, .t_end = s.t0 + s.duration})));
+  EXPECT_EQ(fresh.time_images().count.data, count_data);
+  EXPECT_GT(fresh.time_images().events, 0);
+}
+
 TEST_F(DetectorTest, FindsAMovingBlobWithinTwoPixels) {
   for (unsigned seed = 1; seed <= 4; ++seed) {
     test::BlobScene s;

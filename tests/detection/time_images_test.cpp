@@ -54,6 +54,31 @@ TEST(TimeImages, BuffersAreResetBetweenWindows) {
   EXPECT_NEAR(ti.mean_time_s.at<float>(1, 2), 0.004, 1e-7);
 }
 
+// Prepared ahead (as Detector's constructor does): the first window writes into those buffers,
+// with the same images as unprepared ones.
+TEST(TimeImages, PreparedBuffersAreTheFirstWindowsAndGiveTheSameImages) {
+  TimeImages prepared, fresh;
+  prepare_time_images(prepared, 3, 2);
+  ASSERT_EQ(prepared.count.size(), cv::Size(3, 2));
+  EXPECT_EQ(cv::countNonZero(prepared.count), 0);
+  const void* count_data = prepared.count.data;
+  const void* accumulator_data = prepared.accumulator.data;
+  const std::vector<std::int32_t> px{0, 4, 0, 2};
+  const std::vector<float> t{0.001f, 0.006f, 0.003f, 0.010f};
+  const CompensatedEventsView first = view(3, 2, px, t);
+  build_time_images(first, prepared);
+  build_time_images(first, fresh);
+  EXPECT_EQ(prepared.count.data, count_data);
+  EXPECT_EQ(prepared.accumulator.data, accumulator_data);
+  EXPECT_EQ(cv::countNonZero(prepared.count != fresh.count), 0);
+  EXPECT_EQ(cv::countNonZero(prepared.normalized != fresh.normalized), 0);
+  EXPECT_EQ(prepared.events, fresh.events);
+  // Prepared again at the same size: nothing is re-made or blanked (the next window relies on it).
+  prepare_time_images(prepared, 3, 2);
+  EXPECT_EQ(prepared.count.data, count_data);
+  EXPECT_EQ(prepared.count.at<std::int32_t>(0, 0), 2);
+}
+
 TEST(TimeImages, EmptyWindow) {
   TimeImages ti;
   build_time_images(view(4, 3, {}, {}), ti);

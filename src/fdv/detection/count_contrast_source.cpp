@@ -82,6 +82,8 @@ void CountTables::allocate(int width, int height) {
   saturated_integral_.create(height + 1, width + 1, CV_32S);
   active_integral_.create(height + 1, width + 1, CV_32S);
   fired_integral_.create(height + 1, width + 1, CV_32S);
+  // Touched here, so that the first window's writes do not fault every page in.
+  for (cv::Mat* m : {&saturated8_, &active8_, &saturated_integral_, &active_integral_, &fired_integral_}) m->setTo(0);
 }
 
 void CountTables::reset(const TimeImages& ti, int min_pixel_events) {

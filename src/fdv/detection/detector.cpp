@@ -147,6 +147,7 @@ void Detector::allocate(int width, int height) {
   region_.reserve(width, height);
   for (const Source& s : sources_) s.source->allocate(width, height);
   refiner_.allocate(width, height);
+  prepare_time_images(ti_, width, height);
 }
 
 Eigen::Vector2d Detector::undistorted_to_raw(const Eigen::Vector2d& uv) const {

@@ -249,8 +249,7 @@ void sort_by_owner(Partition& part, int i, const std::int32_t* pixel, const floa
 
 }  // namespace
 
-void build_time_images(const CompensatedEventsView& view, TimeImages& out) {
-  const int w = view.width, h = view.height;
+void prepare_time_images(TimeImages& out, int w, int h) {
   out.count.create(h, w, CV_32S);
   out.sum_time_s.create(h, w, CV_32F);
   out.mean_time_s.create(h, w, CV_32F);
@@ -268,6 +267,13 @@ void build_time_images(const CompensatedEventsView& view, TimeImages& out) {
     out.chunk_sums.assign((n_blocks + kChunkBlocks - 1) / kChunkBlocks, 0.0);
     out.buffer_keys = keys;
   }
+}
+
+void build_time_images(const CompensatedEventsView& view, TimeImages& out) {
+  const int w = view.width, h = view.height;
+  prepare_time_images(out, w, h);
+  const std::size_t npx = static_cast<std::size_t>(w) * h;
+  const std::size_t n_blocks = (npx + kBlock - 1) / kBlock;
   const Images im{out.accumulator.ptr<float>(), out.count.ptr<std::int32_t>(), out.sum_time_s.ptr<float>(),
                   out.mean_time_s.ptr<float>(), out.normalized.ptr<float>()};
   std::uint8_t* blocks = out.blocks.data();

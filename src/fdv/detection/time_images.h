@@ -83,4 +83,9 @@ struct TimeImages {
 /// Fills `out` (reusing its buffers). Events whose pixel index is out of range are ignored.
 void build_time_images(const CompensatedEventsView& view, TimeImages& out);
 
+/// Allocates and blanks `out`'s images for a width × height grid, touching every page, unless they
+/// already are: build_time_images does it on a new size, and a caller that knows the size ahead
+/// (Detector's constructor) calls it so that the first window does not pay for it.
+void prepare_time_images(TimeImages& out, int width, int height);
+
 }  // namespace fdv
