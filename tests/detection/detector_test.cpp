@@ -81,6 +81,22 @@ TEST_F(DetectorTest, TimeImagesAreMadeAtConstructionAndKeptByTheFirstWindow) {
   EXPECT_GT(fresh.time_images().events, 0);
 }
 
+// Windows with too few events leave no segmentation behind, also when several follow each other
+// (the first blanks S, the next ones find it blank) and when a segmented window comes between.
+TEST_F(DetectorTest, WindowsWithTooFewEventsLeaveSBlank) {
+  test::BlobScene s;
+  const auto blob = test::make_scene(lens(), s);
+  const std::vector<Event> few{{s.t0 + 1000, 10, 10, true}, {s.t0 + 2000, 20, 20, false}};
+  for (int round = 0; round < 2; ++round) {
+    EXPECT_EQ(run(blob, s.t0, s.t0 + s.duration).status, DetectionStatus::kDetected);
+    EXPECT_GT(cv::countNonZero(detector_.segmentation()), 0);
+    for (int i = 0; i < 2; ++i) {
+      EXPECT_EQ(run(few, s.t0, s.t0 + s.duration).status, DetectionStatus::kTooFewEvents);
+      EXPECT_EQ(cv::countNonZero(detector_.segmentation()), 0) << "round " << round << ", window " << i;
+    }
+  }
+}
+
 TEST_F(DetectorTest, FindsAMovingBlobWithinTwoPixels) {
   for (unsigned seed = 1; seed <= 4; ++seed) {
     test::BlobScene s;

@@ -140,6 +140,7 @@ Detector::Detector(const DetectorOptions& options, const PinholeCamera& event_ca
 void Detector::allocate(int width, int height) {
   S_.create(height, width, CV_32F);
   S_.setTo(0);
+  S_is_zero_ = true;
   rest_.create(height, width, CV_32F);
   rest_.setTo(0);
   rest_bounds_ = {};
@@ -204,13 +205,16 @@ DetectionResult Detector::detect(const CompensatedEventsView& window, std::span<
   res.mean_normalized = ti_.mean_normalized;
   if (S_.rows != h || S_.cols != w) allocate(w, h);
   if (ti_.events < o.min_window_events) {
-    zero_rect(S_, {0, 0, w, h});
+    // A run of near-empty windows (a sparse stream, a gap's reported windows) blanks it once.
+    if (!S_is_zero_) zero_rect(S_, {0, 0, w, h});
+    S_is_zero_ = true;
     return finish(DetectionStatus::kTooFewEvents);
   }
 
   t = Clock::now();
   res.theta = adaptive_threshold(ti_.mean_normalized, window.omega_rad_s, window.speed_m_s, o);
   const SegmentResult seg = segment(ti_, res.theta, o.min_pixel_events, S_, window.threads);
+  S_is_zero_ = seg.pixels == 0;
   res.segmented_pixels = seg.pixels;
   res.timings.segmentation_ms = ms_since(t);
   if (!(ti_.t_max_s > ti_.t_min_s)) return finish(DetectionStatus::kNoTemporalContrast);
