@@ -72,11 +72,13 @@ def test_a_signal_stops_fdv_run_and_leaves_the_earlier_results(dataset, workdir,
 
 def test_ctrl_c_raises_keyboard_interrupt_in_fdv_run_and_leaves_the_folder(dataset, workdir):
     out = workdir / "python_interrupted"
-    # The child signals itself from a thread of its own as soon as the run's partial folder exists:
-    # within a millisecond of the run's start, so always before its last window (a parent polling
-    # from outside could be scheduled too late on a loaded machine and find the run finished).
+    # Python turns SIGINT into KeyboardInterrupt only if it was not ignored when the interpreter
+    # started, and a shell ignores it for the commands it starts in the background (`.ci/run &`):
+    # the child installs the handler itself. It signals itself from a thread as soon as the run's
+    # partial folder exists, within a millisecond of the run's start, before its last window.
     script = textwrap.dedent(f"""
         import os, pathlib, signal, threading, time, fdv
+        signal.signal(signal.SIGINT, signal.default_int_handler)
         def interrupt_when_started():
             while not list(pathlib.Path({str(out.parent)!r}).glob({f".{out.name}.partial-*"!r})):
                 time.sleep(0.001)
