@@ -16,7 +16,9 @@ namespace {
 
 py::dict simulate(const std::string& scenario, std::uint64_t seed, const std::string& out,
                   std::optional<double> duration_s, std::optional<std::pair<int, int>> resolution,
-                  std::optional<int> threads, const std::string& config_yaml) {
+                  std::optional<int> threads, const std::string& config_yaml, const std::string& depth_format) {
+  if (depth_format != "zstd" && depth_format != "png")
+    throw ConfigError("depth_format '" + depth_format + "': expected zstd or png");
   const auto presets = sim::preset_names();
   if (std::find(presets.begin(), presets.end(), scenario) == presets.end()) {
     std::string names;
@@ -37,7 +39,8 @@ py::dict simulate(const std::string& scenario, std::uint64_t seed, const std::st
     if (resolution) sim::set_event_resolution(config, resolution->first, resolution->second);
     if (const auto why = config.validate(); !why.empty()) throw ConfigError(why);
     sim::Simulator simulator(config);
-    sim::DatasetSink sink(out, simulator.calibration());
+    sim::DatasetSink sink(out, simulator.calibration(),
+                          depth_format == "png" ? DepthEncoding::kPng : DepthEncoding::kZstd);
     summary = simulator.run(sink);
     sink.finish(simulator.manifest_yaml());
   }
@@ -99,9 +102,10 @@ void register_simulation(py::module_& m) {
   m.def("preset_names", &sim::preset_names);
   m.def("simulate", &simulate, py::arg("scenario"), py::kw_only(), py::arg("seed") = 1, py::arg("out"),
         py::arg("duration") = py::none(), py::arg("resolution") = py::none(), py::arg("threads") = py::none(),
-        py::arg("config") = "",
+        py::arg("config") = "", py::arg("depth_format") = "zstd",
         "Simulates preset `scenario` into the dataset folder `out`, as `fdv simulate` (config: YAML "
-        "text overriding any parameter, see `fdv simulate --print-config`). Returns a summary dict.");
+        "text overriding any parameter, see `fdv simulate --print-config`; depth_format: 'zstd' or "
+        "'png', as --depth-format). Returns a summary dict.");
   m.def("load_truth", &load_truth, py::arg("dataset"), py::kw_only(), py::arg("time_unit") = "us",
         "Ground truth of a simulated dataset: body (fdv.ODOMETRY_DTYPE), objects (fdv.OBJECT_DTYPE), "
         "balls {id: radius_m, first_in_view, closest_approach_t, closest_approach_m}, gravity_W.");

@@ -117,3 +117,22 @@ def test_merged_is_in_time_order(dataset):
         assert t >= last
         last = data[0] if kind == "depth" else data["t"][-1]
     assert {"events", "imu", "odometry", "depth"} <= kinds
+
+
+def test_depth_reads_the_same_from_either_encoding(tmp_path):
+    """`depth_format` (as `fdv simulate --depth-format`): the same frames as Zstandard or PNG files;
+    the PNGs read by matplotlib's own decoder equal what fdv reads from the Zstandard frames."""
+    import matplotlib.image
+    for depth_format in ("zstd", "png"):
+        fdv.simulate("scene2_ball", seed=3, out=str(tmp_path / depth_format), duration=0.1,
+                     resolution=(346, 260), depth_format=depth_format)
+    zst, png = (fdv.open(str(tmp_path / f)).depth() for f in ("zstd", "png"))
+    assert sorted(p.name for p in (tmp_path / "zstd" / "depth").iterdir())[0] == "000000.zst"
+    assert len(zst) == len(png) >= 3
+    for (t_z, d_z), (t_p, d_p) in zip(zst, png):
+        assert t_z == t_p
+        np.testing.assert_array_equal(d_z, d_p)
+    first = matplotlib.image.imread(tmp_path / "png" / "depth" / "000000.png")  # 16-bit scaled to [0, 1]
+    np.testing.assert_array_equal(np.rint(first * 65535).astype(np.uint16), zst[0][1])
+    with pytest.raises(fdv.ConfigError, match="depth_format 'jpg'"):
+        fdv.simulate("scene2_ball", out=str(tmp_path / "x"), duration=0.1, depth_format="jpg")
