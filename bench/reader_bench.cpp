@@ -137,10 +137,7 @@ const DepthFrames& simulated_depth() {
     out.width = sink.frames.at(0).width;
     out.height = sink.frames.at(0).height;
     for (const fdv::DepthFrame& f : sink.frames) {
-      auto& mm = out.millimetres.emplace_back(f.depth_m.size());
-      std::transform(f.depth_m.begin(), f.depth_m.end(), mm.begin(), [](float d) {
-        return static_cast<std::uint16_t>(std::isfinite(d) && d > 0 ? std::min(std::round(d * 1000.0), 65535.0) : 0.0);
-      });
+      fdv::metres_to_millimetres(f.depth_m, out.millimetres.emplace_back(f.depth_m.size()));
     }
     return out;
   }();

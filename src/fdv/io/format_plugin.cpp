@@ -51,15 +51,13 @@ std::vector<std::string> plugin_search_path() {
   return folders;
 }
 
-const void* load_plugin_api(const std::string& name, const char* entry, const std::string& needed_for) {
-  static std::mutex mutex;
-  static std::map<std::string, void*> loaded;  // never closed: readers it made may outlive any scope
-  const std::lock_guard lock(mutex);
-  void*& handle = loaded[name];
+namespace {
+
+/// Opens libfdv_NAME.so from the first folder of plugin_search_path() that holds it.
+void* open_plugin(const std::string& name, const std::string& needed_for) {
   const std::string file = "libfdv_" + name + ".so";
   std::string tried;
   for (const std::string& folder : plugin_search_path()) {
-    if (handle != nullptr) break;
     const fs::path path = fs::path(folder) / file;
     std::error_code ec;
     if (!fs::is_regular_file(path, ec)) {
@@ -80,11 +78,20 @@ const void* load_plugin_api(const std::string& name, const char* entry, const st
                                            built_for + ", not " + plugin_abi() +
                                            ": rebuild it, or set FDV_PLUGIN_PATH to this build's plugins");
     }
-    handle = opened;
+    return opened;
   }
-  if (handle == nullptr)
-    throw InputError(needed_for, "", "needs the " + name + " plugin (" + file + "), found in none of: " + tried +
-                                         " (FDV_PLUGIN_PATH adds folders; docs/BUILDING.md \"Format plugins\")");
+  throw InputError(needed_for, "", "needs the " + name + " plugin (" + file + "), found in none of: " + tried +
+                                       " (FDV_PLUGIN_PATH adds folders; docs/BUILDING.md \"Format plugins\")");
+}
+
+}  // namespace
+
+const void* load_plugin_api(const std::string& name, const char* entry, const std::string& needed_for) {
+  static std::mutex mutex;
+  static std::map<std::string, void*> loaded;  // never closed: readers it made may outlive any scope
+  const std::lock_guard lock(mutex);
+  void*& handle = loaded[name];
+  if (handle == nullptr) handle = open_plugin(name, needed_for);
   const auto table = reinterpret_cast<const void* (*)()>(dlsym(handle, entry));
   if (table == nullptr)
     throw InputError(needed_for, "", "the " + name + " plugin has no entry " + entry);

@@ -2,8 +2,6 @@
 
 #include <yaml-cpp/yaml.h>
 
-#include <algorithm>
-#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fmt/format.h>
@@ -97,10 +95,7 @@ void DatasetWriter::add_object_truth(const ObjectState& s) {
 
 void DatasetWriter::add_depth(const DepthFrame& frame) {
   millimetres_.resize(frame.depth_m.size());
-  std::transform(frame.depth_m.begin(), frame.depth_m.end(), millimetres_.begin(), [](float d) {
-    const double m = std::isfinite(d) && d > 0 ? std::round(d * 1000.0) : 0.0;
-    return static_cast<std::uint16_t>(std::min(m, 65535.0));
-  });
+  metres_to_millimetres(frame.depth_m, millimetres_);
   const bool png = depth_encoding_ == DepthEncoding::kPng;
   const std::string name = fmt::format("depth/{:06d}.{}", depth_count_++, png ? "png" : "zst");
   const std::vector<std::uint8_t> bytes =

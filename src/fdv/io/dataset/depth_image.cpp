@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <stdexcept>
@@ -102,6 +103,13 @@ bool sniff_depth_encoding(std::span<const std::uint8_t> bytes, DepthEncoding& en
     return true;
   }
   return false;
+}
+
+void metres_to_millimetres(std::span<const float> metres, std::span<std::uint16_t> millimetres) {
+  std::transform(metres.begin(), metres.end(), millimetres.begin(), [](float d) {
+    const double m = std::isfinite(d) && d > 0 ? std::round(d * 1000.0) : 0.0;
+    return static_cast<std::uint16_t>(std::min(m, 65535.0));
+  });
 }
 
 std::vector<std::uint8_t> encode_depth_png(std::span<const std::uint16_t> millimetres, int width,

@@ -19,6 +19,10 @@ enum class DepthEncoding { kPng, kZstd };
 /// What a depth file's first bytes say it is: kPng or kZstd, or false when neither.
 bool sniff_depth_encoding(std::span<const std::uint8_t> bytes, DepthEncoding& encoding);
 
+/// Metres to the files' millimetres: rounded, 0 for invalid (not finite or ≤ 0), 65535 at most.
+/// `millimetres` has the size of `metres`.
+void metres_to_millimetres(std::span<const float> metres, std::span<std::uint16_t> millimetres);
+
 /// Millimetres of a width × height frame, row-major.
 std::vector<std::uint8_t> encode_depth_png(std::span<const std::uint16_t> millimetres, int width,
                                            int height);
