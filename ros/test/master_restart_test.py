@@ -59,7 +59,9 @@ def main():
         procs.start("roscore2", ["roscore", "-p", str(port)])
         wait_until(master_up, "the restarted roscore")
         wait_until(registered, "the node's registration with the restarted master")
-        assert "is back: publishers and subscribers registered again" in procs.log("node")
+        # The node registers first and logs after, so the line may lag the registration.
+        wait_until(lambda: "is back: publishers and subscribers registered again" in procs.log("node"),
+                   "the node's log of the master's return")
         assert node.poll() is None
         print("the node registered again with the restarted master")
     except Exception:
