@@ -35,6 +35,7 @@ struct ExportArgs {
   std::optional<std::int64_t> time_offset_ns;
 };
 
+#if FDV_HAS_ROS1
 /// ROS bag times must be >= 1 ns and a header stamp of 0 reads as "no stamp" (fdv's reader puts
 /// the bag time in its place, the node drops it), so recordings whose clock starts at 0 (fdv's
 /// simulated datasets) are moved by 1 s; recordings on an epoch clock are written as they are.
@@ -47,7 +48,6 @@ std::int64_t auto_time_offset(const SensorChunk& first) {
   return t <= 0 ? kNsPerS : 0;
 }
 
-#if FDV_HAS_ROS1
 void write_chunk(const SensorChunk& c, std::int64_t offset, ros1::BagExporter& bag,
                  std::vector<ros1::EventRecord>& events, std::map<std::string, int>& depth_encodings) {
   events.resize(c.events.size());
