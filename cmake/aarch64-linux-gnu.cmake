@@ -28,6 +28,11 @@ if(FDV_ARM64_SYSROOT)
                   ${FDV_ARM64_SYSROOT}/usr/share/pkgconfig)
   string(REPLACE ";" ":" fdv_pc_dirs "${fdv_pc_dirs}")
   set(ENV{PKG_CONFIG_LIBDIR} ${fdv_pc_dirs})
+  # CTest runs the test programs under Debian's qemu-user, with the sysroot's loader and libraries.
+  set(CMAKE_CROSSCOMPILING_EMULATOR qemu-aarch64 -L ${FDV_ARM64_SYSROOT})
+  # ldd for aarch64 programs: the sysroot's dynamic loader lists what it would load.
+  set(FDV_LIST_SHARED_LIBRARIES ${CMAKE_CROSSCOMPILING_EMULATOR}
+      ${FDV_ARM64_SYSROOT}/lib/ld-linux-aarch64.so.1 --list)
 endif()
 # Libraries and headers from the sysroot only; programs (flatc, pkg-config) from the build machine.
 set(CMAKE_FIND_ROOT_PATH_MODE_PROGRAM NEVER)
