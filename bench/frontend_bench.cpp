@@ -31,6 +31,7 @@
 #include "fdv/detection/segmentation.h"
 #include "fdv/pipeline/detector_input.h"
 #include "fdv/pipeline/event_windower.h"
+#include "fdv/pipeline/perception.h"
 #include "tests/detection/synthetic_scene.h"
 
 namespace fdv {
@@ -174,6 +175,22 @@ void BM_DepthPreparation(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_DepthPreparation)->Unit(benchmark::kMillisecond);
+
+// Bad input: the same preparation of a depth frame that is all invalid (every pixel 0, a hole).
+void BM_DepthPreparationAllInvalid(benchmark::State& state) {
+  const BenchWindow& w = bench_window();
+  CompensationOptions opt;
+  opt.method = CompensationMethod::kRotationTranslation;
+  auto comp = make_compensator(bench_calibration(), opt);
+  RegisteredDepth depth = w.depth;
+  std::fill(depth.depth_m.begin(), depth.depth_m.end(), 0.0f);
+  const std::vector<Event> one{{0, 1, 1, true}};
+  for (auto _ : state) {
+    depth.t += 1;
+    benchmark::DoNotOptimize(comp->compensate({one, 0, kWindow, w.imu, w.odometry, &depth}).size());
+  }
+}
+BENCHMARK(BM_DepthPreparationAllInvalid)->Unit(benchmark::kMillisecond);
 
 // Cutting the stream into windows (EventWindower, the pipeline's first stage): 40 windows of the
 // benchmark window's events (5 M ev/s, 1 s) pushed in 1 ms slices, as a driver delivers them.
@@ -460,6 +477,62 @@ void BM_HotPixelFilter(benchmark::State& state, bool noisy) {
 }
 BENCHMARK_CAPTURE(BM_HotPixelFilter, textured, false)->Unit(benchmark::kMillisecond)->Iterations(300);
 BENCHMARK_CAPTURE(BM_HotPixelFilter, noisy, true)->Unit(benchmark::kMillisecond)->Iterations(300);
+
+// Bad input through the whole Perception (tests/pipeline/bad_input_work_test.cpp asserts the work
+// bounds by count; this is their time per window): each iteration pushes one window of
+//   overload     10x the benchmark window's events (1.25 M, uniformly random): the windower
+//                decimates it to max_events_per_window (1 M) before any stage;
+//   hot_pixels   only 2,000 isolated pixels firing at 1 kHz (50,000 events), learned in the 10
+//                windows before the timing: the filter drops them all, no stage sees an event.
+// A window is complete when the next one's first event arrives, so iteration k times window k-1.
+void BM_BadInputWindow(benchmark::State& state, bool overload) {
+  const Calibration calib = bench_calibration();
+  std::vector<Event> window;
+  std::mt19937 rng(9);
+  if (overload) {
+    for (int copy = 0; copy < 10; ++copy)
+      for (const Event& e : bench_window().events) window.push_back({e.t, static_cast<std::uint16_t>(rng() % 640),
+                                                                     static_cast<std::uint16_t>(rng() % 480), true});
+  } else {
+    for (int i = 0; i < 2000; ++i) {
+      const auto x = static_cast<std::uint16_t>(4 + 8 * (i % 79)), y = static_cast<std::uint16_t>(4 + 8 * (i / 79));
+      for (TimeNs t = static_cast<TimeNs>(rng() % kNsPerMs); t < kWindow; t += kNsPerMs) window.push_back({t, x, y, true});
+    }
+  }
+  std::sort(window.begin(), window.end(), [](const Event& a, const Event& b) { return a.t < b.t; });
+  PerceptionOptions o;
+  o.compensation.method = CompensationMethod::kNone;
+  o.detection.hot_pixels.enabled = !overload;
+  o.estimate_trajectories = false;
+  std::uint64_t processed = 0, windows = 0;
+  PerceptionCallbacks cb;
+  cb.on_window = [&](const WindowResult& w) {
+    processed += w.compensation.events_in;
+    ++windows;
+  };
+  Perception p(calib, o, cb);
+  std::vector<Event> shifted(window.size());
+  TimeNs offset = 0;
+  const auto push_next = [&] {
+    for (std::size_t i = 0; i < window.size(); ++i) shifted[i] = {window[i].t + offset, window[i].x, window[i].y, window[i].polarity};
+    p.push_events(shifted);
+    offset += kWindow;
+  };
+  for (int warm = 0; warm < 10; ++warm) push_next();
+  processed = windows = 0;
+  std::vector<double> ms, wall;
+  for (auto _ : state) {
+    const double t0 = thread_cpu_ms(), w0 = wall_ms();
+    push_next();
+    ms.push_back(thread_cpu_ms() - t0);
+    wall.push_back(wall_ms() - w0);
+  }
+  state.counters["events_in"] = static_cast<double>(window.size());
+  state.counters["events_processed"] = static_cast<double>(processed) / static_cast<double>(std::max<std::uint64_t>(windows, 1));
+  report_distribution(state, ms, wall);
+}
+BENCHMARK_CAPTURE(BM_BadInputWindow, overload, true)->Unit(benchmark::kMillisecond)->Iterations(30);
+BENCHMARK_CAPTURE(BM_BadInputWindow, hot_pixels, false)->Unit(benchmark::kMillisecond)->Iterations(300);
 
 /// Console output as usual, and the CPU time of every run kept for the speed-up table.
 class RecordingReporter : public benchmark::ConsoleReporter {

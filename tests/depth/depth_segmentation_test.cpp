@@ -287,6 +287,26 @@ TEST(DepthSegmentation, InvalidInputIsReportedNotThrown) {
   EXPECT_THROW(segment_object_depth(depth_view(f), kCam, q, bad), ConfigError);
 }
 
+// Bad input keeps the work bounded: an all-invalid frame (every pixel a hole) costs the ROI's
+// pixels, once, and tries no peak, even for a box as large as the image.
+TEST(DepthSegmentation, AnAllInvalidFrameCostsOnlyTheRoisPixels) {
+  Frame f;
+  f.depth_m.assign(640 * 480, 0.0f);
+  DepthQuery q;
+  q.center_px = {320, 240};
+  q.box_size_px = {20, 20};
+  const DepthSegmentation small = segment_object_depth(depth_view(f), kCam, q, {});
+  EXPECT_EQ(small.rejection, DepthRejection::kTooFewValidPixels);
+  EXPECT_EQ(small.valid_pixels, 0);
+  EXPECT_EQ(small.peaks_tried, 0);
+  EXPECT_LE(small.roi_pixels, 41 * 41);  // the box x2: 40 px, and a border row and column
+  q.box_size_px = {5000, 5000};
+  const DepthSegmentation whole = segment_object_depth(depth_view(f), kCam, q, {});
+  EXPECT_EQ(whole.rejection, DepthRejection::kTooFewValidPixels);
+  EXPECT_EQ(whole.roi_pixels, 640 * 480);  // clipped to the image
+  EXPECT_EQ(whole.peaks_tried, 0);
+}
+
 // The ROI holds the pixels whose centres lie inside the box x2: a 4 x 6 px box about (10.5, 20)
 // covers x in [6.5, 14.5] and y in [14, 26], so columns 7-14 and rows 14-26 (a centre on the
 // border counts); it is clipped at the image's edges and empty when the box is outside.
