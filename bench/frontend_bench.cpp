@@ -161,36 +161,23 @@ FDV_PAIR("rotation_translation", false, rotation_translation_uniform);
 FDV_PAIR("rotation_translation", true, rotation_translation_textured);
 #undef FDV_PAIR
 
-// Depth preparation (inverse depth, hole fill, median) when a new depth frame arrives.
-void BM_DepthPreparation(benchmark::State& state) {
+// Depth preparation (inverse depth, hole fill, median) when a new depth frame arrives; and, as bad
+// input, a frame that is all invalid (every pixel 0, a hole).
+void BM_DepthPreparation(benchmark::State& state, bool all_invalid) {
   const BenchWindow& w = bench_window();
   CompensationOptions opt;
   opt.method = CompensationMethod::kRotationTranslation;
   auto comp = make_compensator(bench_calibration(), opt);
   RegisteredDepth depth = w.depth;
+  if (all_invalid) std::fill(depth.depth_m.begin(), depth.depth_m.end(), 0.0f);
   const std::vector<Event> one{{0, 1, 1, true}};
   for (auto _ : state) {
     depth.t += 1;  // a "new" frame each time
     benchmark::DoNotOptimize(comp->compensate({one, 0, kWindow, w.imu, w.odometry, &depth}).size());
   }
 }
-BENCHMARK(BM_DepthPreparation)->Unit(benchmark::kMillisecond);
-
-// Bad input: the same preparation of a depth frame that is all invalid (every pixel 0, a hole).
-void BM_DepthPreparationAllInvalid(benchmark::State& state) {
-  const BenchWindow& w = bench_window();
-  CompensationOptions opt;
-  opt.method = CompensationMethod::kRotationTranslation;
-  auto comp = make_compensator(bench_calibration(), opt);
-  RegisteredDepth depth = w.depth;
-  std::fill(depth.depth_m.begin(), depth.depth_m.end(), 0.0f);
-  const std::vector<Event> one{{0, 1, 1, true}};
-  for (auto _ : state) {
-    depth.t += 1;
-    benchmark::DoNotOptimize(comp->compensate({one, 0, kWindow, w.imu, w.odometry, &depth}).size());
-  }
-}
-BENCHMARK(BM_DepthPreparationAllInvalid)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_DepthPreparation, valid, false)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_DepthPreparation, all_invalid, true)->Unit(benchmark::kMillisecond);
 
 // Cutting the stream into windows (EventWindower, the pipeline's first stage): 40 windows of the
 // benchmark window's events (5 M ev/s, 1 s) pushed in 1 ms slices, as a driver delivers them.
@@ -478,8 +465,9 @@ void BM_HotPixelFilter(benchmark::State& state, bool noisy) {
 BENCHMARK_CAPTURE(BM_HotPixelFilter, textured, false)->Unit(benchmark::kMillisecond)->Iterations(300);
 BENCHMARK_CAPTURE(BM_HotPixelFilter, noisy, true)->Unit(benchmark::kMillisecond)->Iterations(300);
 
-// Bad input through the whole Perception (tests/pipeline/bad_input_work_test.cpp asserts the work
-// bounds by count; this is their time per window): each iteration pushes one window of
+// Bad input through the whole Perception (BadInputWork.* in tests/pipeline/sensor_noise_test.cpp
+// asserts the work bounds by count; this is their time per window): each iteration pushes one
+// window of
 //   overload     10x the benchmark window's events (1.25 M, uniformly random): the windower
 //                decimates it to max_events_per_window (1 M) before any stage;
 //   hot_pixels   only 2,000 isolated pixels firing at 1 kHz (50,000 events), learned in the 10

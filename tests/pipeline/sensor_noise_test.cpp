@@ -1,5 +1,6 @@
 // Sensor noise through the whole pipeline (a still DAVIS346-sized camera, events only): hot pixels
-// learned and kept out of every source, flickering lamps, and a ball that passes over a hot pixel.
+// learned and kept out of every source, flickering lamps, a ball that passes over a hot pixel, and
+// bad input whose work per window must stay bounded.
 // The scenes are synthetic, so the truth is known exactly.
 #include <gtest/gtest.h>
 
@@ -182,6 +183,60 @@ TEST(SensorNoise, ABallPassingOverAHotPixelIsFoundInEveryWindow) {
     ASSERT_EQ(w.detections.size(), 1u);
     const Eigen::Vector2d truth = start + velocity * to_seconds(w.detections[0].detection.t - t_ball);
     EXPECT_LT((w.detections[0].detection.center_raw - truth).norm(), 3.0);
+  }
+}
+
+// Bad input keeps a window's work bounded (docs/FORMATS.md "Bad input"); checked by count here,
+// timed by bench/frontend_bench's BM_BadInputWindow.
+
+// The overload policy: a window of ten times the usual events is decimated to the cap before any
+// stage sees it; every event is still counted, in a window or as decimated.
+TEST(BadInputWork, TenTimesTheUsualEventsAreDecimatedToTheCap) {
+  constexpr int kUsual = 20'000;
+  PerceptionOptions o;
+  o.windows.max_events_per_window = kUsual;
+  std::mt19937 rng(3);
+  // The windows start at the first event: at 0. Windows 0-3 and 5 hold a quarter of the usual
+  // count of random events, window 4 ten times the usual.
+  std::vector<Event> ev{{0, 0, 0, true}};
+  std::uniform_int_distribution<int> ux(0, kW - 1), uy(0, kH - 1);
+  for (int window = 0; window < 6; ++window) {
+    std::uniform_int_distribution<TimeNs> when(window * kWindow, (window + 1) * kWindow - 1);
+    for (int i = 0; i < (window == 4 ? 10 * kUsual : kUsual / 4); ++i)
+      ev.push_back({when(rng), static_cast<std::uint16_t>(ux(rng)), static_cast<std::uint16_t>(uy(rng)), i % 2 == 0});
+  }
+  const Outcome r = run(ev, o);
+  ASSERT_EQ(r.windows.size(), 6u);
+  for (const WindowResult& w : r.windows) {
+    EXPECT_LE(w.events, static_cast<std::size_t>(kUsual)) << w.index;
+    EXPECT_EQ(w.compensation.events_in, w.events) << w.index;
+  }
+  // Every 10th of the 200,000 kept: k = ceil(200,000 / 20,000) = 10.
+  EXPECT_EQ(r.windows[4].events, static_cast<std::size_t>(kUsual));
+  EXPECT_EQ(r.windows[4].decimated, 9u * kUsual);
+  EXPECT_EQ(r.counters.events, ev.size());
+  EXPECT_EQ(r.counters.events, r.counters.events_in_windows + r.counters.events_dropped.overload);
+}
+
+// A window of hot pixels only: once they are learned, their events leave the window before
+// compensation, so no later stage processes any event.
+TEST(BadInputWork, AWindowOfHotPixelsOnlyReachesNoStageOnceTheyAreLearned) {
+  std::mt19937 rng(8);
+  std::vector<Event> ev;
+  constexpr int kWindows = 30;
+  int pixels = 0;
+  // 300 isolated pixels (8 px apart: no spatial support) at 1 kHz, 25 events a window each.
+  for (int y = 4; y < kH && pixels < 300; y += 8)
+    for (int x = 4; x < kW && pixels < 300; x += 8, ++pixels) hot_pixel(ev, x, y, 1000, kWindows, rng);
+  const Outcome r = run(ev);
+  ASSERT_EQ(r.windows.size(), static_cast<std::size_t>(kWindows));
+  for (const WindowResult& w : r.windows) {
+    EXPECT_TRUE(w.detections.empty()) << w.index;
+    if (w.index < 10) continue;  // learning: 8 windows (the first test above)
+    EXPECT_EQ(w.events, 300u * 25u) << w.index;
+    EXPECT_EQ(w.hot_pixel_events, w.events) << w.index;
+    EXPECT_EQ(w.compensation.events_in, 0u) << w.index;
+    EXPECT_EQ(w.status, DetectionStatus::kTooFewEvents) << w.index;
   }
 }
 
