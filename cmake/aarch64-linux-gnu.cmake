@@ -12,7 +12,9 @@ set(CMAKE_CXX_COMPILER aarch64-linux-gnu-g++)
 # GCC fuses a * b + c into one FMA where the target has it (aarch64 does, baseline x86-64 not):
 # off, so that the renderer's and the front end's own arithmetic rounds as on x86-64.
 set(CMAKE_C_FLAGS_INIT -ffp-contract=off)
-set(CMAKE_CXX_FLAGS_INIT -ffp-contract=off)
+# -Wno-psabi: GCC's note that passing std::pair changed in GCC 10.1 concerns linking with code
+# built by GCC 9 or older, which a build from one sysroot does not do.
+set(CMAKE_CXX_FLAGS_INIT "-ffp-contract=off -Wno-psabi")
 
 set(FDV_ARM64_SYSROOT "" CACHE PATH "arm64 root holding the dependencies' usr/include and usr/lib")
 if(NOT FDV_ARM64_SYSROOT AND DEFINED ENV{FDV_ARM64_SYSROOT})
