@@ -19,8 +19,8 @@ SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
 if ! dpkg --print-foreign-architectures | grep -qx arm64; then
   $SUDO dpkg --add-architecture arm64
 fi
-$SUDO apt-get update -qq
-DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends \
+$SUDO apt-get update -qq -o Acquire::Retries=3
+DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq -o Acquire::Retries=3 --no-install-recommends \
   g++-aarch64-linux-gnu qemu-user > /dev/null
 
 # 2. The packages, downloaded only, into SYSROOT.debs (kept: a second run downloads what is new).
@@ -57,7 +57,8 @@ as_all=$(comm -23 <(echo "$wanted") <(echo "$as_arm64") | have all)
 missing=()
 for p in $as_arm64; do compgen -G "${p}_*_arm64.deb" > /dev/null || missing+=("$p:arm64"); done
 for p in $as_all; do compgen -G "${p}_*_all.deb" > /dev/null || missing+=("$p"); done
-[ ${#missing[@]} -eq 0 ] || apt-get download -q "${missing[@]}" > /dev/null
+# A dropped connection to the mirror is retried rather than failing the build.
+[ ${#missing[@]} -eq 0 ] || apt-get download -q -o Acquire::Retries=3 "${missing[@]}" > /dev/null
 echo "arm64 sysroot: $(ls ./*.deb | wc -l) packages, $(du -sh . | cut -f1)"
 
 # 4. Unpacked: what dpkg's maintainer scripts would have done is done here.
