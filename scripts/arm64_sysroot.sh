@@ -61,7 +61,7 @@ for p in $as_all; do compgen -G "${p}_*_all.deb" > /dev/null || missing+=("$p");
 [ ${#missing[@]} -eq 0 ] || apt-get download -q -o Acquire::Retries=3 "${missing[@]}" > /dev/null
 echo "arm64 sysroot: $(ls ./*.deb | wc -l) packages, $(du -sh . | cut -f1)"
 
-# 4. Unpacked: what dpkg's maintainer scripts would have done is done here.
+# 3. Unpacked: what dpkg's maintainer scripts would have done is done here.
 rm -rf "$sysroot" && mkdir -p "$sysroot"
 for d in ./*.deb; do dpkg -x "$d" "$sysroot"; done
 if [ -d "$sysroot/lib" ] && [ ! -L "$sysroot/lib" ]; then   # merged /usr, as Debian's

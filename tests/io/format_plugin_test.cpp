@@ -74,16 +74,16 @@ TEST(FormatPlugin, Hdf5GoesThroughItsPlugin) {
 
 // The point of the plugins: the command line links neither HDF5 nor ROS, and only the plugins do.
 TEST(FormatPlugin, TheProgramLinksNoneOfThePluginsLibraries) {
-  const auto ldd = [](const std::string& file) {
+  const auto linked_libraries = [](const std::string& file) {
     const auto listed = test::run_command(FDV_TEST_LIST_SHARED_LIBRARIES " " + file, "format_plugin_ldd");
     EXPECT_NE(listed.out.find("libc.so"), std::string::npos) << "no libraries listed for " << file;
     return listed.out;
   };
-  const std::string program = ldd(FDV_TEST_CLI);
+  const std::string program = linked_libraries(FDV_TEST_CLI);
   for (const char* library : {"libhdf5", "librosbag_storage", "libroslib", "libpython", "libcurl", "libgdal"})
     EXPECT_EQ(program.find(library), std::string::npos) << library << " in\n" << program;
-  EXPECT_NE(ldd(std::string(FDV_TEST_PLUGIN_BUILD_DIR) + "/libfdv_hdf5.so").find("libhdf5"), std::string::npos);
-  EXPECT_NE(ldd(std::string(FDV_TEST_PLUGIN_BUILD_DIR) + "/libfdv_ros1.so").find("librosbag_storage"),
+  EXPECT_NE(linked_libraries(std::string(FDV_TEST_PLUGIN_BUILD_DIR) + "/libfdv_hdf5.so").find("libhdf5"), std::string::npos);
+  EXPECT_NE(linked_libraries(std::string(FDV_TEST_PLUGIN_BUILD_DIR) + "/libfdv_ros1.so").find("librosbag_storage"),
             std::string::npos);
 }
 
