@@ -31,6 +31,8 @@ void describe(V& v, OdometryConfig& c);
 template <class V>
 void describe(V& v, TruthConfig& c);
 template <class V>
+void describe(V& v, VehicleResponseConfig& c);
+template <class V>
 void describe(V& v, VehicleConfig& c);
 template <class V>
 void describe(V& v, PanelConfig& c);
@@ -144,6 +146,16 @@ void describe(V& v, VehicleConfig& c) {
   v("acceleration_W_m_s2", c.acceleration_W_m_s2);
   v("omega_B_rad_s", c.omega_B_rad_s);
   v("rpy0_deg", c.rpy0_deg);
+  v.section("response", c.response);
+}
+
+template <class V>
+void describe(V& v, VehicleResponseConfig& c) {
+  v("attitude_time_constant_s", c.attitude_time_constant_s);
+  v("max_body_rate_rad_s", c.max_body_rate_rad_s);
+  v("max_tilt_deg", c.max_tilt_deg);
+  v("min_height_m", c.min_height_m);
+  v("step_s", c.step_s);
 }
 
 template <class V>

@@ -25,6 +25,7 @@ class DatasetSink : public SimulationSink {
   void on_depth(const DepthFrame& f) override { writer_.add_depth(f); }
   void on_odometry(const OdometrySample& s) override { writer_.add_odometry(s); }
   void on_body_truth(const OdometrySample& s) override { writer_.add_body_truth(s); }
+  void on_unflown_body_truth(const OdometrySample& s) override { writer_.add_unflown_body_truth(s); }
   void on_object_truth(const ObjectState& s) override { writer_.add_object_truth(s); }
   /// Completes the files; `manifest_extra` goes into dataset.yaml (Simulator::manifest_yaml()).
   void finish(const std::string& manifest_extra);

@@ -27,7 +27,7 @@ struct EventCameraSim::LensGrid {
 };
 
 EventCameraSim::EventCameraSim(const ScenarioConfig& config, const Calibration& calib,
-                               const Scene& scene, const VehicleTrajectory& vehicle,
+                               const Scene& scene, const FlownVehicle& vehicle,
                                const std::vector<BallTrajectory>& balls, ThreadPool& pool)
     : config_(config),
       scene_(scene),

@@ -30,6 +30,7 @@
 #include "fdv/sim/scenario_config.h"
 #include "fdv/sim/scene.h"
 #include "fdv/sim/trajectory.h"
+#include "fdv/sim/vehicle_dynamics.h"
 
 namespace fdv::sim {
 
@@ -44,7 +45,7 @@ struct EventCameraStats {
 class EventCameraSim {
  public:
   EventCameraSim(const ScenarioConfig& config, const Calibration& calib, const Scene& scene,
-                 const VehicleTrajectory& vehicle, const std::vector<BallTrajectory>& balls,
+                 const FlownVehicle& vehicle, const std::vector<BallTrajectory>& balls,
                  ThreadPool& pool);
 
   /// Renders every pixel at t0 and sets the references (no events).
@@ -149,7 +150,7 @@ class EventCameraSim {
 
   const ScenarioConfig& config_;
   const Scene& scene_;
-  const VehicleTrajectory& vehicle_;
+  const FlownVehicle& vehicle_;
   const std::vector<BallTrajectory>& balls_;
   Calibration calib_;
   int width_, height_;

@@ -169,6 +169,12 @@ Problem ScenarioConfig::find_problem() const {
   c.finite(v.acceleration_W_m_s2, vk + "acceleration_W_m_s2");
   c.finite(v.omega_B_rad_s, vk + "omega_B_rad_s");
   c.finite(v.rpy0_deg, vk + "rpy0_deg");
+  const std::string rk = vk + "response.";
+  c.in_range(v.response.attitude_time_constant_s, 1e-3, 10, rk + "attitude_time_constant_s");
+  c.in_range(v.response.max_body_rate_rad_s, 0.1, 100, rk + "max_body_rate_rad_s");
+  c.in_range(v.response.max_tilt_deg, 1, 80, rk + "max_tilt_deg");
+  c.need(std::isfinite(v.response.min_height_m), rk + "min_height_m", "must be finite");
+  c.in_range(v.response.step_s, 1e-5, 1e-2, rk + "step_s");
 
   const auto& s = scene;
   const std::string sk = "scene.";

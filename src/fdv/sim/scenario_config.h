@@ -126,6 +126,20 @@ struct TruthConfig {
   double rate_hz = 1000.0;  ///< [Hz] truth/body.csv and truth/objects.csv (≥ 1 kHz)
 };
 
+/// How the vehicle flies a commanded acceleration on top of its path (vehicle_dynamics.h): a
+/// quadrotor tilts its thrust towards the command with a first-order lag. The defaults are chosen
+/// for an agile research quadrotor (docs/SIMULATOR.md "Flying a manoeuvre"); ArduCopter's, a
+/// cautious consumer tune, are a 0.15 s input time constant and a 30° lean limit.
+struct VehicleResponseConfig {
+  double attitude_time_constant_s = 0.08;  ///< [s] thrust direction's first-order lag (chosen)
+  double max_body_rate_rad_s = 6.0;        ///< [rad/s] fastest tilt rate (chosen)
+  double max_tilt_deg = 60.0;              ///< [deg] largest thrust tilt from vertical (chosen)
+  /// [m] the height controller's floor in W z: below it a downward command is dropped and the
+  /// descent braked (chosen: above the depth camera's 0.3 m minimum range from the floor).
+  double min_height_m = 0.5;
+  double step_s = 2.5e-4;  ///< [s] integration step of the flown deviation
+};
+
 enum class MotionKind { kHover, kForward, kSwing, kConstant };
 const char* to_string(MotionKind kind);
 
@@ -152,6 +166,8 @@ struct VehicleConfig {
   Eigen::Vector3d acceleration_W_m_s2{0.0, 0.0, 0.0};  ///< [m/s²]
   Eigen::Vector3d omega_B_rad_s{0.0, 0.0, 0.0};        ///< [rad/s] body rate
   Eigen::Vector3d rpy0_deg{0.0, 0.0, 0.0};  ///< [deg] attitude at t = 0 (roll, pitch, yaw)
+  /// Only when a manoeuvre is commanded (Simulator::command): how the vehicle flies it.
+  VehicleResponseConfig response;
 };
 
 /// An axis-aligned textured rectangle (a panel or banner). Its plane is `axis` = `position_m`;

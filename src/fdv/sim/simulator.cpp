@@ -49,25 +49,26 @@ Simulator::Simulator(ScenarioConfig config) : config_(std::move(config)) {
   for (const auto& b : config_.balls)
     balls_.emplace_back(b, *vehicle_, config_.gravity_W_m_s2, config_.duration_s + 0.1);
   // The renderer casts rays from inside the room: the vehicle and its cameras must stay in it.
-  const Eigen::Vector3d lo = config_.scene.room_min_W_m, hi = config_.scene.room_max_W_m;
   const int n = std::max(2, static_cast<int>(std::ceil(config_.duration_s / 0.005)));
   for (int i = 0; i <= n; ++i) {
     const double t = config_.duration_s * i / n;
-    const BodyState s = vehicle_->at(t);
-    const Eigen::Vector3d points_B[3] = {Eigen::Vector3d::Zero(), calib_.T_B_E.translation(),
-                                         calib_.T_B_D.translation()};
-    for (const Eigen::Vector3d& p_B : points_B) {
-      const Eigen::Vector3d p = s.p_W + s.R_W_B * p_B;
-      if ((p - lo).minCoeff() < 0.05 || (hi - p).minCoeff() < 0.05)
-        throw ConfigError(fmt::format(
-            "vehicle: leaves the room at t = {:.3f} s (position [{:.2f}, {:.2f}, {:.2f}]); enlarge "
-            "scene.room_min_W_m / room_max_W_m, move vehicle.start_W_m or shorten duration_s",
-            t, p.x(), p.y(), p.z()));
-    }
+    check_in_room(vehicle_->at(t), t);
   }
 }
 
-Simulator::~Simulator() = default;
+void Simulator::check_in_room(const BodyState& s, double t_s) const {
+  const Eigen::Vector3d lo = config_.scene.room_min_W_m, hi = config_.scene.room_max_W_m;
+  const Eigen::Vector3d points_B[3] = {Eigen::Vector3d::Zero(), calib_.T_B_E.translation(),
+                                       calib_.T_B_D.translation()};
+  for (const Eigen::Vector3d& p_B : points_B) {
+    const Eigen::Vector3d p = s.p_W + s.R_W_B * p_B;
+    if ((p - lo).minCoeff() < 0.05 || (hi - p).minCoeff() < 0.05)
+      throw ConfigError(fmt::format(
+          "vehicle: leaves the room at t = {:.3f} s (position [{:.2f}, {:.2f}, {:.2f}]); enlarge "
+          "scene.room_min_W_m / room_max_W_m, move vehicle.start_W_m or shorten duration_s",
+          t_s, p.x(), p.y(), p.z()));
+  }
+}
 
 std::vector<ResolvedBall> Simulator::resolved_balls() const {
   std::vector<ResolvedBall> out;
@@ -77,90 +78,159 @@ std::vector<ResolvedBall> Simulator::resolved_balls() const {
   return out;
 }
 
-SimulationSummary Simulator::run(SimulationSink& sink) {
-  const auto wall0 = std::chrono::steady_clock::now();
-  ThreadPool pool(config_.threads);
-  Scene scene(config_.scene, config_.balls, config_.seed);
-  EventCameraSim camera(config_, calib_, scene, *vehicle_, balls_, pool);
-  ImuModel imu(config_.imu, calib_.R_B_I, config_.gravity_W_m_s2, config_.seed);
-  OdometryModel odometry(config_.odometry, config_.seed);
-  std::optional<DepthModel> depth;
-  if (config_.depth_camera.enabled)
-    depth.emplace(config_.depth_camera, calib_, scene, config_.seed, pool);
-  std::vector<double> radii;
-  for (const auto& b : balls_) radii.push_back(b.config().radius_m);
-
-  SimulationSummary summary;
-  summary.balls = resolved_balls();
-  const TimeNs t_end = from_seconds(config_.duration_s);
-  const TimeNs chunk = from_seconds(config_.event_camera.chunk_s);
-  SampleClock imu_clock{config_.imu.rate_hz}, odo_clock{config_.odometry.rate_hz};
-  SampleClock truth_clock{config_.truth.rate_hz}, depth_clock{config_.depth_camera.rate_hz};
-
-  auto emit_until = [&](TimeNs t_hi) {
-    for (TimeNs t; (t = imu_clock.next()) <= t_hi && t <= t_end; ++imu_clock.k, ++summary.imu)
-      sink.on_imu(imu.sample(t, vehicle_->at(to_seconds(t))));
-    for (TimeNs t; (t = odo_clock.next()) <= t_hi && t <= t_end; ++odo_clock.k, ++summary.odometry)
-      sink.on_odometry(odometry.sample(t, vehicle_->at(to_seconds(t))));
-    for (TimeNs t; (t = truth_clock.next()) <= t_hi && t <= t_end;
-         ++truth_clock.k, ++summary.truth) {
-      const BodyState s = vehicle_->at(to_seconds(t));
-      OdometrySample body;
-      body.t = t;
-      body.p_W_B = s.p_W;
-      body.q_W_B = Eigen::Quaterniond(s.R_W_B).normalized();
-      body.v_W = s.v_W;
-      body.omega_B = s.omega_B;
-      sink.on_body_truth(body);
-      for (const auto& b : balls_) {
-        const BallState bs = b.at(to_seconds(t));
-        if (bs.exists) sink.on_object_truth({t, b.config().id, bs.p_W, bs.v_W});
-      }
-    }
-    if (depth)
-      for (TimeNs t; (t = depth_clock.next()) <= t_hi && t <= t_end;
-           ++depth_clock.k, ++summary.depth) {
-        std::vector<BallState> states;
-        for (const auto& b : balls_) states.push_back(b.at(to_seconds(t)));
-        sink.on_depth(depth->render(t, vehicle_->at(to_seconds(t)), states, radii, depth_clock.k));
-      }
-  };
-
-  camera.initialize(0);
-  emit_until(0);
-  std::vector<Event> events;
-  std::vector<std::int16_t> labels;
-  for (TimeNs t0 = 0; t0 < t_end; t0 += chunk) {
-    const TimeNs t1 = std::min(t0 + chunk, t_end);
-    emit_until(t1);
-    events.clear();
-    labels.clear();
-    camera.run_chunk(t0, t1, events, labels);
-    for (std::size_t i = 0; i < events.size(); ++i) {
-      summary.events_on += events[i].polarity;
-      const std::int16_t l = labels[i];
-      if (l > 0)
-        ++summary.events_object;
-      else if (l == kLabelScene)
-        ++summary.events_scene;
-      else if (l == kLabelNoise)
-        ++summary.events_noise;
-      else
-        ++summary.events_hot;
-    }
-    summary.events += events.size();
-    sink.on_events(events, labels);
+/// Everything a run keeps between steps. Members are declared in the order they depend on one
+/// another (the camera and the depth model hold references to the scene, vehicle and pool).
+struct Simulator::Running {
+  Running(const ScenarioConfig& config, const Calibration& calib, const VehicleTrajectory& path,
+          const std::vector<BallTrajectory>& balls, SimulationSink& out, Flight flown)
+      : flight(flown),
+        sink(out),
+        pool(config.threads),
+        scene(config.scene, config.balls, config.seed),
+        vehicle(path, config.vehicle.response, config.gravity_W_m_s2),
+        camera(config, calib, scene, vehicle, balls, pool),
+        imu(config.imu, calib.R_B_I, config.gravity_W_m_s2, config.seed),
+        odometry(config.odometry, config.seed),
+        t_end(from_seconds(config.duration_s)),
+        chunk(from_seconds(config.event_camera.chunk_s)),
+        imu_clock{config.imu.rate_hz},
+        odo_clock{config.odometry.rate_hz},
+        truth_clock{config.truth.rate_hz},
+        depth_clock{config.depth_camera.rate_hz} {
+    if (config.depth_camera.enabled) depth.emplace(config.depth_camera, calib, scene, config.seed, pool);
+    for (const auto& b : balls) radii.push_back(b.config().radius_m);
   }
 
-  const auto& st = camera.stats();
-  summary.simulated_s = to_seconds(t_end);
+  Flight flight;
+  SimulationSink& sink;
+  std::chrono::steady_clock::time_point wall0 = std::chrono::steady_clock::now();
+  ThreadPool pool;
+  Scene scene;
+  FlownVehicle vehicle;
+  EventCameraSim camera;
+  ImuModel imu;
+  OdometryModel odometry;
+  std::optional<DepthModel> depth;
+  std::vector<double> radii;
+  SimulationSummary summary;
+  TimeNs t_end, chunk;
+  TimeNs t_done = 0;  ///< every stream is rendered up to here
+  SampleClock imu_clock, odo_clock, truth_clock, depth_clock;
+  std::vector<Event> events;
+  std::vector<std::int16_t> labels;
+};
+
+Simulator::~Simulator() = default;
+
+namespace {
+
+OdometrySample pose_sample(TimeNs t, const BodyState& s) {
+  OdometrySample body;
+  body.t = t;
+  body.p_W_B = s.p_W;
+  body.q_W_B = Eigen::Quaterniond(s.R_W_B).normalized();
+  body.v_W = s.v_W;
+  body.omega_B = s.omega_B;
+  return body;
+}
+
+}  // namespace
+
+SimulationSummary Simulator::run(SimulationSink& sink) {
+  begin(sink);
+  while (step()) {
+  }
+  return finish();
+}
+
+void Simulator::begin(SimulationSink& sink, Flight flight) {
+  if (running_) throw ConfigError("simulator: begin() while a run is going on (finish() it first)");
+  running_ = std::make_unique<Running>(config_, calib_, *vehicle_, balls_, sink, flight);
+  running_->summary.balls = resolved_balls();
+  running_->camera.initialize(0);
+  emit_streams_until(0);
+}
+
+void Simulator::emit_streams_until(TimeNs t_hi) {
+  Running& r = *running_;
+  auto& summary = r.summary;
+  auto& sink = r.sink;
+  const TimeNs t_end = r.t_end;
+  for (TimeNs t; (t = r.imu_clock.next()) <= t_hi && t <= t_end; ++r.imu_clock.k, ++summary.imu)
+    sink.on_imu(r.imu.sample(t, r.vehicle.at(to_seconds(t))));
+  for (TimeNs t; (t = r.odo_clock.next()) <= t_hi && t <= t_end; ++r.odo_clock.k, ++summary.odometry)
+    sink.on_odometry(r.odometry.sample(t, r.vehicle.at(to_seconds(t))));
+  for (TimeNs t; (t = r.truth_clock.next()) <= t_hi && t <= t_end; ++r.truth_clock.k, ++summary.truth) {
+    sink.on_body_truth(pose_sample(t, r.vehicle.at(to_seconds(t))));
+    if (r.flight == Flight::kCommanded) sink.on_unflown_body_truth(pose_sample(t, r.vehicle.unflown_at(to_seconds(t))));
+    for (const auto& b : balls_) {
+      const BallState bs = b.at(to_seconds(t));
+      if (bs.exists) sink.on_object_truth({t, b.config().id, bs.p_W, bs.v_W});
+    }
+  }
+  if (r.depth)
+    for (TimeNs t; (t = r.depth_clock.next()) <= t_hi && t <= t_end; ++r.depth_clock.k, ++summary.depth) {
+      std::vector<BallState> states;
+      for (const auto& b : balls_) states.push_back(b.at(to_seconds(t)));
+      sink.on_depth(r.depth->render(t, r.vehicle.at(to_seconds(t)), states, r.radii, r.depth_clock.k));
+    }
+}
+
+bool Simulator::step() {
+  if (!running_) throw ConfigError("simulator: step() before begin()");
+  Running& r = *running_;
+  if (r.t_done >= r.t_end) return false;
+  const TimeNs t0 = r.t_done, t1 = std::min(t0 + r.chunk, r.t_end);
+  r.vehicle.advance_to(to_seconds(t1));
+  if (r.vehicle.deviates_at(to_seconds(t1))) check_in_room(r.vehicle.at(to_seconds(t1)), to_seconds(t1));
+  emit_streams_until(t1);
+  r.events.clear();
+  r.labels.clear();
+  r.camera.run_chunk(t0, t1, r.events, r.labels);
+  auto& summary = r.summary;
+  for (std::size_t i = 0; i < r.events.size(); ++i) {
+    summary.events_on += r.events[i].polarity;
+    const std::int16_t l = r.labels[i];
+    if (l > 0)
+      ++summary.events_object;
+    else if (l == kLabelScene)
+      ++summary.events_scene;
+    else if (l == kLabelNoise)
+      ++summary.events_noise;
+    else
+      ++summary.events_hot;
+  }
+  summary.events += r.events.size();
+  r.sink.on_events(r.events, r.labels);
+  r.t_done = t1;
+  return true;
+}
+
+TimeNs Simulator::simulated_until() const { return running_ ? running_->t_done : 0; }
+
+void Simulator::command(TimeNs t, const Eigen::Vector3d& a_W) {
+  if (!running_ || running_->flight != Flight::kCommanded)
+    throw ConfigError("simulator: command() needs a run begun with Flight::kCommanded");
+  running_->vehicle.command(t, a_W);
+}
+
+SimulationSummary Simulator::finish() {
+  if (!running_) throw ConfigError("simulator: finish() before begin()");
+  Running& r = *running_;
+  const auto& st = r.camera.stats();
+  SimulationSummary summary = std::move(r.summary);
+  summary.simulated_s = to_seconds(r.t_done);
   summary.pixel_samples = st.pixel_samples;
   summary.mean_sample_rate_hz =
-      static_cast<double>(st.pixel_samples) / (static_cast<double>(calib_.event_camera.width) *
-                                               calib_.event_camera.height * summary.simulated_s);
+      summary.simulated_s > 0
+          ? static_cast<double>(st.pixel_samples) / (static_cast<double>(calib_.event_camera.width) *
+                                                     calib_.event_camera.height * summary.simulated_s)
+          : 0.0;
   summary.max_tile_steps = st.max_tile_steps;
   summary.capped_tiles = st.capped_tiles;
-  summary.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  summary.flight = r.vehicle.counters();
+  summary.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - r.wall0).count();
+  running_.reset();
   return summary;
 }
 

@@ -13,6 +13,17 @@
 /// batch, time-sorted, with one label each (event_labels.h). Same configuration (seed
 /// included) => identical output for any thread count. run() is not reentrant; the sink is
 /// called from the calling thread only.
+///
+/// Flying a manoeuvre (a closed loop): step chunk by chunk and command the vehicle in between.
+///
+///   sim.begin(sink, Flight::kCommanded);     // also emits the unflown path's truth
+///   while (sim.step()) {                     // one more chunk, up to sim.simulated_until()
+///     ... run perception on what the sink got; for a decision:
+///     sim.command(effective_t, acceleration_W);   // from effective_t on (vehicle_dynamics.h)
+///   }
+///   SimulationSummary summary = sim.finish();
+///
+/// Without any command, a commanded run renders exactly what run() renders.
 #include <cstdint>
 #include <memory>
 #include <span>
@@ -24,6 +35,7 @@
 #include "fdv/sim/event_labels.h"
 #include "fdv/sim/scenario_config.h"
 #include "fdv/sim/trajectory.h"
+#include "fdv/sim/vehicle_dynamics.h"
 
 namespace fdv::sim {
 
@@ -45,6 +57,9 @@ class SimulationSink {
   virtual void on_odometry(const OdometrySample& s) { (void)s; }
   /// Exact vehicle motion (pose, velocity in W, body rate in B).
   virtual void on_body_truth(const OdometrySample& s) { (void)s; }
+  /// Only under Flight::kCommanded: the path the vehicle would have flown without commands,
+  /// at the same instants as on_body_truth.
+  virtual void on_unflown_body_truth(const OdometrySample& s) { (void)s; }
   /// Exact ball centre and velocity in W.
   virtual void on_object_truth(const ObjectState& s) { (void)s; }
 };
@@ -61,13 +76,14 @@ class MemorySink : public SimulationSink {
   void on_depth(const DepthFrame& f) override { depth.push_back(f); }
   void on_odometry(const OdometrySample& s) override { odometry.push_back(s); }
   void on_body_truth(const OdometrySample& s) override { body.push_back(s); }
+  void on_unflown_body_truth(const OdometrySample& s) override { body_unflown.push_back(s); }
   void on_object_truth(const ObjectState& s) override { objects.push_back(s); }
 
   std::vector<Event> events;
   std::vector<std::int16_t> labels;
   std::vector<ImuSample> imu;
   std::vector<DepthFrame> depth;
-  std::vector<OdometrySample> odometry, body;
+  std::vector<OdometrySample> odometry, body, body_unflown;
   std::vector<ObjectState> objects;
 };
 
@@ -90,9 +106,14 @@ struct SimulationSummary {
   int max_tile_steps = 0;           ///< most samples of one tile in one chunk
   std::uint64_t capped_tiles = 0;   ///< tile-chunks limited by max_steps_per_chunk
   std::vector<ResolvedBall> balls;
+  FlightCounters flight;  ///< what the vehicle model changed in the commands (Flight::kCommanded)
   /// One line: events, rate, speed.
   std::string brief() const;
 };
+
+/// kPath: the vehicle flies its configured path. kCommanded: it flies the commands given between
+/// steps, and the unflown path's truth is emitted too.
+enum class Flight { kPath, kCommanded };
 
 class Simulator {
  public:
@@ -103,10 +124,25 @@ class Simulator {
   Simulator(const Simulator&) = delete;
   Simulator& operator=(const Simulator&) = delete;
 
+  /// The whole scene at once: begin(sink), step() to the end, finish().
   SimulationSummary run(SimulationSink& sink);
+
+  /// Starts a stepwise run: the samples at t = 0 go to `sink`, which must outlive finish().
+  void begin(SimulationSink& sink, Flight flight = Flight::kPath);
+  /// Renders the next chunk (every stream up to its end); false, rendering nothing, once the
+  /// scene is over.
+  bool step();
+  /// The end of the last chunk rendered.
+  TimeNs simulated_until() const;
+  /// Under Flight::kCommanded: acceleration `a_W` on top of the path from `t` on (FlownVehicle::
+  /// command). A command for a time already rendered takes effect at simulated_until(), counted.
+  void command(TimeNs t, const Eigen::Vector3d& a_W);
+  /// Ends the run begun by begin().
+  SimulationSummary finish();
 
   const ScenarioConfig& config() const { return config_; }
   const Calibration& calibration() const { return calib_; }
+  /// The configured path (what the vehicle flies without commands).
   const VehicleTrajectory& vehicle() const { return *vehicle_; }
   const std::vector<BallTrajectory>& balls() const { return balls_; }
   std::vector<ResolvedBall> resolved_balls() const;
@@ -119,6 +155,12 @@ class Simulator {
   Calibration calib_;
   std::unique_ptr<VehicleTrajectory> vehicle_;
   std::vector<BallTrajectory> balls_;
+  /// Throws ConfigError when the body or a camera at state `s` is not inside the room.
+  void check_in_room(const BodyState& s, double t_s) const;
+  /// Hands `sink` the IMU, odometry, truth and depth samples up to `t_hi`.
+  void emit_streams_until(TimeNs t_hi);
+  struct Running;  ///< the state of a run between begin() and finish()
+  std::unique_ptr<Running> running_;
 };
 
 }  // namespace fdv::sim

@@ -88,6 +88,12 @@ void DatasetWriter::add_imu(const ImuSample& s) {
 void DatasetWriter::add_odometry(const OdometrySample& s) { write_pose_row(odometry_, s); }
 void DatasetWriter::add_body_truth(const OdometrySample& s) { write_pose_row(body_, s); }
 
+void DatasetWriter::add_unflown_body_truth(const OdometrySample& s) {
+  if (!body_unflown_.is_open())
+    body_unflown_ = open_out(fs::path(dir_) / "truth" / "body_unflown.csv", kPoseHeader);
+  write_pose_row(body_unflown_, s);
+}
+
 void DatasetWriter::add_object_truth(const ObjectState& s) {
   objects_ << fmt::format("{},{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g}\n", s.t, s.id, s.p_W.x(),
                           s.p_W.y(), s.p_W.z(), s.v_W.x(), s.v_W.y(), s.v_W.z());
@@ -113,7 +119,8 @@ void DatasetWriter::finish(const std::string& manifest_extra) {
   finished_ = true;
   events_.seekp(16);
   events_.write(reinterpret_cast<const char*>(&event_count_), 8);
-  for (auto* f : {&events_, &imu_, &odometry_, &depth_index_, &objects_, &body_}) {
+  for (auto* f : {&events_, &imu_, &odometry_, &depth_index_, &objects_, &body_, &body_unflown_}) {
+    if (f == &body_unflown_ && !f->is_open()) continue;
     f->close();
     if (f->fail()) throw InputError(dir_, "", "write failed (disk full?)");
   }

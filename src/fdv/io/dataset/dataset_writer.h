@@ -32,6 +32,9 @@ class DatasetWriter {
   void add_depth(const DepthFrame& frame);  ///< metres -> 16-bit millimetres (0 invalid)
   void add_object_truth(const ObjectState& s);
   void add_body_truth(const OdometrySample& s);
+  /// truth/body_unflown.csv, created by the first row: the path a flown vehicle would have
+  /// taken without its manoeuvre (same layout as truth/body.csv).
+  void add_unflown_body_truth(const OdometrySample& s);
   /// Completes events.bin and writes dataset.yaml; `manifest_extra` is a YAML mapping text
   /// merged into the manifest (e.g. scenario name, seed, ball radius).
   void finish(const std::string& manifest_extra = "");
@@ -40,7 +43,7 @@ class DatasetWriter {
  private:
   std::string dir_;
   int width_, height_;
-  std::ofstream events_, imu_, odometry_, depth_index_, objects_, body_;
+  std::ofstream events_, imu_, odometry_, depth_index_, objects_, body_, body_unflown_;
   std::uint64_t event_count_ = 0;
   DepthEncoding depth_encoding_;
   std::vector<std::uint16_t> millimetres_;

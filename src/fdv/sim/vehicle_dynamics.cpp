@@ -1,0 +1,140 @@
+#include "fdv/sim/vehicle_dynamics.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "fdv/core/error.h"
+#include "fdv/sim/geometry.h"
+
+namespace fdv::sim {
+namespace {
+
+/// The floor hold brakes a descent once stopping at the floor needs this fraction of |g|.
+constexpr double kFloorBrakeStart = 0.5;
+
+Eigen::Quaterniond rotation_exp(const Eigen::Vector3d& w) {
+  const double angle = w.norm();
+  if (angle < 1e-15) return Eigen::Quaterniond::Identity();
+  return Eigen::Quaterniond(Eigen::AngleAxisd(angle, w / angle));
+}
+
+}  // namespace
+
+FlownVehicle::FlownVehicle(const VehicleTrajectory& path, const VehicleResponseConfig& response,
+                           const Eigen::Vector3d& gravity_W)
+    : path_(path),
+      response_(response),
+      gravity_(gravity_W),
+      up_(-gravity_W.normalized()),
+      step_s_(response.step_s) {}
+
+void FlownVehicle::command(TimeNs t, const Eigen::Vector3d& a_W) {
+  if (!a_W.allFinite()) throw ConfigError("vehicle command: the acceleration is not finite");
+  ++counters_.commands;
+  const TimeNs horizon = from_seconds(nodes_.empty() ? horizon_s_ : node_time(nodes_.size() - 1));
+  if (t < horizon) {
+    ++counters_.late;
+    t = horizon;
+  }
+  if (nodes_.empty()) {
+    t0_s_ = to_seconds(t);
+    nodes_.emplace_back();
+  }
+  const Eigen::Vector3d f = a_W - gravity_;
+  if (f.norm() > 1e-9 && std::acos(std::clamp(f.normalized().dot(up_), -1.0, 1.0)) >
+                             response_.max_tilt_deg * kDegToRad)
+    ++counters_.tilt_clipped;
+  commands_.erase(commands_.lower_bound(t), commands_.end());
+  commands_[t] = a_W;
+}
+
+Eigen::Vector3d FlownVehicle::command_at(std::size_t k) {
+  const double t = node_time(k);
+  Eigen::Vector3d a_c = Eigen::Vector3d::Zero();
+  if (auto it = commands_.upper_bound(from_seconds(t)); it != commands_.begin()) a_c = std::prev(it)->second;
+  // The height controller's floor, in the vertical of gravity: brake a descent once stopping at
+  // the floor needs half of |g| (braking at up to |g| then always stops it there), keep braking
+  // as needed until the descent stops, then hold that height while the command points down.
+  const BodyState path = path_.at(t);
+  const double gap = (path.p_W + nodes_[k].p).dot(up_) - response_.min_height_m;
+  const double climb = (path.v_W + nodes_[k].v).dot(up_);
+  const double g = gravity_.norm();
+  const double brake = climb >= 0 ? 0.0 : gap > 0 ? climb * climb / (2 * gap) : g;
+  const double vertical = a_c.dot(up_);
+  const bool hold = brake >= kFloorBrakeStart * g || (gap <= 0 && vertical < 0) ||
+                    (floor_holding_ && (climb < 0 || vertical < 0));
+  if (hold) {
+    if (!floor_holding_) ++counters_.floor_holds;
+    double held = std::max(vertical, std::min(brake, g));
+    if (gap <= 0 || climb >= 0) held = std::max(held, 0.0);  // stopped: hold the height
+    a_c += (held - vertical) * up_;
+  }
+  floor_holding_ = hold;
+  return a_c;
+}
+
+Eigen::Vector3d FlownVehicle::thrust_direction(const Eigen::Vector3d& a_c) const {
+  const Eigen::Vector3d f = a_c - gravity_;
+  if (f.norm() < 1e-9) return up_;  // free fall commanded: no direction, keep level
+  const Eigen::Vector3d n = f.normalized();
+  const double tilt = std::acos(std::clamp(n.dot(up_), -1.0, 1.0));
+  const double max_tilt = response_.max_tilt_deg * kDegToRad;
+  if (tilt <= max_tilt) return n;
+  const Eigen::Vector3d side = n - n.dot(up_) * up_;  // horizontal part; zero only for tilt = 180°
+  const Eigen::Vector3d across = side.norm() > 1e-12 ? side.normalized() : up_.unitOrthogonal();
+  return std::cos(max_tilt) * up_ + std::sin(max_tilt) * across;
+}
+
+Eigen::Vector3d FlownVehicle::deviation_acceleration(const Eigen::Vector3d& a_c,
+                                                     const Eigen::Quaterniond& q) const {
+  const Eigen::Vector3d n = q * up_;
+  // n stays within max_tilt (< 90°) of the vertical: it turns along the arc to a direction that is.
+  const double thrust = (a_c.dot(up_) + gravity_.norm()) / n.dot(up_);
+  return thrust * n + gravity_;
+}
+
+void FlownVehicle::advance_to(double t_s) {
+  horizon_s_ = std::max(horizon_s_, t_s);
+  if (nodes_.empty()) return;
+  const double h = step_s_;
+  while (node_time(nodes_.size() - 1) < t_s) {
+    const std::size_t k = nodes_.size() - 1;
+    const Eigen::Vector3d a_c = command_at(k);
+    Node& node = nodes_[k];
+    // First-order lag of the thrust direction, rate-limited.
+    const Eigen::Vector3d n = node.q * up_, n_c = thrust_direction(a_c);
+    const Eigen::Vector3d axis = n.cross(n_c);
+    const double angle = std::atan2(axis.norm(), n.dot(n_c));
+    node.w_W.setZero();
+    if (axis.norm() > 1e-15)
+      node.w_W = axis.normalized() *
+                 std::min(angle / response_.attitude_time_constant_s, response_.max_body_rate_rad_s);
+    Node next;
+    next.q = (rotation_exp(node.w_W * h) * node.q).normalized();
+    node.a = deviation_acceleration(a_c, node.q);
+    node.da = deviation_acceleration(a_c, next.q) - node.a;
+    // Exact for the acceleration running linearly over the step (what at() interpolates).
+    next.v = node.v + h * (node.a + 0.5 * node.da);
+    next.p = node.p + h * node.v + h * h * (0.5 * node.a + node.da / 6);
+    nodes_.push_back(next);
+  }
+}
+
+BodyState FlownVehicle::at(double t_s) const {
+  BodyState s = path_.at(t_s);
+  if (!deviates_at(t_s) || nodes_.size() < 2) return s;
+  const auto last = static_cast<double>(nodes_.size() - 2);
+  const double x = std::min((t_s - t0_s_) / step_s_, last + 1.0);
+  const double k_real = std::min(std::floor(x), last);
+  const Node& node = nodes_[static_cast<std::size_t>(k_real)];
+  const double tau = (x - k_real) * step_s_, u = tau / step_s_;
+  s.p_W += node.p + tau * node.v + tau * tau * (0.5 * node.a + u * node.da / 6);
+  s.v_W += node.v + tau * (node.a + 0.5 * u * node.da);
+  s.a_W += node.a + u * node.da;
+  const Eigen::Matrix3d R_tilt = (rotation_exp(node.w_W * tau) * node.q).toRotationMatrix();
+  s.R_W_B = R_tilt * s.R_W_B;
+  s.omega_B += s.R_W_B.transpose() * node.w_W;
+  return s;
+}
+
+}  // namespace fdv::sim
