@@ -77,6 +77,22 @@ TEST(DodgePlan, DeadAheadIsPerpendicularAtTheLimitAndScoredByTheRiceMean) {
   EXPECT_TRUE(plan.trigger);
 }
 
+// The vehicle's attitude lag plans as a further delay: the same dead-ahead threat with a 0.08 s lag
+// gains the displacement ½ a (t_ca − delay − lag)² and needs 0.08 s more, and the set-point still
+// starts after the response delay alone.
+TEST(DodgePlan, TheAttitudeLagIsPlannedAsAFurtherDelay) {
+  DodgeOptions o;
+  const DodgePlan without = plan_dodge(threat(Eigen::Vector3d::Zero(), 0.35, 0.2, 0.9), hovering(1.0), o, kR);
+  o.limits.attitude_lag_s = 0.08;
+  const DodgePlan with = plan_dodge(threat(Eigen::Vector3d::Zero(), 0.35, 0.2, 0.9), hovering(1.0), o, kR);
+  const double displacement_m = 0.5 * 10.0 * 0.22 * 0.22;
+  EXPECT_NEAR(with.maneuver.expected_clearance_m, rice_mean(displacement_m, 0.2) - kR, 1e-6);
+  EXPECT_NEAR(with.time_needed_s - without.time_needed_s, 0.08, 1e-12);
+  EXPECT_EQ(with.maneuver.start_t, at(1.05));
+  o.limits.attitude_lag_s = -0.1;
+  EXPECT_NE(o.validate().find("attitude_lag_s"), std::string::npos);
+}
+
 // Anisotropic and degenerate uncertainty: the clearance the planner reports is the adaptive
 // quadrature's (gaussian_expected_norm) at the chosen manoeuvre, and no direction between the
 // planner's candidates does better by that measure.
@@ -463,6 +479,19 @@ TEST(ManeuverPlayback, PiecewiseConstantAccelerationIntegratedExactly) {
   // Without the cancel, the replan's set-point runs its full 0.2 s.
   const ManeuverOffset uncancelled = commanded_offset(std::span(d).first(3), at(1.5));
   EXPECT_NEAR(uncancelled.velocity_W.z(), 1.0, 1e-9);
+
+  // What a vehicle controller receives: −y from 1.05 s, +z from 1.15 s (the replan dropped the
+  // dodge's end at 1.35 s), zero from the cancel at 1.3 s (which dropped the replan's end at
+  // 1.35 s); the refusal adds nothing.
+  const std::vector<SetpointChange> schedule = setpoint_schedule(d);
+  ASSERT_EQ(schedule.size(), 3u);
+  EXPECT_EQ(schedule[0].t, at(1.05));
+  EXPECT_EQ(schedule[0].acceleration_W, Eigen::Vector3d(0, -10, 0));
+  EXPECT_EQ(schedule[1].t, at(1.15));
+  EXPECT_EQ(schedule[1].acceleration_W, Eigen::Vector3d(0, 0, 5));
+  EXPECT_EQ(schedule[2].t, at(1.3));
+  EXPECT_EQ(schedule[2].acceleration_W, Eigen::Vector3d::Zero());
+  EXPECT_TRUE(setpoint_changes(d[1]).empty());
 }
 
 }  // namespace

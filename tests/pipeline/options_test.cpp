@@ -602,7 +602,8 @@ TEST(Options, FuzzFindingNonScalarKey) {
 
 // ---- The docs' key tables are the field list's (regenerate: FDV_WRITE_OPTIONS_DOCS=1 options_test).
 
-const std::filesystem::path kDocs = std::filesystem::path(__FILE__).parent_path().parent_path().parent_path() / "docs";
+// Not from __FILE__: ccache's base_dir makes it relative to the build directory.
+const std::filesystem::path kDocs = std::filesystem::path(FDV_SOURCE_DIR) / "docs";
 
 /// Where each section's table lives: between `<!-- options.NAME:begin -->` and `<!-- options.NAME:end -->`.
 struct DocsTable {

@@ -119,6 +119,7 @@ std::string VehicleLimits::validate() const {
       return fmt::format("max_acceleration_per_axis_m_s2[{}] must be > 0 (got {})", i,
                          max_acceleration_per_axis_m_s2(i));
   if (auto err = bad_duration("response_delay_s", response_delay_s); !err.empty()) return err;
+  if (auto err = bad_duration("attitude_lag_s", attitude_lag_s); !err.empty()) return err;
   if (std::isnan(min_height_m)) return "min_height_m must be a number (got nan)";
   return {};
 }
@@ -161,7 +162,9 @@ DodgePlan plan_dodge(const CollisionRisk& risk, const VehicleState& vehicle, con
   const Eigen::Matrix<double, 2, 3> E = dodge_plane(risk.relative_velocity_W);
   const Eigen::Vector2d miss = E * (closest.object_W - closest.vehicle_W);
   const Eigen::Matrix2d miss_cov = E * risk.closest_offset_covariance_W * E.transpose();
-  const double lever_s2 = 0.5 * std::pow(std::max(0.0, closest_s - delay_s), 2);  // Δ = a·lever·u
+  // Δ = a·lever·u; the vehicle's attitude lag plans as a further delay (VehicleLimits).
+  const double lag_s = delay_s + limits.attitude_lag_s;
+  const double lever_s2 = 0.5 * std::pow(std::max(0.0, closest_s - lag_s), 2);
 
   std::vector<Eigen::Vector3d> candidates(options.directions);
   std::vector<double> scores(options.directions);
@@ -204,8 +207,8 @@ DodgePlan plan_dodge(const CollisionRisk& risk, const VehicleState& vehicle, con
   plan.time_to_act_on_s = risk.nominal.contact ? std::max(0.0, risk.nominal.time_to_contact_s) : closest_s;
   plan.clear_m = std::max(0.0, R + options.clear_sigmas * risk.miss_distance_sigma_m - miss.norm());
   const double accel = best_a.norm();
-  plan.time_needed_s = plan.clear_m == 0 ? delay_s
-                       : accel > 0       ? delay_s + std::sqrt(2 * plan.clear_m / accel)
+  plan.time_needed_s = plan.clear_m == 0 ? lag_s
+                       : accel > 0       ? lag_s + std::sqrt(2 * plan.clear_m / accel)
                                          : std::numeric_limits<double>::infinity();
   const double p = risk.probability;
   const double t_c = plan.time_to_act_on_s;

@@ -40,6 +40,12 @@ struct VehicleLimits {
   Eigen::Vector3d max_acceleration_per_axis_m_s2 = Eigen::Vector3d::Constant(1e3);
   /// From the decision to the set-point taking effect [s].
   double response_delay_s = 0.05;
+  /// The time constant of the vehicle's thrust tilt [s]: a quadrotor reaches a lateral
+  /// acceleration only by tilting, a first-order lag that for a small tilt costs the position
+  /// what a further delay of this much would. Planned as such: added to the delay in t_need and
+  /// in the displacement the manoeuvre gains (not in its start). 0: a vehicle that accelerates at
+  /// once, as the kinematic replay of `fdv dodge-eval` assumes; the simulator's is 0.08 s.
+  double attitude_lag_s = 0.0;
   /// Forbidden: any downward component that would bring the body below this height in W's z by
   /// the end of the manoeuvre [m]. The default, -1000 m, is no floor (-infinity is accepted too).
   double min_height_m = -1e3;
@@ -53,6 +59,7 @@ void describe(V& v, VehicleLimits& o) {
   v("max_acceleration_per_axis_m_s2", o.max_acceleration_per_axis_m_s2, "m/s²",
     "largest commanded acceleration along W's x, y, z (1000 = none)");
   v("response_delay_s", o.response_delay_s, "s", "from the decision to the set-point taking effect");
+  v("attitude_lag_s", o.attitude_lag_s, "s", "thrust tilt time constant, planned as a further delay (0 = none)");
   v("min_height_m", o.min_height_m, "m", "no downward manoeuvre below this height in W (-1000 = no floor)");
 }
 
@@ -140,8 +147,8 @@ struct DodgeDecision {
   std::string reason;  ///< why this decision, in words (thresholds and figures)
   /// When the decision's change of set-point takes effect: t + response delay.
   TimeNs effective_t = 0;
-  /// t_need: the response delay plus the time to clear the sphere at the manoeuvre's acceleration
-  /// [s]; infinity when the manoeuvre cannot clear it.
+  /// t_need: the response delay, the attitude lag and the time to clear the sphere at the
+  /// manoeuvre's acceleration [s]; infinity when the manoeuvre cannot clear it.
   double time_needed_s = 0;
 };
 
@@ -151,7 +158,7 @@ struct DodgePlan {
   /// t_c: the nominal time to contact, or to the closest approach when the mean misses [s].
   double time_to_act_on_s = 0;
   double clear_m = 0;        ///< radius + clear_sigmas·σ_miss − nominal miss, at least 0 [m]
-  double time_needed_s = 0;  ///< t_need = delay + sqrt(2·clear_m / |a|) [s]
+  double time_needed_s = 0;  ///< t_need = delay + attitude lag + sqrt(2·clear_m / |a|) [s]
   bool trigger = false;      ///< the trigger policy says act
   bool commit = false;       ///< t_c <= t_need + commit_margin_s
   std::string why;           ///< the trigger's figures in words

@@ -1,47 +1,39 @@
 #include "fdv/avoidance/maneuver_playback.h"
 
 #include <algorithm>
-#include <limits>
-#include <vector>
 
 namespace fdv {
 
-namespace {
-
-/// Acceleration `a` over [from, to).
-struct Piece {
-  TimeNs from = 0, to = 0;
-  Eigen::Vector3d a = Eigen::Vector3d::Zero();
-};
-
-/// Nothing set from `t` on: later pieces go, a piece spanning `t` ends there.
-void clear_from(std::vector<Piece>& pieces, TimeNs t) {
-  std::erase_if(pieces, [t](const Piece& p) { return p.from >= t; });
-  for (Piece& p : pieces) p.to = std::min(p.to, t);
+std::vector<SetpointChange> setpoint_changes(const DodgeDecision& d) {
+  if (d.action == DodgeAction::kRefused) return {};
+  // A decision rebuilt from a row without effective_t (0) takes effect at its own time.
+  const Eigen::Vector3d none = Eigen::Vector3d::Zero();
+  if (d.action == DodgeAction::kCancel || !d.maneuver) return {{std::max(d.effective_t, d.t), none}};
+  const DodgeManeuver& m = *d.maneuver;
+  return {{m.start_t, m.acceleration_W}, {m.start_t + from_seconds(m.duration_s), none}};
 }
 
-}  // namespace
+std::vector<SetpointChange> setpoint_schedule(std::span<const DodgeDecision> decisions) {
+  std::vector<SetpointChange> schedule;
+  for (const DodgeDecision& d : decisions)
+    for (const SetpointChange& c : setpoint_changes(d)) {
+      std::erase_if(schedule, [&](const SetpointChange& s) { return s.t >= c.t; });
+      schedule.push_back(c);
+    }
+  return schedule;
+}
 
 ManeuverOffset commanded_offset(std::span<const DodgeDecision> decisions, TimeNs t) {
-  std::vector<Piece> pieces;
-  for (const DodgeDecision& d : decisions) {
-    if (d.action == DodgeAction::kRefused) continue;
-    if (d.action == DodgeAction::kCancel || !d.maneuver) {
-      // A decision rebuilt from a row without effective_t (0) takes effect at its own time.
-      clear_from(pieces, std::max(d.effective_t, d.t));
-      continue;
-    }
-    const DodgeManeuver& m = *d.maneuver;
-    clear_from(pieces, m.start_t);
-    pieces.push_back({m.start_t, m.start_t + from_seconds(m.duration_s), m.acceleration_W});
-  }
+  const std::vector<SetpointChange> schedule = setpoint_schedule(decisions);
   ManeuverOffset out;
-  for (const Piece& p : pieces) {
-    if (t <= p.from || p.to <= p.from) continue;
-    const double held_s = to_seconds(std::min(t, p.to) - p.from);
-    const double coast_s = to_seconds(t - std::min(t, p.to));
-    out.velocity_W += p.a * held_s;
-    out.position_W += p.a * (0.5 * held_s * held_s + held_s * coast_s);
+  for (std::size_t i = 0; i < schedule.size(); ++i) {
+    const TimeNs from = schedule[i].t;
+    const TimeNs to = i + 1 < schedule.size() ? schedule[i + 1].t : t;
+    if (t <= from || to <= from) continue;
+    const double held_s = to_seconds(std::min(t, to) - from);
+    const double coast_s = to_seconds(t - std::min(t, to));
+    out.velocity_W += schedule[i].acceleration_W * held_s;
+    out.position_W += schedule[i].acceleration_W * (0.5 * held_s * held_s + held_s * coast_s);
   }
   return out;
 }
