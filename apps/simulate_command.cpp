@@ -1,17 +1,21 @@
 // `fdv simulate --scenario NAME [--seed N] [--duration S] [--camera FILE] [--resolution WxH]
-//  [--config FILE] --out DIR`: a simulated dataset folder with exact ground truth, and a JSON
-//  summary.
+//  [--config FILE] [--fly DODGE_JSONL] --out DIR`: a simulated dataset folder with exact ground
+//  truth, and a JSON summary. --fly: the vehicle flies the decisions' set-points.
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
+#include <cmath>
 #include <iostream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <cstdio>
 
 #include "apps/commands.h"
+#include "fdv/avoidance/maneuver_playback.h"
 #include "fdv/core/error.h"
 #include "fdv/eval/ground_truth_box.h"
+#include "fdv/results/reader.h"
 #include "fdv/sim/dataset_sink.h"
 #include "fdv/sim/scenario_config.h"
 #include "fdv/sim/simulator.h"
@@ -20,7 +24,7 @@ namespace fdv::cli {
 namespace {
 
 struct SimulateArgs {
-  std::string scenario, config, out, resolution, camera;
+  std::string scenario, config, out, resolution, camera, fly;
   std::optional<std::uint64_t> seed;
   std::optional<double> duration_s;
   std::optional<int> threads;
@@ -36,13 +40,33 @@ class RecordingSink : public sim::DatasetSink {
     DatasetSink::on_body_truth(s);
     body.push_back(s);
   }
+  void on_unflown_body_truth(const OdometrySample& s) override {
+    DatasetSink::on_unflown_body_truth(s);
+    body_unflown.push_back(s);
+  }
   void on_object_truth(const ObjectState& s) override {
     DatasetSink::on_object_truth(s);
     objects.push_back(s);
   }
-  std::vector<OdometrySample> body;
+  std::vector<OdometrySample> body, body_unflown;
   std::vector<ObjectState> objects;
 };
+
+/// The least distance from ball `id`'s centre to the body origin over the truth, and its time.
+nlohmann::json closest_approach(const std::vector<OdometrySample>& body,
+                                const std::vector<ObjectState>& objects, int id) {
+  std::size_t b = 0;
+  double best = std::numeric_limits<double>::infinity();
+  TimeNs best_t = 0;
+  for (const ObjectState& o : objects) {
+    if (o.id != id) continue;
+    while (b < body.size() && body[b].t < o.t) ++b;
+    if (b == body.size() || body[b].t != o.t) continue;
+    if (const double d = (o.p_W - body[b].p_W_B).norm(); d < best) best = d, best_t = o.t;
+  }
+  if (!std::isfinite(best)) return nullptr;
+  return {{"distance_m", best}, {"t_s", to_seconds(best_t)}};
+}
 
 sim::ScenarioConfig build_config(const SimulateArgs& args) {
   YAML::Node file;
@@ -143,7 +167,13 @@ void run_simulate(const SimulateArgs& args) {
              args.out);
   RecordingSink sink(args.out, simulator.calibration(),
                      args.depth_format == "png" ? DepthEncoding::kPng : DepthEncoding::kZstd);
-  const sim::SimulationSummary summary = simulator.run(sink);
+  std::vector<SetpointChange> schedule;
+  if (!args.fly.empty()) schedule = setpoint_schedule(dodge_decisions(read_dodge_file(args.fly)));
+  simulator.begin(sink, args.fly.empty() ? sim::Flight::kPath : sim::Flight::kCommanded);
+  for (const SetpointChange& c : schedule) simulator.command(c.t, c.acceleration_W);
+  while (simulator.step()) {
+  }
+  const sim::SimulationSummary summary = simulator.finish();
 
   nlohmann::json balls = nlohmann::json::array();
   YAML::Node manifest = YAML::Load(simulator.manifest_yaml());
@@ -156,6 +186,8 @@ void run_simulate(const SimulateArgs& args) {
     jb["origin_W"] = vec_json(b.origin_W);
     jb["velocity_W"] = vec_json(b.velocity_W);
     jb["speed_m_s"] = b.velocity_W.norm();
+    jb["closest_approach"] = closest_approach(sink.body, sink.objects, b.id);
+    if (!args.fly.empty()) jb["closest_approach_unflown"] = closest_approach(sink.body_unflown, sink.objects, b.id);
     if (jb.contains("visible_from_s")) {
       manifest["balls"][i]["visible_from_s"] = jb["visible_from_s"].get<double>();
       manifest["balls"][i]["visible_to_s"] = jb["visible_to_s"].get<double>();
@@ -184,6 +216,12 @@ void run_simulate(const SimulateArgs& args) {
   j["depth_frames"] = summary.depth;
   j["truth_samples"] = summary.truth;
   j["balls"] = balls;
+  if (!args.fly.empty())
+    j["flight"] = {{"decisions", args.fly},
+                   {"setpoint_changes", summary.flight.commands},
+                   {"tilt_clipped", summary.flight.tilt_clipped},
+                   {"late", summary.flight.late},
+                   {"floor_holds", summary.flight.floor_holds}};
   j["wall_s"] = summary.wall_s;
   j["realtime_factor"] = summary.simulated_s / summary.wall_s;
   j["mean_pixel_sample_rate_hz"] = summary.mean_sample_rate_hz;
@@ -214,6 +252,9 @@ void add_simulate_command(CLI::App& app) {
                   "YAML file overriding any parameter (see `--print-config`)");
   cmd->add_option("--threads", args.threads, "worker threads (default: all cores)");
   cmd->add_option("--out", args.out, "output dataset folder");
+  cmd->add_option("--fly", args.fly,
+                  "a dodge.jsonl (`fdv run`'s decisions): the vehicle flies their set-points through "
+                  "its dynamics (docs/SIMULATOR.md); truth/body_unflown.csv keeps the path without them");
   cmd->add_option("--depth-format", args.depth_format,
                   "depth frame files: zstd (default; raw millimetres in a Zstandard frame) or png "
                   "(16-bit, viewable; decodes several times slower)")

@@ -361,5 +361,56 @@ TEST(CliDodgeEval, OneThrowGivesTheTotalsTheBaselinesAndItsRow) {
   EXPECT_FALSE(fs::exists(out / "bad" / "dodge_eval.json"));
 }
 
+
+/// The last row of a pose CSV (truth/body.csv layout) as t, x, y, z.
+std::vector<double> last_pose(const fs::path& p) {
+  std::ifstream f(p);
+  EXPECT_TRUE(f.good()) << p;
+  std::string line, last;
+  while (std::getline(f, line))
+    if (!line.empty() && line[0] != '#') last = line;
+  std::vector<double> v;
+  std::stringstream s(last);
+  for (std::string cell; std::getline(s, cell, ',') && v.size() < 4;) v.push_back(std::stod(cell));
+  return v;
+}
+
+// A decision written by hand: 4 m/s² to the left from 0.25 s for 0.3 s. The kinematic replay moves
+// 4·(0.3²/2 + 0.3·0.25) = 0.48 m by 0.8 s. Flown, the tilt follows with a first-order lag of
+// τ = 0.08 s, which for a small tilt acts on the position like a delay of τ once settled:
+// 4·(0.3²/2 + 0.3·0.17) = 0.384 m.
+TEST(CliSimulateFly, TheVehicleFliesTheDecisionsAndKeepsTheUnflownPath) {
+  const fs::path dir = test::scratch_dir("cli_fly");
+  {
+    std::ofstream f(dir / "dodge.jsonl");
+    f << R"({"t":0.2,"effective_t":0.25,"track":1,"action":"dodge","probability":0.9,"miss_distance":0.1,)"
+      << R"("committed":false,"reason":"by hand","maneuver":{"acceleration_W":[0,4,0],"start_t":0.25,)"
+      << R"("duration":0.3,"expected_clearance":1,"probability_after":0}})" << "\n";
+  }
+  const fs::path out = dir / "flown";
+  const Ran r = fdv("simulate --scenario hover_headon --seed 2 --resolution 64x48 --duration 0.8 --threads 2 --fly " +
+                    (dir / "dodge.jsonl").string() + " --out " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const json j = json::parse(r.output.substr(r.output.find('{'), r.output.rfind('}') - r.output.find('{') + 1));
+  EXPECT_EQ(j.at("flight").at("setpoint_changes"), 2);
+  EXPECT_EQ(j.at("flight").at("late"), 0);
+  EXPECT_EQ(j.at("flight").at("tilt_clipped"), 0);
+  EXPECT_TRUE(j.at("balls")[0].contains("closest_approach_unflown"));
+  const std::vector<double> flown = last_pose(out / "truth" / "body.csv");
+  const std::vector<double> unflown = last_pose(out / "truth" / "body_unflown.csv");
+  ASSERT_EQ(flown.size(), 4u);
+  ASSERT_EQ(unflown.size(), 4u);
+  EXPECT_EQ(flown[0], unflown[0]);
+  EXPECT_NEAR(flown[2] - unflown[2], 0.384, 0.02);
+  EXPECT_NEAR(flown[1], unflown[1], 0.02);  // x: a lateral command
+  EXPECT_NEAR(flown[3], unflown[3], 0.02);  // z: height held
+
+  // A missing decisions file is an error naming it.
+  const Ran missing = fdv("simulate --scenario hover_headon --fly " + (dir / "nope.jsonl").string() +
+                          " --out " + (dir / "x").string());
+  EXPECT_NE(missing.exit_code, 0);
+  EXPECT_NE(missing.output.find("nope.jsonl"), std::string::npos) << missing.output;
+}
+
 }  // namespace
 }  // namespace fdv

@@ -62,6 +62,8 @@ std::vector<DodgeRow> read_dodge(const std::string& results_dir) {
   return read_lines<DodgeRow>(results_dir + "/" + kDodgeFile, false);
 }
 
+std::vector<DodgeRow> read_dodge_file(const std::string& path) { return read_lines<DodgeRow>(path, true); }
+
 std::vector<TumPose> read_tum(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw InputError(path, "", "cannot open");

@@ -28,6 +28,8 @@ std::vector<TrajectoryRow> read_trajectories(const std::string& results_dir);
 std::vector<PredictionRow> read_predictions(const std::string& results_dir);
 /// RESULTS/dodge.jsonl (empty when absent: results of an older fdv).
 std::vector<DodgeRow> read_dodge(const std::string& results_dir);
+/// A dodge.jsonl file by its path. Throws InputError when it is missing or a line is malformed.
+std::vector<DodgeRow> read_dodge_file(const std::string& path);
 /// A TUM trajectory file (track_ID_{fusion,mono}.tum). Throws InputError when it is missing.
 std::vector<TumPose> read_tum(const std::string& path);
 /// RESULTS/summary.json. Throws InputError when it is missing or malformed.
