@@ -21,22 +21,37 @@ struct DodgeEvalArgs {
   std::string config;
   int jobs = 2;
   bool keep = false;
+  bool closed_loop = false;
 };
 
 std::string percent(int n, int of) { return of > 0 ? fmt::format("{:.1f} %", 100.0 * n / of) : "-"; }
 
-void print_table(const DodgeEval& e) {
-  std::cout << "\n| method | threats escaped | false alarms (non-threats) | near misses manoeuvred | "
-               "warning time median [s] | miss error at decision median [m] |\n"
-               "|---|---|---|---|---|---|\n";
+void print_table(const DodgeEval& e, OutcomeSet set, const std::string& title) {
+  std::cout << "\n" << title << "\n\n| method | threats escaped | false alarms (non-threats) | near misses manoeuvred | "
+               "warning time median [s] | miss error at decision median [m] | re-plans |\n"
+               "|---|---|---|---|---|---|---|\n";
   for (const std::string& method : kDodgeMethods) {
-    const DodgeTotals& t = e.totals.at(method);
+    const DodgeTotals t = dodge_totals(e.throws, method, set);
     const Summary w = summarize(t.warning_times_s), m = summarize(t.miss_errors_m);
-    std::cout << fmt::format("| {} | {}/{} ({}) | {}/{} ({}) | {}/{} | {} | {} |\n", method, t.escaped, t.threats,
+    std::cout << fmt::format("| {} | {}/{} ({}) | {}/{} ({}) | {}/{} | {} | {} | {} |\n", method, t.escaped, t.threats,
                              percent(t.escaped, t.threats), t.false_alarms, t.non_threats,
                              percent(t.false_alarms, t.non_threats), t.near_miss_maneuvers, t.near_misses,
                              w.count ? fmt::format("{:.3f}", w.median) : "-",
-                             m.count ? fmt::format("{:.3f}", m.median) : "-");
+                             m.count ? fmt::format("{:.3f}", m.median) : "-", t.replans);
+  }
+}
+
+/// What the manoeuvres did to perception in the loop, per perception method.
+void print_closed_loop_perception(const DodgeEval& e) {
+  std::cout << "\nClosed loop, from the first decision to the closest approach:\n\n"
+               "| method | recall (ball eligible) | tracks lost / decided throws checked |\n|---|---|---|\n";
+  for (const char* method : {"ours", "point_estimate", "mono", "rotation"}) {
+    const DodgeTotals t = dodge_totals(e.throws, method);
+    std::cout << fmt::format("| {} | {}/{} ({}) | {}/{} |\n", method, t.found_after_decision, t.eligible_after_decision,
+                             t.eligible_after_decision ? fmt::format("{:.1f} %", 100.0 * static_cast<double>(t.found_after_decision) /
+                                                                             static_cast<double>(t.eligible_after_decision))
+                                                       : "-",
+                             t.tracks_lost, t.tracks_checked);
   }
 }
 
@@ -66,16 +81,27 @@ void add_dodge_eval_command(CLI::App& app) {
       ->check(CLI::Range(1, 64));
   cmd->add_option("--config", args->config, "YAML options of the pipeline (as `fdv run --config`)");
   cmd->add_flag("--keep", args->keep, "keep each throw's dataset and run in DIR/throws/SEED/{dataset,run}");
+  cmd->add_flag("--closed-loop", args->closed_loop,
+                "also fly every method through the simulator's vehicle model, the scene rendered again as it "
+                "manoeuvres (docs/AVOIDANCE.md \"Closed loop\"); the totals are then the closed loop's");
   cmd->callback([args] {
     DodgeEvalOptions o;
     o.seeds = parse_seed_list(args->seeds);
     o.out_dir = args->out;
     o.jobs = args->jobs;
     o.keep = args->keep;
+    o.closed_loop = args->closed_loop;
     if (!args->config.empty()) o.perception = load_perception_options_file(args->config);
     spdlog::info("dodge-eval: {} throws, {} at a time, into {}", o.seeds.size(), o.jobs, o.out_dir);
     const DodgeEval e = run_dodge_eval(o);
-    print_table(e);
+    if (o.closed_loop) {
+      print_table(e, &DodgeThrow::outcomes, "Closed loop (flown, the scene rendered again):");
+      print_closed_loop_perception(e);
+      print_table(e, &DodgeThrow::dynamics_outcomes, "Open-loop decisions flown by the vehicle model, not rendered again:");
+      print_table(e, &DodgeThrow::open_loop_outcomes, "Open loop (kinematic replay):");
+    } else {
+      print_table(e, &DodgeThrow::outcomes, "Open loop (kinematic replay):");
+    }
     const nlohmann::json j = to_json(e, o);
     print_lags(j["late_against_oracle_visible"]);
     std::cout << fmt::format(

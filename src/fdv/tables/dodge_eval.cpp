@@ -17,6 +17,7 @@
 #include "fdv/results/run.h"
 #include "fdv/sim/dataset_cache.h"
 #include "fdv/sim/random_throw.h"
+#include "fdv/tables/closed_loop.h"
 #include "fdv/tables/experiment.h"
 
 namespace fdv {
@@ -94,6 +95,75 @@ std::vector<DodgeDecision> oracle_decisions(const DatasetTruth& truth, int ball,
   return decisions;
 }
 
+/// Ours, and the baselines that change one thing each.
+std::map<std::string, PerceptionOptions> perception_variants(const PerceptionOptions& options) {
+  PerceptionOptions ours = options;
+  ours.threads = 1;
+  std::map<std::string, PerceptionOptions> variants;
+  variants["ours"] = ours;
+  variants["point_estimate"] = ours;
+  variants["point_estimate"].dodge_from = DodgeSource::kFusionPointEstimate;
+  variants["mono"] = ours;
+  variants["mono"].dodge_from = DodgeSource::kMonocular;
+  variants["mono"].monocular_baseline = true;
+  variants["rotation"] = ours;
+  variants["rotation"].compensation.method = CompensationMethod::kRotation;
+  return variants;
+}
+
+/// An outcome as the throw reports it: an escape only of a threat, the warning time against the
+/// true contact, and why nothing was decided.
+DodgeOutcome scored(const DodgeThrow& row, const std::string& method, DodgeOutcome o, std::optional<TimeNs> contact) {
+  o.escaped = row.threat && o.escaped;
+  if (o.decision_t && contact) o.warning_time_s = to_seconds(*contact - *o.decision_t);
+  if (!o.maneuvered) {
+    if (method == "oracle_visible") o.reason = row.first_in_view_t_s ? "no manoeuvre decided" : "never in view";
+    else o.reason = row.first_detection_t_s ? "no manoeuvre decided" : "never detected";
+  }
+  return o;
+}
+
+/// Every method flown through the closed loop, and every open-loop decision list through the
+/// vehicle model alone (dodge_eval.h). `dir`: where flights are kept (empty: nowhere).
+void fly_every_method(DodgeThrow& row, const sim::ScenarioConfig& config, const DatasetTruth& truth,
+                      const DodgeEvalOptions& options, const std::string& dir) {
+  const int ball = truth.radius_m.begin()->first;
+  const double radius = options.perception.prediction.safety_radius_m;
+  const std::optional<TimeNs> contact = true_contact_time(truth, ball, radius);
+  row.open_loop_outcomes = row.outcomes;
+  for (const std::string& method : kDodgeMethods) {
+    const std::vector<DodgeDecision>& open_loop = row.decisions[method];
+    row.dynamics_outcomes[method] =
+        scored(row, method, dodge_outcome(fly_decisions(config, truth, open_loop), ball, open_loop, radius, false), contact);
+  }
+  auto seconds_to_ns = [](std::optional<double> s) { return s ? std::optional(from_seconds(*s)) : std::nullopt; };
+  for (const auto& [method, perception] : perception_variants(options.perception)) {
+    const std::string keep = dir.empty() ? "" : (method == "ours" ? dir : dir + "/" + method);
+    const ClosedLoopFlight f =
+        fly_with_perception(config, perception, keep.empty() ? "" : keep + "/dataset", keep.empty() ? "" : keep + "/run");
+    DodgeOutcome o = scored(row, method, dodge_outcome(f.truth, ball, f.decisions, radius, false), contact);
+    if (o.decision_t) {
+      const ManeuverPerception p = maneuver_perception(f.truth, ball, f.windows, *o.decision_t);
+      o.eligible_after_decision = p.eligible;
+      o.found_after_decision = p.found;
+      o.track_survived = p.track_survived;
+    }
+    row.outcomes[method] = o;
+    if (method == "ours") {
+      row.window_total_ms = f.window_total_ms;
+      row.flight = f.flight;
+    }
+  }
+  const PerceptionOptions& ours = options.perception;
+  const ClosedLoopFlight oracle =
+      fly_oracle(config, truth, ball, row.window_ends, seconds_to_ns(row.first_detection_t_s), ours);
+  row.outcomes["oracle"] = scored(row, "oracle", dodge_outcome(oracle.truth, ball, oracle.decisions, radius, false), contact);
+  const ClosedLoopFlight visible =
+      fly_oracle(config, truth, ball, row.window_ends, seconds_to_ns(row.first_in_view_t_s), ours);
+  row.outcomes["oracle_visible"] =
+      scored(row, "oracle_visible", dodge_outcome(visible.truth, ball, visible.decisions, radius, false), contact);
+}
+
 }  // namespace
 
 std::optional<TimeNs> first_window_in_view(const DatasetTruth& truth, int ball, std::span<const TimeNs> window_ends) {
@@ -107,12 +177,13 @@ std::optional<TimeNs> first_window_in_view(const DatasetTruth& truth, int ball, 
 }
 
 DodgeOutcome dodge_outcome(const DatasetTruth& truth, int ball, const std::vector<DodgeDecision>& decisions,
-                           double safety_radius_m) {
+                           double safety_radius_m, bool replay) {
   DodgeOutcome out;
   std::vector<DodgeDecision> flown;
   for (const DodgeDecision& d : decisions) {
     if (d.action == DodgeAction::kRefused) continue;
     flown.push_back(d);
+    out.replans += d.action == DodgeAction::kReplan;
     if (d.action == DodgeAction::kDodge && !out.decision_t) {
       out.maneuvered = true;
       out.decision_t = d.t;
@@ -146,7 +217,7 @@ DodgeOutcome dodge_outcome(const DatasetTruth& truth, int ball, const std::vecto
   for (TimeNs t = truth.body.front().t; t <= body_end.t + kPastTheEndNs; t += kOutcomeStepNs) {
     const auto object = ball_at(t);
     if (!object) continue;
-    const Eigen::Vector3d vehicle = body_at(t) + commanded_offset(flown, t).position_W;
+    const Eigen::Vector3d vehicle = replay ? Eigen::Vector3d(body_at(t) + commanded_offset(flown, t).position_W) : body_at(t);
     closest = std::min(closest, (*object - vehicle).norm());
   }
   out.miss_with_maneuver_m = closest;
@@ -169,24 +240,15 @@ DodgeThrow score_dodge_dataset(const std::string& dataset, const DodgeEvalOption
   const std::optional<TimeNs> contact = true_contact_time(truth, ball, radius);
   if (contact) row.true_contact_t_s = to_seconds(*contact);
 
-  PerceptionOptions ours = options.perception;
-  ours.threads = 1;
-  std::map<std::string, PerceptionOptions> variants;
-  variants["ours"] = ours;
-  variants["point_estimate"] = ours;
-  variants["point_estimate"].dodge_from = DodgeSource::kFusionPointEstimate;
-  variants["mono"] = ours;
-  variants["mono"].dodge_from = DodgeSource::kMonocular;
-  variants["mono"].monocular_baseline = true;
-  variants["rotation"] = ours;
-  variants["rotation"].compensation.method = CompensationMethod::kRotation;
-
-  std::map<std::string, std::vector<DodgeDecision>> decisions;
+  const std::map<std::string, PerceptionOptions> variants = perception_variants(options.perception);
+  const PerceptionOptions& ours = variants.at("ours");
+  std::map<std::string, std::vector<DodgeDecision>>& decisions = row.decisions;
   std::optional<TimeNs> first_detection;
   for (const auto& [method, perception] : variants) {
     const MethodRun run = run_method(truth, ball, perception, method == "ours" ? run_dir : "");
     decisions[method] = run.decisions;
     if (method == "ours") {
+      row.window_ends = run.window_ends;
       first_detection = run.first_ball_detection;
       const std::optional<TimeNs> in_view = first_window_in_view(truth, ball, run.window_ends);
       decisions["oracle"] = oracle_decisions(truth, ball, run, first_detection, ours);
@@ -196,16 +258,8 @@ DodgeThrow score_dodge_dataset(const std::string& dataset, const DodgeEvalOption
       row.first_usable_estimate_t_s = seconds_of(run.first_usable_estimate);
     }
   }
-  for (const std::string& method : kDodgeMethods) {
-    DodgeOutcome o = dodge_outcome(truth, ball, decisions[method], radius);
-    o.escaped = row.threat && o.escaped;
-    if (o.decision_t && contact) o.warning_time_s = to_seconds(*contact - *o.decision_t);
-    if (!o.maneuvered) {
-      if (method == "oracle_visible") o.reason = row.first_in_view_t_s ? "no manoeuvre decided" : "never in view";
-      else o.reason = first_detection ? "no manoeuvre decided" : "never detected";
-    }
-    row.outcomes[method] = o;
-  }
+  for (const std::string& method : kDodgeMethods)
+    row.outcomes[method] = scored(row, method, dodge_outcome(truth, ball, decisions[method], radius), contact);
   return row;
 }
 
@@ -214,22 +268,35 @@ DodgeThrow evaluate_dodge_throw(std::uint64_t seed, const DodgeEvalOptions& opti
   const sim::RandomThrowParameters parameters = sim::sample_random_throw(seed);
   sim::ScenarioConfig config = sim::random_throw_config(parameters);
   config.threads = 1;
-  const std::string dataset = throw_dir + "/dataset";
+  // Closed loop: ours' flown dataset and run take DIR/throws/SEED/{dataset,run}; the open loop's
+  // go under open_loop/.
+  const std::string open_dir = options.closed_loop ? throw_dir + "/open_loop" : throw_dir;
+  const std::string dataset = open_dir + "/dataset";
   sim::ensure_simulated(config, dataset);
-  DodgeThrow row = score_dodge_dataset(dataset, options, options.keep ? throw_dir + "/run" : "");
+  DodgeThrow row = score_dodge_dataset(dataset, options, options.keep ? open_dir + "/run" : "");
   row.seed = seed;
   row.parameters = sim::to_json(parameters);
+  if (options.closed_loop) fly_every_method(row, config, load_dataset_truth(dataset), options, options.keep ? throw_dir : "");
   if (!options.keep) std::filesystem::remove_all(dataset);
   row.seconds = std::chrono::duration<double>(Clock::now() - start).count();
   return row;
 }
 
-DodgeTotals dodge_totals(const std::vector<DodgeThrow>& throws, const std::string& method) {
+DodgeTotals dodge_totals(const std::vector<DodgeThrow>& throws, const std::string& method, OutcomeSet set) {
   DodgeTotals t;
   for (const DodgeThrow& row : throws) {
-    const auto it = row.outcomes.find(method);
-    if (it == row.outcomes.end()) continue;
+    const auto it = (row.*set).find(method);
+    if (it == (row.*set).end()) continue;
     const DodgeOutcome& o = it->second;
+    t.replans += o.replans;
+    if (o.eligible_after_decision) {
+      t.eligible_after_decision += *o.eligible_after_decision;
+      t.found_after_decision += o.found_after_decision.value_or(0);
+    }
+    if (o.track_survived) {
+      ++t.tracks_checked;
+      t.tracks_lost += !*o.track_survived;
+    }
     if (row.threat) {
       ++t.threats;
       t.escaped += o.escaped;
@@ -259,7 +326,20 @@ nlohmann::json totals_json(const DodgeTotals& t) {
           {"near_misses", t.near_misses},
           {"near_miss_maneuvers", t.near_miss_maneuvers},
           {"warning_time_s", summarize(t.warning_times_s).to_json()},
-          {"miss_error_at_decision_m", summarize(t.miss_errors_m).to_json()}};
+          {"miss_error_at_decision_m", summarize(t.miss_errors_m).to_json()},
+          {"replans", t.replans}};
+}
+
+/// The closed loop's perception figures (dodge_eval.h), beside totals_json's.
+void add_closed_loop_totals(nlohmann::json& j, const DodgeTotals& t) {
+  j["eligible_windows_after_decision"] = t.eligible_after_decision;
+  j["found_windows_after_decision"] = t.found_after_decision;
+  j["recall_after_decision"] = t.eligible_after_decision > 0
+                                   ? nlohmann::json(static_cast<double>(t.found_after_decision) /
+                                                    static_cast<double>(t.eligible_after_decision))
+                                   : nlohmann::json();
+  j["tracks_checked"] = t.tracks_checked;
+  j["tracks_lost"] = t.tracks_lost;
 }
 
 nlohmann::json outcome_json(const DodgeOutcome& o) {
@@ -275,19 +355,31 @@ nlohmann::json outcome_json(const DodgeOutcome& o) {
                      {"start_t_s", to_seconds(m->start_t)},
                      {"duration_s", m->duration_s}};
   if (!o.reason.empty()) j["reason"] = o.reason;
+  j["replans"] = o.replans;
+  if (o.eligible_after_decision) {
+    j["eligible_windows_after_decision"] = *o.eligible_after_decision;
+    j["found_windows_after_decision"] = o.found_after_decision.value_or(0);
+  }
+  if (o.track_survived) j["track_survived"] = *o.track_survived;
   return j;
 }
 
-}  // namespace
-
-nlohmann::json to_json(const DodgeEval& e, const DodgeEvalOptions& options) {
-  nlohmann::json j = totals_json(e.totals.at("ours"));
+/// The totals of one outcome set: ours' (totals_json), ours against the oracles, the baselines'.
+nlohmann::json outcome_set_json(const DodgeEval& e, OutcomeSet set, bool closed_loop) {
+  auto totals = [&](const std::string& method) {
+    const DodgeTotals t = dodge_totals(e.throws, method, set);
+    nlohmann::json j = totals_json(t);
+    if (closed_loop) add_closed_loop_totals(j, t);
+    return j;
+  };
+  nlohmann::json j = totals("ours");
   // Ours among the threats the oracle escapes: the share of what the sensors allow.
   int oracle_escaped = 0, ours_too = 0;
   for (const DodgeThrow& row : e.throws) {
-    if (row.outcomes.empty() || !row.outcomes.at("oracle").escaped) continue;
+    const auto& outcomes = row.*set;
+    if (outcomes.empty() || !outcomes.at("oracle").escaped) continue;
     ++oracle_escaped;
-    ours_too += row.outcomes.at("ours").escaped;
+    ours_too += outcomes.at("ours").escaped;
   }
   j["oracle_escaped"] = oracle_escaped;
   j["escaped_where_oracle_escaped"] = ours_too;
@@ -295,9 +387,10 @@ nlohmann::json to_json(const DodgeEval& e, const DodgeEvalOptions& options) {
   int visible_escaped = 0, ours_too_visible = 0;
   j["late_against_oracle_visible"] = nlohmann::json::array();
   for (const DodgeThrow& row : e.throws) {
-    if (row.outcomes.empty() || !row.outcomes.at("oracle_visible").escaped) continue;
+    const auto& outcomes = row.*set;
+    if (outcomes.empty() || !outcomes.at("oracle_visible").escaped) continue;
     ++visible_escaped;
-    const DodgeOutcome& o = row.outcomes.at("ours");
+    const DodgeOutcome& o = outcomes.at("ours");
     ours_too_visible += o.escaped;
     if (o.escaped) continue;
     nlohmann::json lag = {{"seed", row.seed}};
@@ -306,7 +399,7 @@ nlohmann::json to_json(const DodgeEval& e, const DodgeEvalOptions& options) {
     put("first_detection_t_s", row.first_detection_t_s);
     put("first_usable_estimate_t_s", row.first_usable_estimate_t_s);
     put("decision_t_s", seconds_of(o.decision_t));
-    const DodgeOutcome& bound = row.outcomes.at("oracle_visible");
+    const DodgeOutcome& bound = outcomes.at("oracle_visible");
     put("oracle_visible_decision_t_s", seconds_of(bound.decision_t));
     j["late_against_oracle_visible"].push_back(lag);
   }
@@ -314,7 +407,23 @@ nlohmann::json to_json(const DodgeEval& e, const DodgeEvalOptions& options) {
   j["escaped_where_oracle_visible_escaped"] = ours_too_visible;
   j["baselines"] = nlohmann::json::object();
   for (const std::string& method : kDodgeMethods)
-    if (method != "ours") j["baselines"][method] = totals_json(e.totals.at(method));
+    if (method != "ours") j["baselines"][method] = totals(method);
+  return j;
+}
+
+}  // namespace
+
+nlohmann::json to_json(const DodgeEval& e, const DodgeEvalOptions& options) {
+  nlohmann::json j = outcome_set_json(e, &DodgeThrow::outcomes, options.closed_loop);
+  if (options.closed_loop) {
+    j["closed_loop"] = true;
+    j["open_loop"] = outcome_set_json(e, &DodgeThrow::open_loop_outcomes, false);
+    j["dynamics_only"] = outcome_set_json(e, &DodgeThrow::dynamics_outcomes, false);
+    std::vector<double> window_ms;
+    for (const DodgeThrow& row : e.throws) window_ms.insert(window_ms.end(), row.window_total_ms.begin(), row.window_total_ms.end());
+    j["window_total_ms"] = summarize(window_ms).to_json();
+    j["response_delay_s"] = options.perception.dodge.limits.response_delay_s;
+  }
   j["throws"] = nlohmann::json::array();
   for (const DodgeThrow& row : e.throws) {
     nlohmann::json t = {{"seed", row.seed},           {"parameters", row.parameters},
@@ -327,6 +436,15 @@ nlohmann::json to_json(const DodgeEval& e, const DodgeEvalOptions& options) {
     if (row.first_usable_estimate_t_s) t["first_usable_estimate_t_s"] = *row.first_usable_estimate_t_s;
     if (!row.error.empty()) t["error"] = row.error;
     for (const auto& [method, o] : row.outcomes) t["outcomes"][method] = outcome_json(o);
+    if (options.closed_loop && row.error.empty()) {
+      for (const auto& [method, o] : row.open_loop_outcomes) t["open_loop"]["outcomes"][method] = outcome_json(o);
+      for (const auto& [method, o] : row.dynamics_outcomes) t["dynamics_only"]["outcomes"][method] = outcome_json(o);
+      t["window_total_ms"] = summarize(row.window_total_ms).to_json();
+      t["flight"] = {{"commands", row.flight.commands},
+                     {"tilt_clipped", row.flight.tilt_clipped},
+                     {"late", row.flight.late},
+                     {"floor_holds", row.flight.floor_holds}};
+    }
     j["throws"].push_back(t);
   }
   j["safety_radius_m"] = options.perception.prediction.safety_radius_m;

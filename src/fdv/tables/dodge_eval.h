@@ -14,6 +14,12 @@
 /// scene when the ball reaches the camera). A throw is
 /// a threat when its true miss distance without a manoeuvre is below the safety radius, a
 /// non-threat above 1 m, a near miss in between.
+///
+/// With `closed_loop` (tables/closed_loop.h), every method is also flown through the loop: the
+/// scene rendered again as the vehicle model flies the method's decisions, the method deciding on
+/// what it sees. `outcomes` then hold the closed-loop figures, `open_loop_outcomes` the kinematic
+/// replay's above, and `dynamics_outcomes` the open-loop decisions flown by the vehicle model
+/// without rendering again (what the dynamics alone change).
 /// Thread safety: run_dodge_eval may be called from any thread; it runs `jobs` throws at once,
 /// each on its own thread with its own state.
 #include <cstdint>
@@ -27,6 +33,7 @@
 #include "fdv/avoidance/dodge_planner.h"
 #include "fdv/eval/dataset_truth.h"
 #include "fdv/pipeline/perception.h"
+#include "fdv/sim/vehicle_dynamics.h"
 
 namespace fdv {
 
@@ -52,6 +59,7 @@ struct DodgeEvalOptions {
   std::string out_dir;
   int jobs = 2;       ///< throws evaluated at once (each single-threaded)
   bool keep = false;  ///< keep DIR/throws/SEED/{dataset,run}
+  bool closed_loop = false;  ///< also fly every method through the closed loop (above)
   /// Ours; the baselines change one thing each: dodge_from (point_estimate, mono), the
   /// compensation method (rotation), or the estimate itself (oracle: the true trajectory).
   PerceptionOptions perception;
@@ -68,6 +76,11 @@ struct DodgeOutcome {
   double miss_with_maneuver_m = 0;  ///< the true closest approach with the set-points flown
   bool escaped = false;             ///< threat and miss_with_maneuver_m >= the safety radius
   std::string reason;               ///< no decision: why (e.g. "never detected")
+  int replans = 0;                  ///< kReplan decisions
+  /// Closed loop, a perception method that decided: the ball's eligible windows from the first
+  /// decision to the closest approach, those with a detection on it, and whether one track held it.
+  std::optional<std::size_t> eligible_after_decision, found_after_decision;
+  std::optional<bool> track_survived;
 };
 
 struct DodgeThrow {
@@ -81,6 +94,16 @@ struct DodgeThrow {
   std::optional<double> first_in_view_t_s, first_detection_t_s, first_usable_estimate_t_s;
   bool threat = false, non_threat = false, near_miss = false;
   std::map<std::string, DodgeOutcome> outcomes;  ///< by kDodgeMethods
+  /// With closed_loop: the kinematic replay's outcomes, and the open-loop decisions flown by the
+  /// vehicle model without rendering again.
+  std::map<std::string, DodgeOutcome> open_loop_outcomes, dynamics_outcomes;
+  /// With closed_loop: ours' pipeline time per window in the loop [ms], and what the vehicle model
+  /// changed in ours' commands (clipped tilts, floor holds, late commands).
+  std::vector<double> window_total_ms;
+  sim::FlightCounters flight;
+  /// Each method's decisions and ours' window ends, open loop (the closed loop starts from them).
+  std::map<std::string, std::vector<DodgeDecision>> decisions;
+  std::vector<TimeNs> window_ends;
   double seconds = 0;  ///< wall time of this throw
   std::string error;   ///< a throw that could not be evaluated (then no outcomes)
 };
@@ -90,6 +113,11 @@ struct DodgeTotals {
   int near_miss_maneuvers = 0;
   std::vector<double> warning_times_s;  ///< threats with a decision
   std::vector<double> miss_errors_m;    ///< |predicted − true miss| at each first decision
+  int replans = 0;
+  /// Closed loop: the eligible windows after the first decision (pooled over the decided
+  /// threats) and those with the ball found; the decided throws whose track was checked, and lost.
+  std::size_t eligible_after_decision = 0, found_after_decision = 0;
+  int tracks_checked = 0, tracks_lost = 0;
 };
 
 struct DodgeEval {
@@ -103,9 +131,11 @@ struct DodgeEval {
 /// the image (eval/ground_truth_box.h); nothing when it never is.
 std::optional<TimeNs> first_window_in_view(const DatasetTruth& truth, int ball, std::span<const TimeNs> window_ends);
 
-/// The outcome of one method's decisions (in order) on the truth: the kinematic replay.
+/// The outcome of one method's decisions (in order) on the truth: the kinematic replay, the
+/// set-points' motion added to the body (`replay`), or, with replay false, the truth's body as
+/// it is (a flown truth already holds the manoeuvre).
 DodgeOutcome dodge_outcome(const DatasetTruth& truth, int ball, const std::vector<DodgeDecision>& decisions,
-                           double safety_radius_m);
+                           double safety_radius_m, bool replay = true);
 
 /// One simulated dataset with one ball: runs every method and scores them (the run of ours into
 /// `run_dir` as `fdv run` writes it, unless empty). A ball never detected gives no decision, with
@@ -120,7 +150,11 @@ DodgeThrow evaluate_dodge_throw(std::uint64_t seed, const DodgeEvalOptions& opti
 /// Every seed, `jobs` at a time with a progress line per throw; writes DIR/dodge_eval.json.
 DodgeEval run_dodge_eval(const DodgeEvalOptions& options);
 
-DodgeTotals dodge_totals(const std::vector<DodgeThrow>& throws, const std::string& method);
+/// Which of a throw's outcomes: the reported ones, the open loop's, the dynamics-only ones.
+using OutcomeSet = std::map<std::string, DodgeOutcome> DodgeThrow::*;
+
+DodgeTotals dodge_totals(const std::vector<DodgeThrow>& throws, const std::string& method,
+                         OutcomeSet set = &DodgeThrow::outcomes);
 nlohmann::json to_json(const DodgeEval& e, const DodgeEvalOptions& options);
 
 }  // namespace fdv
