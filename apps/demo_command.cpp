@@ -16,6 +16,7 @@
 #include "fdv/results/run.h"
 #include "fdv/sim/dataset_cache.h"
 #include "fdv/sim/scenario_config.h"
+#include "fdv/tables/closed_loop.h"
 #include "fdv/tables/dodge_eval.h"
 #include "fdv/tables/experiment.h"
 
@@ -26,23 +27,36 @@ struct DemoArgs {
   std::string out = "demo_out";
   std::string scenario = "hover_headon";
   std::uint64_t seed = 1;
+  bool closed_loop = false;
 };
 
 void demo(const DemoArgs& args) {
   namespace fs = std::filesystem;
   const std::string dataset = (fs::path(args.out) / "dataset").string();
   const std::string results = (fs::path(args.out) / "results").string();
-  // Simulated again only when the folder does not hold this scenario and seed already.
-  sim::ensure_simulated(sim::make_preset(args.scenario, args.seed), dataset);
-  PerceptionCallbacks also;
-  also.on_warning = [](const std::string& w) { spdlog::warn("{}", w); };
-  RunRequest request;
-  request.input = dataset;
-  RecordingRun(std::move(request)).into(results, also);
+  const sim::ScenarioConfig config = sim::make_preset(args.scenario, args.seed);
+  if (args.closed_loop) {
+    // The pipeline runs inside the simulation and the vehicle flies its decisions: the dataset
+    // written is the flown one (never a cached open-loop one: the folder is replaced).
+    fs::remove_all(dataset);
+    fly_with_perception(config, PerceptionOptions{}, dataset, results);
+  } else {
+    // Simulated again only when the folder does not hold this scenario and seed already.
+    sim::ensure_simulated(config, dataset);
+    PerceptionCallbacks also;
+    also.on_warning = [](const std::string& w) { spdlog::warn("{}", w); };
+    RunRequest request;
+    request.input = dataset;
+    RecordingRun(std::move(request)).into(results, also);
+  }
   const nlohmann::json metrics = evaluate(results, dataset);
   const DatasetTruth truth = load_dataset_truth(dataset);
+  // What would have happened without a dodge: the truth itself open loop; the path flown without
+  // commands in the closed loop.
+  const DatasetTruth unflown = args.closed_loop ? fly_decisions(config, truth, {}) : truth;
 
-  std::cout << "\nfast-dynamic-vision demo: " << args.scenario << ", seed " << args.seed << "\n";
+  std::cout << "\nfast-dynamic-vision demo: " << args.scenario << ", seed " << args.seed
+            << (args.closed_loop ? " (closed loop: the drone flies its decisions, its sensors see it)" : "") << "\n";
   const auto& det = metrics["detection"];
   std::cout << fmt::format(
       "  detection recall {:.0f} % of eligible windows, median centre error {:.1f} px, "
@@ -100,7 +114,7 @@ void demo(const DemoArgs& args) {
   }
   std::optional<TimeNs> contact;
   if (!truth.radius_m.empty()) {
-    contact = true_contact_time(truth, truth.radius_m.begin()->first, safety_radius_m);
+    contact = true_contact_time(unflown, truth.radius_m.begin()->first, safety_radius_m);
     if (contact)
       std::cout << fmt::format("  true contact with the {} m safety sphere at t = {:.3f} s\n", safety_radius_m,
                                to_seconds(*contact));
@@ -124,8 +138,11 @@ void demo(const DemoArgs& args) {
                              decisions.size() == 1 ? std::string("1 decision") : fmt::format("{} decisions", decisions.size()));
   }
   if (!truth.radius_m.empty() && first != decisions.end()) {
-    const DodgeOutcome flown = dodge_outcome(truth, truth.radius_m.begin()->first, decisions, safety_radius_m);
-    std::cout << fmt::format("  flying it, the true closest approach becomes {:.3f} m: {}\n", flown.miss_with_maneuver_m,
+    const int ball = truth.radius_m.begin()->first;
+    const DodgeOutcome flown = dodge_outcome(truth, ball, decisions, safety_radius_m, !args.closed_loop);
+    std::cout << fmt::format("  {}, the true closest approach is {:.3f} m ({:.3f} m without the dodge): {}\n",
+                             args.closed_loop ? "flown in the loop" : "replaying the set-points kinematically",
+                             flown.miss_with_maneuver_m, dodge_outcome(unflown, ball, {}, safety_radius_m).miss_with_maneuver_m,
                              flown.miss_with_maneuver_m >= safety_radius_m ? "outside the safety sphere"
                                                                           : "still inside the safety sphere");
   }
@@ -155,6 +172,8 @@ void add_demo_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--scenario", args.scenario, "simulator preset")->capture_default_str();
   cmd->add_option("--seed", args.seed, "random seed")->capture_default_str();
+  cmd->add_flag("--closed-loop", args.closed_loop,
+                "run the pipeline inside the simulation and fly its decisions (the sensors see the dodge)");
   cmd->callback([] { demo(args); });
 }
 
