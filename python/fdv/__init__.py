@@ -16,11 +16,12 @@ from dataclasses import dataclass, field
 import os
 
 from ._fdv import (EVENT_DTYPE, IMU_DTYPE, ODOMETRY_DTYPE, OBJECT_DTYPE, Calibration, ConfigError, InputError,
-                   Perception, PerceptionOptions, Recording, load_truth, open, preset_names, simulate)
+                   Perception, PerceptionOptions, Recording, load_truth, maneuver_offset, open, preset_names,
+                   simulate)
 from . import _fdv
 
 __all__ = ["EVENT_DTYPE", "IMU_DTYPE", "ODOMETRY_DTYPE", "OBJECT_DTYPE", "Calibration", "ConfigError",
-           "InputError", "Perception", "PerceptionOptions", "Recording", "Results", "load_truth", "open",
+           "InputError", "Perception", "PerceptionOptions", "Recording", "Results", "load_truth", "maneuver_offset", "open",
            "options", "preset_names", "run", "simulate"]
 
 

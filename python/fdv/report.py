@@ -5,9 +5,11 @@
 Writes DIR/report.html (DIR defaults to RESULTS_DIR/report) and its PNGs: the detection timeline
 (u, v per track, the true ball's projection beside it with --truth), each track's 3D trajectory in
 top and side views against the truth, the prediction error at the true closest approach against
-the time since the track's first detection, a latency histogram of each stage (timing.csv; older
-results folders without it: median, p99 and max bars from summary.json), and a strip of window
-images (when the run had --visualize). The files are read as the results schema writes them
+the time since the track's first detection, the dodge (with --truth and decisions in dodge.jsonl:
+the vehicle's path with its safety sphere and the ball's, the predicted passage at each decision,
+the manoeuvre, the closest approach with and without it), a latency histogram of each stage
+(timing.csv; older results folders without it: median, p99 and max bars from summary.json), and a
+strip of window images (when the run had --visualize). The files are read as the results schema writes them
 (docs/FORMATS.md "fdv run outputs").
 """
 import argparse
@@ -89,6 +91,9 @@ class Truth:
         self.body_t = self.body["t"] * 1e-9
         self.objects = t["objects"]
         self.balls = t["balls"]
+        # A flown simulation (`fdv simulate --fly`, the closed loop) keeps the path without its manoeuvre.
+        unflown = Path(dataset) / "truth" / "body_unflown.csv"
+        self.body_unflown = np.loadtxt(unflown, delimiter=",", comments="#", ndmin=2) if unflown.exists() else None
 
     def ball(self, ball_id):
         o = self.objects[self.objects["id"] == ball_id]
@@ -221,7 +226,9 @@ def plot_prediction_error(windows, trajectories, predictions, truth, out):
     fig, ax = plt.subplots(figsize=(10, 4))
     if truth is not None:
         for k, track in enumerate(sorted({r["track"] for r in trajectories})):
-            rows = [r for r in trajectories if r["track"] == track and r["method"] == "fusion" and r["usable"]]
+            # In time order: a solve on a late depth frame is written after later ones.
+            rows = sorted((r for r in trajectories if r["track"] == track and r["method"] == "fusion" and r["usable"]),
+                          key=lambda r: r["t"])
             if not rows or track not in first_seen:
                 continue
             end = np.array(trajectory_at(rows[-1], [rows[-1]["t_last"]]))
@@ -242,7 +249,7 @@ def plot_prediction_error(windows, trajectories, predictions, truth, out):
         ax.set_title("Prediction error at the true closest approach (usable fusion solves)")
     else:
         for k, track in enumerate(sorted({p["track"] for p in predictions})):
-            rows = [p for p in predictions if p["track"] == track]
+            rows = sorted((p for p in predictions if p["track"] == track), key=lambda p: p["t"])
             t0 = first_seen.get(track, rows[0]["t"])
             ax.plot([p["t"] - t0 for p in rows], [p["miss_distance"] for p in rows], "o-", ms=4,
                     color=TRACK_COLORS[k % len(TRACK_COLORS)], label=f"track {track}")
@@ -253,6 +260,71 @@ def plot_prediction_error(windows, trajectories, predictions, truth, out):
     if ax.get_legend_handles_labels()[0]:
         ax.legend(fontsize=8)
     return save(fig, out, "prediction_error.png")
+
+
+def closest_approach(t_s, body_W, ball_W):
+    """Index of the least distance between two paths sampled at the same times, and that distance."""
+    d = np.linalg.norm(ball_W - body_W, axis=1)
+    i = int(np.argmin(d))
+    return i, d[i]
+
+
+def plot_dodge(results, dodge, predictions, truth, safety_radius_m, out):
+    """The vehicle's path with and without the escape, the ball's, and what each decision saw."""
+    acting = [d for d in dodge if d.get("maneuver")]
+    if truth is None or not acting or not truth.balls:
+        return None
+    ball = min(truth.balls, key=lambda b: truth.balls[b].get("closest_approach_m") or np.inf)
+    tb, pb = truth.ball(ball)
+    b = truth.body
+    body_t = truth.body_t
+    body = np.stack([b["px"], b["py"], b["pz"]], axis=1)
+    if truth.body_unflown is not None:  # flown: body.csv holds the escape
+        flown, flown_label = body, "vehicle, flown"
+        unflown = truth.body_unflown[:, 1:4]
+    else:  # open loop: the escape is the set-points replayed on the path
+        import fdv
+        unflown = body
+        flown, flown_label = body + fdv.maneuver_offset(os.fspath(results), body_t.tolist()), "vehicle, set-points replayed"
+    ball_on_body = np.stack([np.interp(body_t, tb, pb[:, k]) for k in range(3)], axis=1)
+    in_flight = (body_t >= tb[0]) & (body_t <= tb[-1])
+    i_with, d_with = closest_approach(body_t[in_flight], flown[in_flight], ball_on_body[in_flight])
+    i_without, d_without = closest_approach(body_t[in_flight], unflown[in_flight], ball_on_body[in_flight])
+    t_in = body_t[in_flight]
+
+    fig, axes = plt.subplots(1, 2, figsize=(12, 5))
+    along = 0 if np.ptp(pb[:, 0]) >= np.ptp(pb[:, 1]) else 1  # the side view looks across the throw
+    views = [(0, 1, "top view (x, y)"), (along, 2, f"side view ({'xy'[along]}, z)")]
+    for ax, (i, j, view) in zip(axes, views):
+        ax.plot(pb[:, i], pb[:, j], "k--", lw=1, label=f"ball {ball}, truth")
+        ax.plot(unflown[:, i], unflown[:, j], "-", color="0.6", lw=2, label="vehicle, without the escape")
+        ax.plot(flown[:, i], flown[:, j], "-", color="C0", lw=2, label=flown_label)
+        for path, idx, dist, style, name in [(flown[in_flight], i_with, d_with, "C0", "with"),
+                                             (unflown[in_flight], i_without, d_without, "0.6", "without")]:
+            centre = path[idx]
+            ax.add_patch(plt.Circle((centre[i], centre[j]), safety_radius_m, fill=False, color=style,
+                                    ls="-" if name == "with" else ":"))
+            ball_then = ball_on_body[in_flight][idx]
+            ax.plot([centre[i], ball_then[i]], [centre[j], ball_then[j]], "-", color=style, lw=1,
+                    label=f"closest approach {name} the escape: {dist:.2f} m at {t_in[idx]:.3f} s")
+        for k, d in enumerate(acting):
+            body_then = flown[np.clip(np.searchsorted(body_t, d["t"]), 0, len(body_t) - 1)]
+            a = np.array(d["maneuver"]["acceleration_W"])
+            ax.annotate("", xy=(body_then[i] + 0.05 * a[i], body_then[j] + 0.05 * a[j]), xytext=(body_then[i], body_then[j]),
+                        arrowprops=dict(arrowstyle="->", color=f"C{1 + k % 8}"))
+            same = [p for p in predictions if p["track"] == d["track"] and abs(p["t"] - d["t"]) < 1e-6]
+            if same:
+                p = same[-1]["object_W"]
+                ax.plot(p[i], p[j], "x", color=f"C{1 + k % 8}", ms=8,
+                        label=f"{d['action']} at {d['t']:.3f} s: predicted passage (x), set-point (arrow: a · 0.05 s²)")
+        ax.set_xlabel("xyz"[i] + " [m]")
+        ax.set_ylabel("xyz"[j] + " [m]")
+        ax.set_title(view)
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=7, loc="best")
+    fig.suptitle(f"Dodge: {len(acting)} set-point decision(s); safety sphere {safety_radius_m} m")
+    return save(fig, out, "dodge.png")
 
 
 def plot_latency_histograms(timing, out):
@@ -339,6 +411,7 @@ def write_report(results_dir, truth_dir=None, out_dir=None):
     windows = read_jsonl(results / "detections.jsonl")
     trajectories = read_jsonl(results / "trajectories.jsonl")
     predictions = read_jsonl(results / "predictions.jsonl")
+    dodge = read_jsonl(results / "dodge.jsonl")
     truth = Truth(truth_dir) if truth_dir else None
     if truth:
         check_truth_matches(summary, truth, truth_dir)
@@ -348,6 +421,10 @@ def write_report(results_dir, truth_dir=None, out_dir=None):
     sections.append(("3D trajectories (final usable fusion estimate per track)",
                      plot_trajectories(results, trajectories, truth, out)))
     sections.append(("Prediction error", [plot_prediction_error(windows, trajectories, predictions, truth, out)]))
+    radius = summary.get("options", {}).get("prediction", {}).get("safety_radius_m", 0.5)
+    dodge_plot = plot_dodge(results, dodge, predictions, truth, radius, out)
+    if dodge_plot:
+        sections.append(("Dodge", [dodge_plot]))
     timing = read_timing(results)
     if timing is not None and timing.size:
         sections.append(("Latency per stage", [plot_latency_histograms(timing, out)]))

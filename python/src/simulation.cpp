@@ -5,7 +5,9 @@
 #include <optional>
 
 #include "common.h"
+#include "fdv/avoidance/maneuver_playback.h"
 #include "fdv/core/error.h"
+#include "fdv/results/reader.h"
 #include "fdv/eval/dataset_truth.h"
 #include "fdv/sim/dataset_sink.h"
 #include "fdv/sim/scenario_config.h"
@@ -96,9 +98,24 @@ py::dict load_truth(const std::string& dir, const std::string& time_unit) {
   return d;
 }
 
+/// The kinematic replay's displacement of the body at each of `times_s` by a run's decisions.
+py::array_t<double> maneuver_offset(const std::string& results_dir, const std::vector<double>& times_s) {
+  const std::vector<DodgeDecision> decisions = dodge_decisions(read_dodge(results_dir));
+  py::array_t<double> out({static_cast<py::ssize_t>(times_s.size()), py::ssize_t{3}});
+  auto o = out.mutable_unchecked<2>();
+  for (std::size_t i = 0; i < times_s.size(); ++i) {
+    const Eigen::Vector3d p = commanded_offset(decisions, from_seconds(times_s[i])).position_W;
+    for (int k = 0; k < 3; ++k) o(static_cast<py::ssize_t>(i), k) = p[k];
+  }
+  return out;
+}
+
 }  // namespace
 
 void register_simulation(py::module_& m) {
+  m.def("maneuver_offset", &maneuver_offset, py::arg("results"), py::arg("times_s"),
+        "The displacement [m] (N x 3, W axes) that a results folder's dodge decisions (dodge.jsonl) add "
+        "to the body's path at each time [s], as `fdv dodge-eval` replays them kinematically.");
   m.def("preset_names", &sim::preset_names);
   m.def("simulate", &simulate, py::arg("scenario"), py::kw_only(), py::arg("seed") = 1, py::arg("out"),
         py::arg("duration") = py::none(), py::arg("resolution") = py::none(), py::arg("threads") = py::none(),

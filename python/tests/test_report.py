@@ -113,3 +113,32 @@ def test_a_run_without_windows_still_reports(cli_results, workdir):
     assert read_timing(folder) is None
     done = report(folder)
     assert done.returncode == 0, done.stderr
+
+
+# A decision written by hand: 4 m/s² along +y from 0.25 s for 0.3 s. The kinematic replay moves the
+# body ½·4·0.15² = 0.045 m by 0.4 s and 4·(0.3²/2 + 0.3·0.25) = 0.48 m by 0.8 s, nothing before 0.25 s.
+HAND_DODGE = {"t": 0.2, "effective_t": 0.25, "track": 1, "action": "dodge", "probability": 0.9,
+              "miss_distance": 0.1, "committed": False, "reason": "by hand",
+              "maneuver": {"acceleration_W": [0, 4, 0], "start_t": 0.25, "duration": 0.3,
+                           "expected_clearance": 1, "probability_after": 0}}
+
+
+def test_maneuver_offset_replays_the_set_points_exactly(cli_results, workdir):
+    folder = copy_of(cli_results, workdir, "hand_dodge")
+    (folder / "dodge.jsonl").write_text(json.dumps(HAND_DODGE) + "\n")
+    offset = fdv.maneuver_offset(str(folder), [0.2, 0.4, 0.8])
+    np.testing.assert_allclose(offset, [[0, 0, 0], [0, 0.045, 0], [0, 0.48, 0]], atol=1e-9)
+
+
+def test_a_run_with_a_decision_gets_the_dodge_view(cli_results, dataset, workdir):
+    folder = copy_of(cli_results, workdir, "dodge_view")
+    (folder / "dodge.jsonl").write_text(json.dumps(HAND_DODGE) + "\n")
+    out = workdir / "dodge_report"
+    done = report(folder, "--truth", dataset, "--out", out)
+    assert done.returncode == 0, done.stderr
+    assert "dodge.png" in re.findall(r'<img src="([^"]+)"', (out / "report.html").read_text())
+    img = plt.imread(out / "dodge.png")
+    assert np.std(img[..., :3]) > 0.01
+    # Without --truth there is no vehicle path to draw: no dodge view, no error.
+    done = report(folder, "--out", workdir / "dodge_report_no_truth")
+    assert done.returncode == 0 and not (workdir / "dodge_report_no_truth" / "dodge.png").exists()
