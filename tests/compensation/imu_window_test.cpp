@@ -1,6 +1,7 @@
 // Mean angular velocity of a window from IMU samples: hand-computed integrals.
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <limits>
 
@@ -56,6 +57,32 @@ TEST(ImuWindow, BadSamplesAreSkippedAndCounted) {
   EXPECT_EQ(s.samples_skipped, 2);
   EXPECT_EQ(s.samples_used, 3);
   EXPECT_NEAR(s.mean_gyro_I.x(), 1.0, 1e-12);
+}
+
+// A constant 2 rad/s about x for 30 ms: a fixed direction's coordinates turn by −0.06 rad about x
+// (the frame turns the other way), backwards by the transpose; without samples nothing is known.
+TEST(ImuTurn, ConstantRateTurnsFixedDirectionsBackwards) {
+  std::vector<ImuSample> imu;
+  for (int t = -5; t <= 40; ++t) imu.push_back(gyro(t, 2.0));
+  const auto R = imu_turn(imu, 0, 30 * kNsPerMs, 20 * kNsPerMs);
+  ASSERT_TRUE(R.has_value());
+  const Eigen::Matrix3d expected = Eigen::AngleAxisd(-0.06, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  EXPECT_LT((*R - expected).norm(), 1e-12);
+  const auto back = imu_turn(imu, 30 * kNsPerMs, 0, 20 * kNsPerMs);
+  ASSERT_TRUE(back.has_value());
+  EXPECT_LT((*back - expected.transpose()).norm(), 1e-12);
+  EXPECT_FALSE(imu_turn({}, 0, 30 * kNsPerMs, 20 * kNsPerMs).has_value());
+  EXPECT_TRUE(imu_turn(imu, 5 * kNsPerMs, 5 * kNsPerMs, 20 * kNsPerMs)->isIdentity());
+}
+
+// A rate ramping about z, ω(t) = 100 t (t in s): the angle turned over [0, 0.1] s is 0.5 rad, which
+// the 5 ms steps' means give exactly (one axis: the rotations commute).
+TEST(ImuTurn, ARampIntegratesToItsAngle) {
+  std::vector<ImuSample> imu;
+  for (int t = -5; t <= 105; ++t) imu.push_back({t * kNsPerMs, {0, 0, 0.1 * t}, {0, 0, 0}});
+  const auto R = imu_turn(imu, 0, 100 * kNsPerMs, 20 * kNsPerMs);
+  ASSERT_TRUE(R.has_value());
+  EXPECT_LT((*R - Eigen::AngleAxisd(-0.5, Eigen::Vector3d::UnitZ()).toRotationMatrix()).norm(), 1e-9);
 }
 
 }  // namespace

@@ -376,5 +376,38 @@ TEST(Tracker, ExternalGateKeepsTheHardRadiusCap) {
   EXPECT_EQ(step.assignments.at(0).outcome, Outcome::kNewTrack);  // 120 px > 100 px cap
 }
 
+// The camera turns between two windows and the image shifts 150 px right: beyond the 100 px cap,
+// a new track would start. With the tracker's coordinates moved by the turn (change_coordinates),
+// the object keeps its track, and its velocity is carried by the map's Jacobian.
+TEST(Tracker, ACameraTurnMovesTheTracksWithTheImage) {
+  auto run = [](bool follow_the_turn) {
+    Tracker tracker;
+    for (int k = 0; k < 4; ++k) tracker.update(k * kWindow, std::vector{det(k * kWindow, 100 + 4.0 * k, 100)});
+    if (follow_the_turn)
+      tracker.change_coordinates([](const Eigen::Vector2d& u) { return Eigen::Vector2d(u.x() + 150, u.y()); });
+    const TrackerStep step = tracker.update(4 * kWindow, std::vector{det(4 * kWindow, 266, 100)});
+    return step.assignments.at(0);
+  };
+  EXPECT_EQ(run(false).outcome, Outcome::kNewTrack);
+  const TrackAssignment a = run(true);
+  EXPECT_EQ(a.outcome, Outcome::kUpdated);
+  EXPECT_EQ(a.track_id, 1);
+  EXPECT_LT(a.mahalanobis2, 1.0);
+}
+
+// A map that doubles distances doubles the velocity and acceleration, and quadruples their
+// variances.
+TEST(ImageKalmanFilter, ChangeOfCoordinatesCarriesTheStateByTheJacobian) {
+  ImageKalmanFilter f(ImageFilterOptions{}, 0, {10, 20});
+  f.update(kWindow, {12, 21});
+  const ImageKalmanFilter::State x = f.state();
+  const ImageKalmanFilter::Covariance P = f.covariance();
+  f.change_coordinates({50, 60}, 2 * Eigen::Matrix2d::Identity());
+  EXPECT_EQ(f.state().head<2>(), Eigen::Vector2d(50, 60));
+  EXPECT_TRUE(f.state().tail<4>().isApprox(2 * x.tail<4>()));
+  EXPECT_TRUE(f.covariance().isApprox(4 * P));
+  EXPECT_EQ(f.time(), kWindow);
+}
+
 }  // namespace
 }  // namespace fdv

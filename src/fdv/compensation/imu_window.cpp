@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <Eigen/Geometry>
 #include <limits>
 
 namespace fdv {
@@ -54,6 +55,23 @@ ImuWindowSummary summarize_imu(std::span<const ImuSample> imu, TimeNs t0, TimeNs
   out.gap = largest_gap > max_gap_ns;
   out.mean_gyro_I = t1 > t0 ? Eigen::Vector3d(integral / static_cast<double>(t1 - t0)) : first->gyro_rad_s;
   return out;
+}
+
+std::optional<Eigen::Matrix3d> imu_turn(std::span<const ImuSample> imu, TimeNs t0, TimeNs t1, TimeNs max_gap_ns) {
+  if (t1 < t0) {
+    const auto back = imu_turn(imu, t1, t0, max_gap_ns);
+    return back ? std::optional<Eigen::Matrix3d>(back->transpose()) : std::nullopt;
+  }
+  constexpr TimeNs kStepNs = 5 * kNsPerMs;
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+  for (TimeNs a = t0; a < t1; a += kStepNs) {
+    const TimeNs b = std::min(a + kStepNs, t1);
+    const ImuWindowSummary s = summarize_imu(imu, a, b, max_gap_ns);
+    if (!s.available) return std::nullopt;
+    const Eigen::Vector3d angle = -s.mean_gyro_I * to_seconds(b - a);
+    if (angle.norm() > 0) R = Eigen::AngleAxisd(angle.norm(), angle.normalized()).toRotationMatrix() * R;
+  }
+  return R;
 }
 
 }  // namespace fdv

@@ -12,6 +12,8 @@
 /// between the window's ends and the nearest sample) is flagged as a gap: the mean is still
 /// computed from what is there, and the caller reports the flag.
 /// Thread safety: value types and pure functions; may be used from any thread.
+#include <Eigen/Core>
+#include <optional>
 #include <span>
 
 #include "fdv/core/sensor_data.h"
@@ -28,5 +30,10 @@ struct ImuWindowSummary {
 };
 
 ImuWindowSummary summarize_imu(std::span<const ImuSample> imu, TimeNs t0, TimeNs t1, TimeNs max_gap_ns);
+
+/// How a fixed direction's coordinates in the IMU frame change from t0 to t1 (either order) as
+/// the IMU turns: d_I(t1) = R d_I(t0), R = Π exp(−[ω̄_k]× Δt_k) over steps of at most 5 ms, each
+/// with its mean gyro (summarize_imu). Nothing when summarize_imu has no sample for a step.
+std::optional<Eigen::Matrix3d> imu_turn(std::span<const ImuSample> imu, TimeNs t0, TimeNs t1, TimeNs max_gap_ns);
 
 }  // namespace fdv

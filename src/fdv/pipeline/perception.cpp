@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 
+#include "fdv/compensation/imu_window.h"
 #include "fdv/core/error.h"
 #include "fdv/estimation/camera_pose.h"
 #include "fdv/pipeline/detector_input.h"
@@ -254,6 +255,17 @@ void Perception::process_ready(bool flush) {
   segment_pending_depth(processed_until_);
 }
 
+Eigen::Vector2d Perception::turned_pixel(const Eigen::Vector2d& px, TimeNs from, TimeNs to) const {
+  if (!options_.derotate_tracking || from == to || imu_.empty()) return px;
+  const auto R_I = imu_turn(imu_, from, to, options_.compensation.max_imu_gap_ns);
+  if (!R_I) return px;
+  const Eigen::Matrix3d R_E_I = calibration_.R_E_I();
+  const Eigen::Vector2d xn = calibration_.event_camera.pixel_to_normalized(px);
+  const Eigen::Vector3d ray = R_E_I * *R_I * R_E_I.transpose() * Eigen::Vector3d(xn.x(), xn.y(), 1.0);
+  if (!ray.allFinite() || ray.z() <= 1e-6) return px;  // turned behind the camera: nowhere better
+  return calibration_.event_camera.project(ray);
+}
+
 std::optional<OdometrySample> Perception::vehicle_state(TimeNs t) const {
   if (!odometry_.empty()) return body_state_at(odometry_, t, options_.odometry_max_extrapolation_ns);
   if (!options_.assume_static_vehicle) return std::nullopt;
@@ -339,7 +351,7 @@ void Perception::detector_priors_from_tracks(TimeNs t) {
   for (const Track& track : tracker_.tracks()) {
     if (!lends_detector_gate(track, options_)) continue;
     const TrackPrediction p = track.predict(t);
-    priors_.push_back({p.center_px, p.box_size_px, track.confirmed()});
+    priors_.push_back({in_camera_at(p.center_px, t), p.box_size_px, track.confirmed()});
   }
 }
 
@@ -352,10 +364,18 @@ DetectionResult Perception::detect(const CompensatedWindow& cw) {
 
 // Association and Kalman filter on the image plane (paper §IV-C.1), with the 3D estimates' say.
 TrackerStep Perception::associate(TimeNs t, std::span<const Detection2D> detections) {
+  // The tracker's coordinates: the camera at the window's end (derotate_tracking).
+  if (tracker_frame_t_ && *tracker_frame_t_ != t) {
+    const TimeNs from = *tracker_frame_t_;
+    tracker_.change_coordinates([&](const Eigen::Vector2d& px) { return turned_pixel(px, from, t); });
+  }
+  tracker_frame_t_ = t;
   tracker_inputs_.clear();
-  for (const Detection2D& d : detections)
-    tracker_inputs_.push_back({d.t, d.center_raw, d.center_normalized,
+  for (const Detection2D& d : detections) {
+    const Eigen::Vector2d at_end = turned_pixel(d.center_raw, d.t, t);
+    tracker_inputs_.push_back({d.t, at_end.allFinite() ? at_end : d.center_raw, d.center_normalized,
                                Eigen::Vector2d(d.box_raw.width(), d.box_raw.height()), d.events});
+  }
   vouch_by_trajectory();
   return tracker_.update(t, tracker_inputs_, vouched_);
 }
@@ -470,7 +490,7 @@ bool Perception::segment_depth(const RegisteredDepth& depth, const Track& track)
   const auto start = Clock::now();
   const TrackPrediction p = track.predict(depth.t);
   DepthQuery query;
-  query.center_px = p.center_px;
+  query.center_px = in_camera_at(p.center_px, depth.t);
   query.box_size_px = p.box_size_px;
   const auto T_W_E = camera_pose(depth.t);
   if (T_W_E)

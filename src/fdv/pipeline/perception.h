@@ -95,6 +95,12 @@ struct PerceptionOptions {
   /// covariance propagated) even when the image-plane filter's gate rejects it, so that the track
   /// and its 3D history go on instead of a new track starting from nothing (Tracker, ExternalGate).
   bool estimate_aided_association = true;
+  /// The image-plane tracker works in the camera's coordinates at each window's end: at each
+  /// window its tracks are moved by the image motion the gyro-measured rotation since the last
+  /// window causes, and each detection by the rotation from its time to the window's end, so that
+  /// the filter sees the object's motion, not the camera's turn (a dodge's tilt at several rad/s
+  /// moves the image tens of pixels a window). Without IMU samples nothing moves.
+  bool derotate_tracking = true;
   /// A tentative track detected in the last window also lends the detector its gate, for the
   /// dense-motion source and the count-contrast source's sparse search only: the windows before
   /// confirmation are where a fast ball is most often missed (docs/DETECTION.md, "Gates of
@@ -151,6 +157,8 @@ void describe(V& v, PerceptionOptions& o) {
   v("monocular_baseline", o.monocular_baseline, "-", "run Su & Shen's events-only estimator beside the fusion");
   v("estimate_aided_association", o.estimate_aided_association, "-",
     "a usable fusion estimate keeps a detection it predicts that the image gate rejects");
+  v("derotate_tracking", o.derotate_tracking, "-",
+    "the tracker's coordinates follow the camera's gyro-measured turn (tracks and detections moved to the window's end)");
   v("tentative_track_priors", o.tentative_track_priors, "-",
     "a tentative track detected in the last window lends its gate to the detector's dense-motion cue and sparse count search");
   v("depth_since_first_detection", o.depth_since_first_detection, "-",
@@ -365,6 +373,13 @@ class Perception {
   void decide_dodge(int track_id, const TrajectoryEstimate& estimate, TimeNs t);
   std::optional<Eigen::Isometry3d> camera_pose(TimeNs t) const;
   std::optional<OdometrySample> vehicle_state(TimeNs t) const;
+  /// Where a direction seen at raw pixel `px` at time `from` is seen at `to`, the camera having
+  /// turned as the gyro says (derotate_tracking); `px` itself without the option or IMU samples.
+  Eigen::Vector2d turned_pixel(const Eigen::Vector2d& px, TimeNs from, TimeNs to) const;
+  /// A pixel in the tracker's coordinates, seen by the camera at time t.
+  Eigen::Vector2d in_camera_at(const Eigen::Vector2d& tracker_px, TimeNs t) const {
+    return tracker_frame_t_ ? turned_pixel(tracker_px, *tracker_frame_t_, t) : tracker_px;
+  }
   TrackEstimators& estimators_for(int track_id);
   /// χ²₂ of detection `d` against the trajectory of `est` at d's time (normalised image plane,
   /// covariance of the predicted position ⊕ the event noise); nothing when `est` is not a usable
@@ -384,6 +399,8 @@ class Perception {
   std::optional<HotPixelFilter> hot_pixels_;  ///< none when detection.hot_pixels is off
   std::optional<DepthRegistrar> registrar_;
   Tracker tracker_;
+  /// The time whose camera coordinates the tracker's tracks are in (derotate_tracking).
+  std::optional<TimeNs> tracker_frame_t_;
   std::vector<ImuSample> imu_;            ///< recent history; contiguous: the compensator takes a span
   std::vector<OdometrySample> odometry_;  ///< recent history, time-sorted
   std::deque<RegisteredDepth> recent_depth_;     ///< for the translational compensation

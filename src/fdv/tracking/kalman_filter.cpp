@@ -57,6 +57,14 @@ ImageKalmanFilter::ImageKalmanFilter(const ImageFilterOptions& options, TimeNs t
   P_.diagonal() << sp * sp, sp * sp, sv * sv, sv * sv, sa * sa, sa * sa;
 }
 
+void ImageKalmanFilter::change_coordinates(const Eigen::Vector2d& position, const Eigen::Matrix2d& J) {
+  Covariance T = Covariance::Zero();
+  for (int k = 0; k < 3; ++k) T.block<2, 2>(2 * k, 2 * k) = J;
+  x_ = T * x_;
+  x_.head<2>() = position;
+  P_ = T * P_ * T.transpose();
+}
+
 ImagePrediction ImageKalmanFilter::predict(TimeNs t, const Eigen::Vector2d& extra_variance_px2) const {
   const double dt = to_seconds(t - t_);
   const Covariance F = transition(dt);

@@ -88,6 +88,11 @@ class ImageKalmanFilter {
   double update(TimeNs t, const Eigen::Vector2d& z_px,
                 const Eigen::Vector2d& extra_variance_px2 = Eigen::Vector2d::Zero());
 
+  /// A change of image coordinates u -> f(u) (the camera turned): the position becomes `position`
+  /// = f(u), velocity and acceleration are carried by f's Jacobian `J` there, and the covariance
+  /// by the same linear map, blockdiag(J, J, J).
+  void change_coordinates(const Eigen::Vector2d& position, const Eigen::Matrix2d& J);
+
   TimeNs time() const { return t_; }
   const State& state() const { return x_; }
   const Covariance& covariance() const { return P_; }

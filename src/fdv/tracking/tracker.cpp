@@ -68,6 +68,20 @@ const Track* Tracker::find(int id) const {
   return nullptr;
 }
 
+void Tracker::change_coordinates(const std::function<Eigen::Vector2d(const Eigen::Vector2d&)>& turn) {
+  for (Track& track : tracks_) {
+    const Eigen::Vector2d u = track.filter_.state().head<2>();
+    const Eigen::Vector2d moved = turn(u);
+    Eigen::Matrix2d J;
+    for (int k = 0; k < 2; ++k) {
+      const Eigen::Vector2d step = Eigen::Vector2d::Unit(k);
+      J.col(k) = (turn(u + step) - turn(u - step)) / 2;
+    }
+    if (!moved.allFinite() || !J.allFinite()) continue;
+    track.filter_.change_coordinates(moved, J);
+  }
+}
+
 TrackerStep Tracker::update(TimeNs t, std::span<const TrackerDetection> detections,
                             std::span<const ExternalGate> external) {
   TrackerStep step;

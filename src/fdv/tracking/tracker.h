@@ -24,6 +24,7 @@
 /// the grid in which detections, boxes and registered depth frames live.
 /// Not thread-safe.
 #include <Eigen/Core>
+#include <functional>
 #include <span>
 #include <string>
 #include <vector>
@@ -184,6 +185,13 @@ class Tracker {
   /// with the filter-gated pairs by their own statistic.
   TrackerStep update(TimeNs t, std::span<const TrackerDetection> detections,
                      std::span<const ExternalGate> external = {});
+
+  /// The camera turned: re-expresses every track in the new image coordinates. `turn` maps a raw
+  /// pixel before the turn to where the same direction is seen after it (a pure rotation); each
+  /// filter's position moves with it, its velocity, acceleration and covariance by the map's
+  /// Jacobian there (central differences over ±1 px). A pixel the map cannot take (NaN) leaves
+  /// that track as it is.
+  void change_coordinates(const std::function<Eigen::Vector2d(const Eigen::Vector2d&)>& turn);
 
   const std::vector<Track>& tracks() const { return tracks_; }
   /// The track with this id, or nullptr (deleted or never existed).
