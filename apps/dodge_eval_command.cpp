@@ -41,17 +41,22 @@ void print_table(const DodgeEval& e, OutcomeSet set, const std::string& title) {
   }
 }
 
-/// What the manoeuvres did to perception in the loop, per perception method.
-void print_closed_loop_perception(const DodgeEval& e) {
-  std::cout << "\nClosed loop, from the first decision to the closest approach:\n\n"
-               "| method | recall (ball eligible) | tracks lost / decided throws checked |\n|---|---|---|\n";
+/// What the manoeuvres did to perception, per perception method: in the loop, and open loop (the
+/// same windows without the manoeuvre seen) as the reference.
+void print_maneuver_perception(const DodgeEval& e) {
+  std::cout << "\nFrom the first decision to the closest approach (the ball eligible):\n\n"
+               "| method | recall, closed loop | recall, open loop | tracks lost, closed loop | tracks lost, open loop |\n"
+               "|---|---|---|---|---|\n";
+  auto recall = [](const DodgeTotals& t) {
+    return fmt::format("{}/{} ({})", t.found_after_decision, t.eligible_after_decision,
+                       t.eligible_after_decision ? fmt::format("{:.1f} %", 100.0 * static_cast<double>(t.found_after_decision) /
+                                                                        static_cast<double>(t.eligible_after_decision))
+                                                 : "-");
+  };
   for (const char* method : {"ours", "point_estimate", "mono", "rotation"}) {
-    const DodgeTotals t = dodge_totals(e.throws, method);
-    std::cout << fmt::format("| {} | {}/{} ({}) | {}/{} |\n", method, t.found_after_decision, t.eligible_after_decision,
-                             t.eligible_after_decision ? fmt::format("{:.1f} %", 100.0 * static_cast<double>(t.found_after_decision) /
-                                                                             static_cast<double>(t.eligible_after_decision))
-                                                       : "-",
-                             t.tracks_lost, t.tracks_checked);
+    const DodgeTotals closed = dodge_totals(e.throws, method), open = dodge_totals(e.throws, method, &DodgeThrow::open_loop_outcomes);
+    std::cout << fmt::format("| {} | {} | {} | {}/{} | {}/{} |\n", method, recall(closed), recall(open), closed.tracks_lost,
+                             closed.tracks_checked, open.tracks_lost, open.tracks_checked);
   }
 }
 
@@ -96,7 +101,7 @@ void add_dodge_eval_command(CLI::App& app) {
     const DodgeEval e = run_dodge_eval(o);
     if (o.closed_loop) {
       print_table(e, &DodgeThrow::outcomes, "Closed loop (flown, the scene rendered again):");
-      print_closed_loop_perception(e);
+      print_maneuver_perception(e);
       print_table(e, &DodgeThrow::dynamics_outcomes, "Open-loop decisions flown by the vehicle model, not rendered again:");
       print_table(e, &DodgeThrow::open_loop_outcomes, "Open loop (kinematic replay):");
     } else {

@@ -29,14 +29,7 @@ Truth truth_of(const Simulator& sim) {
   const auto n = static_cast<std::int64_t>(std::floor(c.duration_s * c.truth.rate_hz + 1e-9));
   for (std::int64_t k = 0; k <= n; ++k) {
     const TimeNs t = std::llround(static_cast<double>(k) * 1e9 / c.truth.rate_hz);
-    const BodyState s = sim.vehicle().at(to_seconds(t));
-    OdometrySample body;
-    body.t = t;
-    body.p_W_B = s.p_W;
-    body.q_W_B = Eigen::Quaterniond(s.R_W_B).normalized();
-    body.v_W = s.v_W;
-    body.omega_B = s.omega_B;
-    truth.body.push_back(body);
+    truth.body.push_back(to_pose_sample(t, sim.vehicle().at(to_seconds(t))));
     for (const auto& b : sim.balls()) {
       const BallState bs = b.at(to_seconds(t));
       if (bs.exists) truth.objects.push_back({t, b.config().id, bs.p_W, bs.v_W});

@@ -20,8 +20,7 @@ DatasetTruth unrendered_truth(const sim::ScenarioConfig& config) {
   t.gravity_W = config.gravity_W_m_s2;
   for (const auto& b : config.balls) t.radius_m[b.id] = b.radius_m;
   for (TimeNs ns = 0; ns <= from_seconds(config.duration_s); ns += kNsPerMs) {
-    const sim::BodyState s = simulator.vehicle().at(to_seconds(ns));
-    t.body.push_back({.t = ns, .p_W_B = s.p_W, .q_W_B = Eigen::Quaterniond(s.R_W_B), .v_W = s.v_W, .omega_B = s.omega_B});
+    t.body.push_back(sim::to_pose_sample(ns, simulator.vehicle().at(to_seconds(ns))));
     for (const auto& ball : simulator.balls()) {
       const sim::BallState b = ball.at(to_seconds(ns));
       if (b.exists) t.objects.push_back({ns, ball.config().id, b.p_W, b.v_W});

@@ -12,6 +12,13 @@ namespace fdv::sim {
 inline constexpr double kDegToRad = 0.017453292519943295;
 
 /// R = Rz(yaw) Ry(pitch) Rx(roll), angles in degrees (roll, pitch, yaw).
+/// exp of a rotation vector (axis · angle) as a unit quaternion.
+inline Eigen::Quaterniond rotation_exp_q(const Eigen::Vector3d& w) {
+  const double angle = w.norm();
+  if (angle < 1e-15) return Eigen::Quaterniond::Identity();
+  return Eigen::Quaterniond(Eigen::AngleAxisd(angle, w / angle));
+}
+
 inline Eigen::Matrix3d rotation_from_rpy_deg(const Eigen::Vector3d& rpy_deg) {
   return (Eigen::AngleAxisd(rpy_deg.z() * kDegToRad, Eigen::Vector3d::UnitZ()) *
           Eigen::AngleAxisd(rpy_deg.y() * kDegToRad, Eigen::Vector3d::UnitY()) *

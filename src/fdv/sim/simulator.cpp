@@ -122,20 +122,6 @@ struct Simulator::Running {
 
 Simulator::~Simulator() = default;
 
-namespace {
-
-OdometrySample pose_sample(TimeNs t, const BodyState& s) {
-  OdometrySample body;
-  body.t = t;
-  body.p_W_B = s.p_W;
-  body.q_W_B = Eigen::Quaterniond(s.R_W_B).normalized();
-  body.v_W = s.v_W;
-  body.omega_B = s.omega_B;
-  return body;
-}
-
-}  // namespace
-
 SimulationSummary Simulator::run(SimulationSink& sink) {
   begin(sink);
   while (step()) {
@@ -161,8 +147,8 @@ void Simulator::emit_streams_until(TimeNs t_hi) {
   for (TimeNs t; (t = r.odo_clock.next()) <= t_hi && t <= t_end; ++r.odo_clock.k, ++summary.odometry)
     sink.on_odometry(r.odometry.sample(t, r.vehicle.at(to_seconds(t))));
   for (TimeNs t; (t = r.truth_clock.next()) <= t_hi && t <= t_end; ++r.truth_clock.k, ++summary.truth) {
-    sink.on_body_truth(pose_sample(t, r.vehicle.at(to_seconds(t))));
-    if (r.flight == Flight::kCommanded) sink.on_unflown_body_truth(pose_sample(t, r.vehicle.unflown_at(to_seconds(t))));
+    sink.on_body_truth(to_pose_sample(t, r.vehicle.at(to_seconds(t))));
+    if (r.flight == Flight::kCommanded) sink.on_unflown_body_truth(to_pose_sample(t, r.vehicle.unflown_at(to_seconds(t))));
     for (const auto& b : balls_) {
       const BallState bs = b.at(to_seconds(t));
       if (bs.exists) sink.on_object_truth({t, b.config().id, bs.p_W, bs.v_W});

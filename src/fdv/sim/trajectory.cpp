@@ -14,13 +14,19 @@ namespace {
 
 constexpr double kTwoPi = 6.283185307179586;
 
-Eigen::Matrix3d rotation_exp(const Eigen::Vector3d& w) {
-  const double angle = w.norm();
-  if (angle < 1e-15) return Eigen::Matrix3d::Identity();
-  return Eigen::AngleAxisd(angle, w / angle).toRotationMatrix();
-}
+Eigen::Matrix3d rotation_exp(const Eigen::Vector3d& w) { return rotation_exp_q(w).toRotationMatrix(); }
 
 }  // namespace
+
+OdometrySample to_pose_sample(TimeNs t, const BodyState& s) {
+  OdometrySample o;
+  o.t = t;
+  o.p_W_B = s.p_W;
+  o.q_W_B = Eigen::Quaterniond(s.R_W_B).normalized();
+  o.v_W = s.v_W;
+  o.omega_B = s.omega_B;
+  return o;
+}
 
 void VehicleTrajectory::Wave::eval(double t, double& f, double& df, double& ddf) const {
   f = offset, df = 0, ddf = 0;

@@ -15,6 +15,7 @@
 #include <Eigen/Geometry>
 #include <vector>
 
+#include "fdv/core/sensor_data.h"
 #include "fdv/sim/scenario_config.h"
 
 namespace fdv::sim {
@@ -26,6 +27,9 @@ struct BodyState {
   Eigen::Matrix3d R_W_B = Eigen::Matrix3d::Identity();
   Eigen::Vector3d omega_B = Eigen::Vector3d::Zero();  ///< body rate in B [rad/s]
 };
+
+/// The state as a pose sample (truth/body.csv's row) at time t.
+OdometrySample to_pose_sample(TimeNs t, const BodyState& s);
 
 class VehicleTrajectory {
  public:

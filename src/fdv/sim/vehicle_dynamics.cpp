@@ -12,12 +12,6 @@ namespace {
 /// The floor hold brakes a descent once stopping at the floor needs this fraction of |g|.
 constexpr double kFloorBrakeStart = 0.5;
 
-Eigen::Quaterniond rotation_exp(const Eigen::Vector3d& w) {
-  const double angle = w.norm();
-  if (angle < 1e-15) return Eigen::Quaterniond::Identity();
-  return Eigen::Quaterniond(Eigen::AngleAxisd(angle, w / angle));
-}
-
 }  // namespace
 
 FlownVehicle::FlownVehicle(const VehicleTrajectory& path, const VehicleResponseConfig& response,
@@ -110,7 +104,7 @@ void FlownVehicle::advance_to(double t_s) {
       node.w_W = axis.normalized() *
                  std::min(angle / response_.attitude_time_constant_s, response_.max_body_rate_rad_s);
     Node next;
-    next.q = (rotation_exp(node.w_W * h) * node.q).normalized();
+    next.q = (rotation_exp_q(node.w_W * h) * node.q).normalized();
     node.a = deviation_acceleration(a_c, node.q);
     node.da = deviation_acceleration(a_c, next.q) - node.a;
     // Exact for the acceleration running linearly over the step (what at() interpolates).
@@ -131,7 +125,7 @@ BodyState FlownVehicle::at(double t_s) const {
   s.p_W += node.p + tau * node.v + tau * tau * (0.5 * node.a + u * node.da / 6);
   s.v_W += node.v + tau * (node.a + 0.5 * u * node.da);
   s.a_W += node.a + u * node.da;
-  const Eigen::Matrix3d R_tilt = (rotation_exp(node.w_W * tau) * node.q).toRotationMatrix();
+  const Eigen::Matrix3d R_tilt = (rotation_exp_q(node.w_W * tau) * node.q).toRotationMatrix();
   s.R_W_B = R_tilt * s.R_W_B;
   s.omega_B += s.R_W_B.transpose() * node.w_W;
   return s;

@@ -15,16 +15,6 @@
 namespace fdv {
 namespace {
 
-OdometrySample pose_of(TimeNs t, const sim::BodyState& s) {
-  OdometrySample o;
-  o.t = t;
-  o.p_W_B = s.p_W;
-  o.q_W_B = Eigen::Quaterniond(s.R_W_B).normalized();
-  o.v_W = s.v_W;
-  o.omega_B = s.omega_B;
-  return o;
-}
-
 /// The truth of `config` without its body samples.
 DatasetTruth truth_frame(const sim::ScenarioConfig& config) {
   DatasetTruth t;
@@ -44,7 +34,7 @@ std::vector<OdometrySample> sample_body(const sim::ScenarioConfig& config, sim::
   for (std::uint64_t k = 0;; ++k) {
     const TimeNs t = std::llround(static_cast<double>(k) * 1e9 / config.truth.rate_hz);
     if (t > end) break;
-    body.push_back(pose_of(t, vehicle.at(to_seconds(t))));
+    body.push_back(sim::to_pose_sample(t, vehicle.at(to_seconds(t))));
   }
   return body;
 }
@@ -153,19 +143,9 @@ ClosedLoopFlight fly_oracle(const sim::ScenarioConfig& config, const DatasetTrut
   DodgePlanner planner(options.dodge, options.prediction.safety_radius_m);
   for (TimeNs t : window_ends) {
     if (!start || t < *start) continue;
-    const auto object = truth.object_at(ball, t);
-    if (!object) continue;
     vehicle.advance_to(to_seconds(t));
-    TrajectoryEstimate exact;
-    exact.usable = exact.converged = true;
-    exact.method = EstimateMethod::kFusion;
-    exact.trajectory = BallisticTrajectory{t, object->p_W, object->v_W, truth.gravity_W};
-    exact.covariance = Eigen::Matrix<double, 6, 6>::Zero();
-    exact.t_first = exact.t_last = t;
-    const VehicleState state{pose_of(t, vehicle.at(to_seconds(t))), Eigen::Matrix<double, 6, 6>::Zero()};
-    const RiskAssessment r = assess_collision_risk(exact, state, options.prediction);
-    if (!r.risk) continue;
-    if (auto d = planner.update(ball, *r.risk, state)) {
+    const OdometrySample body = sim::to_pose_sample(t, vehicle.at(to_seconds(t)));
+    if (auto d = decide_on_truth(planner, truth, ball, t, body, options.prediction)) {
       out.decisions.push_back(*d);
       for (const SetpointChange& c : setpoint_changes(*d)) vehicle.command(c.t, c.acceleration_W);
     }
@@ -175,6 +155,22 @@ ClosedLoopFlight fly_oracle(const sim::ScenarioConfig& config, const DatasetTrut
   out.truth.objects = truth.objects;
   out.flight = vehicle.counters();
   return out;
+}
+
+std::optional<DodgeDecision> decide_on_truth(DodgePlanner& planner, const DatasetTruth& truth, int ball, TimeNs t,
+                                             const OdometrySample& body, const PredictionOptions& prediction) {
+  const auto object = truth.object_at(ball, t);
+  if (!object) return std::nullopt;
+  TrajectoryEstimate exact;
+  exact.usable = exact.converged = true;
+  exact.method = EstimateMethod::kFusion;
+  exact.trajectory = BallisticTrajectory{t, object->p_W, object->v_W, truth.gravity_W};
+  exact.covariance = Eigen::Matrix<double, 6, 6>::Zero();
+  exact.t_first = exact.t_last = t;
+  const VehicleState vehicle{body, Eigen::Matrix<double, 6, 6>::Zero()};
+  const RiskAssessment r = assess_collision_risk(exact, vehicle, prediction);
+  if (!r.risk) return std::nullopt;
+  return planner.update(ball, *r.risk, vehicle);
 }
 
 DatasetTruth fly_decisions(const sim::ScenarioConfig& config, const DatasetTruth& truth,

@@ -48,6 +48,12 @@ ClosedLoopFlight fly_oracle(const sim::ScenarioConfig& config, const DatasetTrut
                             std::span<const TimeNs> window_ends, std::optional<TimeNs> start,
                             const PerceptionOptions& options);
 
+/// An oracle's decision at window end `t`: `planner` given ball `ball`'s true state at t (from
+/// `truth`) and the vehicle state `body`, both exact (zero covariance); nothing when the ball is
+/// unknown then, there is no risk, or the planner decides nothing.
+std::optional<DodgeDecision> decide_on_truth(DodgePlanner& planner, const DatasetTruth& truth, int ball, TimeNs t,
+                                             const OdometrySample& body, const PredictionOptions& prediction);
+
 /// `decisions` (made open loop) flown through the vehicle model, nothing rendered again: the
 /// truth with the flown body, to separate the dynamics' share of a closed-loop result.
 DatasetTruth fly_decisions(const sim::ScenarioConfig& config, const DatasetTruth& truth,

@@ -34,6 +34,7 @@ std::optional<double> seconds_of(std::optional<TimeNs> t) { return t ? std::opti
 /// track that follows the ball.
 struct MethodRun {
   std::vector<DodgeDecision> decisions;
+  std::vector<WindowDetections> windows;
   std::vector<TimeNs> window_ends;
   std::optional<TimeNs> first_ball_detection;
   std::optional<TimeNs> first_usable_estimate;
@@ -44,7 +45,7 @@ struct MethodRun {
 MethodRun run_method(const DatasetTruth& truth, int ball, const PerceptionOptions& options,
                      const std::string& results_dir) {
   MethodRun run;
-  std::vector<WindowDetections> windows;
+  std::vector<WindowDetections>& windows = run.windows;
   std::map<int, TimeNs> first_usable_by_track;
   PerceptionCallbacks also;
   also.on_window = [&](const WindowResult& w) {
@@ -77,21 +78,9 @@ std::vector<DodgeDecision> oracle_decisions(const DatasetTruth& truth, int ball,
   std::vector<DodgeDecision> decisions;
   if (!start) return decisions;
   DodgePlanner planner(options.dodge, options.prediction.safety_radius_m);
-  for (TimeNs t : run.window_ends) {
-    if (t < *start) continue;
-    const auto object = truth.object_at(ball, t);
-    if (!object) continue;
-    TrajectoryEstimate truth_estimate;
-    truth_estimate.usable = truth_estimate.converged = true;
-    truth_estimate.method = EstimateMethod::kFusion;
-    truth_estimate.trajectory = BallisticTrajectory{t, object->p_W, object->v_W, truth.gravity_W};
-    truth_estimate.covariance = Eigen::Matrix<double, 6, 6>::Zero();
-    truth_estimate.t_first = truth_estimate.t_last = t;
-    const VehicleState vehicle{truth.body_at(t), Eigen::Matrix<double, 6, 6>::Zero()};
-    const RiskAssessment r = assess_collision_risk(truth_estimate, vehicle, options.prediction);
-    if (!r.risk) continue;
-    if (auto d = planner.update(ball, *r.risk, vehicle)) decisions.push_back(*d);
-  }
+  for (TimeNs t : run.window_ends)
+    if (t >= *start)
+      if (auto d = decide_on_truth(planner, truth, ball, t, truth.body_at(t), options.prediction)) decisions.push_back(*d);
   return decisions;
 }
 
@@ -123,6 +112,12 @@ DodgeOutcome scored(const DodgeThrow& row, const std::string& method, DodgeOutco
   return o;
 }
 
+void add_maneuver_perception(DodgeOutcome& o, const ManeuverPerception& p) {
+  o.eligible_after_decision = p.eligible;
+  o.found_after_decision = p.found;
+  o.track_survived = p.track_survived;
+}
+
 /// Every method flown through the closed loop, and every open-loop decision list through the
 /// vehicle model alone (dodge_eval.h). `dir`: where flights are kept (empty: nowhere).
 void fly_every_method(DodgeThrow& row, const sim::ScenarioConfig& config, const DatasetTruth& truth,
@@ -142,12 +137,7 @@ void fly_every_method(DodgeThrow& row, const sim::ScenarioConfig& config, const 
     const ClosedLoopFlight f =
         fly_with_perception(config, perception, keep.empty() ? "" : keep + "/dataset", keep.empty() ? "" : keep + "/run");
     DodgeOutcome o = scored(row, method, dodge_outcome(f.truth, ball, f.decisions, radius, false), contact);
-    if (o.decision_t) {
-      const ManeuverPerception p = maneuver_perception(f.truth, ball, f.windows, *o.decision_t);
-      o.eligible_after_decision = p.eligible;
-      o.found_after_decision = p.found;
-      o.track_survived = p.track_survived;
-    }
+    if (o.decision_t) add_maneuver_perception(o, maneuver_perception(f.truth, ball, f.windows, *o.decision_t));
     row.outcomes[method] = o;
     if (method == "ours") {
       row.window_total_ms = f.window_total_ms;
@@ -244,9 +234,11 @@ DodgeThrow score_dodge_dataset(const std::string& dataset, const DodgeEvalOption
   const PerceptionOptions& ours = variants.at("ours");
   std::map<std::string, std::vector<DodgeDecision>>& decisions = row.decisions;
   std::optional<TimeNs> first_detection;
+  std::map<std::string, std::vector<WindowDetections>> windows;
   for (const auto& [method, perception] : variants) {
     const MethodRun run = run_method(truth, ball, perception, method == "ours" ? run_dir : "");
     decisions[method] = run.decisions;
+    windows[method] = run.windows;
     if (method == "ours") {
       row.window_ends = run.window_ends;
       first_detection = run.first_ball_detection;
@@ -258,8 +250,12 @@ DodgeThrow score_dodge_dataset(const std::string& dataset, const DodgeEvalOption
       row.first_usable_estimate_t_s = seconds_of(run.first_usable_estimate);
     }
   }
-  for (const std::string& method : kDodgeMethods)
-    row.outcomes[method] = scored(row, method, dodge_outcome(truth, ball, decisions[method], radius), contact);
+  for (const std::string& method : kDodgeMethods) {
+    DodgeOutcome o = scored(row, method, dodge_outcome(truth, ball, decisions[method], radius), contact);
+    if (const auto it = windows.find(method); it != windows.end() && o.decision_t)
+      add_maneuver_perception(o, maneuver_perception(truth, ball, it->second, *o.decision_t));
+    row.outcomes[method] = o;
+  }
   return row;
 }
 
@@ -330,8 +326,8 @@ nlohmann::json totals_json(const DodgeTotals& t) {
           {"replans", t.replans}};
 }
 
-/// The closed loop's perception figures (dodge_eval.h), beside totals_json's.
-void add_closed_loop_totals(nlohmann::json& j, const DodgeTotals& t) {
+/// What the manoeuvre did to perception (dodge_eval.h), beside totals_json's.
+void add_perception_totals(nlohmann::json& j, const DodgeTotals& t) {
   j["eligible_windows_after_decision"] = t.eligible_after_decision;
   j["found_windows_after_decision"] = t.found_after_decision;
   j["recall_after_decision"] = t.eligible_after_decision > 0
@@ -365,11 +361,11 @@ nlohmann::json outcome_json(const DodgeOutcome& o) {
 }
 
 /// The totals of one outcome set: ours' (totals_json), ours against the oracles, the baselines'.
-nlohmann::json outcome_set_json(const DodgeEval& e, OutcomeSet set, bool closed_loop) {
+nlohmann::json outcome_set_json(const DodgeEval& e, OutcomeSet set) {
   auto totals = [&](const std::string& method) {
     const DodgeTotals t = dodge_totals(e.throws, method, set);
     nlohmann::json j = totals_json(t);
-    if (closed_loop) add_closed_loop_totals(j, t);
+    add_perception_totals(j, t);
     return j;
   };
   nlohmann::json j = totals("ours");
@@ -414,11 +410,11 @@ nlohmann::json outcome_set_json(const DodgeEval& e, OutcomeSet set, bool closed_
 }  // namespace
 
 nlohmann::json to_json(const DodgeEval& e, const DodgeEvalOptions& options) {
-  nlohmann::json j = outcome_set_json(e, &DodgeThrow::outcomes, options.closed_loop);
+  nlohmann::json j = outcome_set_json(e, &DodgeThrow::outcomes);
   if (options.closed_loop) {
     j["closed_loop"] = true;
-    j["open_loop"] = outcome_set_json(e, &DodgeThrow::open_loop_outcomes, false);
-    j["dynamics_only"] = outcome_set_json(e, &DodgeThrow::dynamics_outcomes, false);
+    j["open_loop"] = outcome_set_json(e, &DodgeThrow::open_loop_outcomes);
+    j["dynamics_only"] = outcome_set_json(e, &DodgeThrow::dynamics_outcomes);
     std::vector<double> window_ms;
     for (const DodgeThrow& row : e.throws) window_ms.insert(window_ms.end(), row.window_total_ms.begin(), row.window_total_ms.end());
     j["window_total_ms"] = summarize(window_ms).to_json();

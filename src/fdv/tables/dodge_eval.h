@@ -77,8 +77,9 @@ struct DodgeOutcome {
   bool escaped = false;             ///< threat and miss_with_maneuver_m >= the safety radius
   std::string reason;               ///< no decision: why (e.g. "never detected")
   int replans = 0;                  ///< kReplan decisions
-  /// Closed loop, a perception method that decided: the ball's eligible windows from the first
-  /// decision to the closest approach, those with a detection on it, and whether one track held it.
+  /// A perception method that decided: the ball's eligible windows from the first decision to the
+  /// closest approach, those with a detection on it, and whether one track held it (open loop
+  /// too, as the reference for what the manoeuvre changes in the closed loop).
   std::optional<std::size_t> eligible_after_decision, found_after_decision;
   std::optional<bool> track_survived;
 };
@@ -114,8 +115,8 @@ struct DodgeTotals {
   std::vector<double> warning_times_s;  ///< threats with a decision
   std::vector<double> miss_errors_m;    ///< |predicted − true miss| at each first decision
   int replans = 0;
-  /// Closed loop: the eligible windows after the first decision (pooled over the decided
-  /// threats) and those with the ball found; the decided throws whose track was checked, and lost.
+  /// The eligible windows after the first decision (pooled over the decided throws) and those with
+  /// the ball found; the decided throws whose track was checked, and lost.
   std::size_t eligible_after_decision = 0, found_after_decision = 0;
   int tracks_checked = 0, tracks_lost = 0;
 };
