@@ -188,6 +188,20 @@ TEST(SimFlight, ACommandedRunWithoutCommandsRendersExactlyAsThePathRun) {
   EXPECT_TRUE(path_run.body_unflown.empty());  // only a commanded run emits it
 }
 
+TEST(SimFlight, CallsOutOfOrderAreErrors) {
+  Simulator sim(test::still_scene(32, 24, 0.02));
+  MemorySink sink;
+  EXPECT_THROW(sim.step(), ConfigError);
+  EXPECT_THROW(sim.finish(), ConfigError);
+  sim.begin(sink);  // a path run takes no command
+  EXPECT_THROW(sim.command(0, {0, 1, 0}), ConfigError);
+  EXPECT_THROW(sim.begin(sink), ConfigError);
+  while (sim.step()) {
+  }
+  EXPECT_FALSE(sim.step());
+  EXPECT_EQ(sim.finish().truth, 21u);  // 0, 1, ..., 20 ms
+}
+
 TEST(SimFlight, TheIMUReadsTheSteadyTiltOfALateralCommand) {
   ScenarioConfig c = test::still_scene(32, 24, 1.2);
   c.imu.gyro_noise_density = c.imu.accel_noise_density = 0;

@@ -255,13 +255,18 @@ void Perception::process_ready(bool flush) {
   segment_pending_depth(processed_until_);
 }
 
-Eigen::Vector2d Perception::turned_pixel(const Eigen::Vector2d& px, TimeNs from, TimeNs to) const {
-  if (!options_.derotate_tracking || from == to || imu_.empty()) return px;
+std::optional<Eigen::Matrix3d> Perception::camera_turn(TimeNs from, TimeNs to) const {
+  if (!options_.derotate_tracking || from == to || imu_.empty()) return std::nullopt;
   const auto R_I = imu_turn(imu_, from, to, options_.compensation.max_imu_gap_ns);
-  if (!R_I) return px;
+  if (!R_I) return std::nullopt;
   const Eigen::Matrix3d R_E_I = calibration_.R_E_I();
+  return R_E_I * *R_I * R_E_I.transpose();
+}
+
+Eigen::Vector2d Perception::turned_pixel(const Eigen::Vector2d& px, const std::optional<Eigen::Matrix3d>& R_E) const {
+  if (!R_E) return px;
   const Eigen::Vector2d xn = calibration_.event_camera.pixel_to_normalized(px);
-  const Eigen::Vector3d ray = R_E_I * *R_I * R_E_I.transpose() * Eigen::Vector3d(xn.x(), xn.y(), 1.0);
+  const Eigen::Vector3d ray = *R_E * Eigen::Vector3d(xn.x(), xn.y(), 1.0);
   if (!ray.allFinite() || ray.z() <= 1e-6) return px;  // turned behind the camera: nowhere better
   return calibration_.event_camera.project(ray);
 }
@@ -365,14 +370,13 @@ DetectionResult Perception::detect(const CompensatedWindow& cw) {
 // Association and Kalman filter on the image plane (paper §IV-C.1), with the 3D estimates' say.
 TrackerStep Perception::associate(TimeNs t, std::span<const Detection2D> detections) {
   // The tracker's coordinates: the camera at the window's end (derotate_tracking).
-  if (tracker_frame_t_ && *tracker_frame_t_ != t) {
-    const TimeNs from = *tracker_frame_t_;
-    tracker_.change_coordinates([&](const Eigen::Vector2d& px) { return turned_pixel(px, from, t); });
-  }
+  if (tracker_frame_t_ && *tracker_frame_t_ != t)
+    if (const auto R_E = camera_turn(*tracker_frame_t_, t))
+      tracker_.change_coordinates([&](const Eigen::Vector2d& px) { return turned_pixel(px, R_E); });
   tracker_frame_t_ = t;
   tracker_inputs_.clear();
   for (const Detection2D& d : detections) {
-    const Eigen::Vector2d at_end = turned_pixel(d.center_raw, d.t, t);
+    const Eigen::Vector2d at_end = turned_pixel(d.center_raw, camera_turn(d.t, t));
     tracker_inputs_.push_back({d.t, at_end.allFinite() ? at_end : d.center_raw, d.center_normalized,
                                Eigen::Vector2d(d.box_raw.width(), d.box_raw.height()), d.events});
   }

@@ -373,12 +373,15 @@ class Perception {
   void decide_dodge(int track_id, const TrajectoryEstimate& estimate, TimeNs t);
   std::optional<Eigen::Isometry3d> camera_pose(TimeNs t) const;
   std::optional<OdometrySample> vehicle_state(TimeNs t) const;
-  /// Where a direction seen at raw pixel `px` at time `from` is seen at `to`, the camera having
-  /// turned as the gyro says (derotate_tracking); `px` itself without the option or IMU samples.
-  Eigen::Vector2d turned_pixel(const Eigen::Vector2d& px, TimeNs from, TimeNs to) const;
+  /// How the event camera turned from `from` to `to` as the gyro says: d_E(to) = R d_E(from) for
+  /// a fixed direction d; nothing without derotate_tracking or IMU samples (no turn is applied).
+  std::optional<Eigen::Matrix3d> camera_turn(TimeNs from, TimeNs to) const;
+  /// Where a direction seen at raw pixel `px` is seen after the camera's turn `R_E`; `px` itself
+  /// without a turn, or when the turn takes it behind the camera.
+  Eigen::Vector2d turned_pixel(const Eigen::Vector2d& px, const std::optional<Eigen::Matrix3d>& R_E) const;
   /// A pixel in the tracker's coordinates, seen by the camera at time t.
   Eigen::Vector2d in_camera_at(const Eigen::Vector2d& tracker_px, TimeNs t) const {
-    return tracker_frame_t_ ? turned_pixel(tracker_px, *tracker_frame_t_, t) : tracker_px;
+    return tracker_frame_t_ ? turned_pixel(tracker_px, camera_turn(*tracker_frame_t_, t)) : tracker_px;
   }
   TrackEstimators& estimators_for(int track_id);
   /// χ²₂ of detection `d` against the trajectory of `est` at d's time (normalised image plane,
