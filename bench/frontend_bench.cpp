@@ -239,6 +239,39 @@ BENCHMARK_CAPTURE(BM_TimeImages, optimised, false, 1)->Unit(benchmark::kMillisec
 BENCHMARK_CAPTURE(BM_TimeImages, optimised/threads:2, false, 2)->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_TimeImages, reference, true, 1)->Unit(benchmark::kMillisecond);
 
+// A sparse window: `events` events in a 32x32 patch of a width x height grid, alternating with
+// a window at another place (a far ball, a quiet scene, a gap's windows). Its cost should follow
+// the events, not the frame.
+void BM_TimeImagesSparse(benchmark::State& state, int width, int height) {
+  const auto events = static_cast<std::size_t>(state.range(0));
+  std::vector<std::int32_t> px[2];
+  std::vector<float> t[2];
+  std::uint64_t lcg = 1;
+  auto next = [&lcg](int n) {
+    lcg = lcg * 6364136223846793005ULL + 1442695040888963407ULL;
+    return static_cast<int>((lcg >> 33) % static_cast<std::uint64_t>(n));
+  };
+  for (int k = 0; k < 2; ++k) {
+    const int u0 = k == 0 ? width / 4 : 3 * width / 4, v0 = k == 0 ? height / 4 : 3 * height / 4;
+    for (std::size_t i = 0; i < events; ++i) {
+      px[k].push_back((v0 + next(32)) * width + u0 + next(32));
+      t[k].push_back(static_cast<float>(to_seconds(kWindow)) * static_cast<float>(i) / static_cast<float>(events));
+    }
+  }
+  TimeImages ti;
+  prepare_time_images(ti, width, height);
+  std::size_t k = 0;
+  for (auto _ : state) {
+    const CompensatedEventsView v{0, kWindow, width, height, px[k], t[k]};
+    build_time_images(v, ti);
+    benchmark::DoNotOptimize(ti.mean_normalized);
+    k ^= 1;
+  }
+  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(events));
+}
+BENCHMARK_CAPTURE(BM_TimeImagesSparse, 640x480, 640, 480)->Arg(100)->Arg(2000)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_TimeImagesSparse, 1280x720, 1280, 720)->Arg(100)->Arg(2000)->Unit(benchmark::kMicrosecond);
+
 // Per-window time is measured as the thread's CPU time: this machine is shared (other builds
 // run at the same time), and wall time then mostly measures the scheduler.
 double thread_cpu_ms() {

@@ -111,6 +111,47 @@ TEST(TimeImagesReference, SeveralThreadsReusedOverConsecutiveWindowsEqualTheRefe
   }
 }
 
+// n events in a size x size patch with its corner at (u0, v0).
+Window patch_window(int w, int h, int u0, int v0, int size, int n, unsigned seed) {
+  Window win{w, h, {}, {}};
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<int> d(0, size - 1);
+  std::uniform_real_distribution<float> t(0.0f, 0.025f);
+  for (int i = 0; i < n; ++i) {
+    win.pixel.push_back((v0 + d(rng)) * w + u0 + d(rng));
+    win.t_s.push_back(t(rng));
+  }
+  return win;
+}
+
+TEST(TimeImagesReference, SparseWindowsVisitOnlyTheGroupsTheyAndThePreviousOneTouch) {
+  // A far ball's windows: a patch that moves across the frame. The previous window's patch must
+  // be blanked, every other group of 16 blocks (256 pixels) skipped. Each of a 20x20 patch's rows
+  // lies in at most 2 groups: at most 40 groups, 640 blocks of the frame's 57,600.
+  constexpr int kW = 1280, kH = 720;
+  constexpr std::size_t kGroupBlocks = 16, kMaxGroupsPerPatch = 40, kAllGroups = kW * kH / 256;
+  for (int threads : {1, 2}) {
+    TimeImages fast;
+    build_time_images(random_window(kW, kH, 120'000, 1).view(), fast);  // every group in use
+    const Window windows[] = {patch_window(kW, kH, 100, 50, 20, 300, 2), patch_window(kW, kH, 900, 600, 20, 300, 3),
+                              patch_window(kW, kH, 910, 605, 20, 300, 4), Window{kW, kH, {}, {}},
+                              patch_window(kW, kH, 10, 700, 20, 50, 5)};
+    std::size_t previous_groups = kAllGroups;
+    for (const Window& win : windows) {
+      SCOPED_TRACE(testing::Message() << threads << " threads, " << win.pixel.size() << " events");
+      CompensatedEventsView v = win.view();
+      v.threads = threads;
+      TimeImages ref;
+      build_time_images(v, fast);
+      reference_time_images(win.view(), ref);
+      expect_identical(fast, ref);
+      const std::size_t groups = win.pixel.empty() ? 0 : kMaxGroupsPerPatch;
+      EXPECT_LE(fast.blocks_visited, (groups + previous_groups) * kGroupBlocks);
+      previous_groups = groups;
+    }
+  }
+}
+
 TEST(TimeImagesReference, ReferenceMatchesHandComputedValues) {
   // The reference itself, on the hand-computed window of time_images_test.cpp.
   Window win{3, 2, {0, 4, 0, 2, 4, 4, 6}, {0.001f, 0.006f, 0.003f, 0.010f, 0.006f, 0.009f, 0.020f}};

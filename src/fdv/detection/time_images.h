@@ -18,7 +18,8 @@
 /// optimised builder is tested against.
 ///
 /// Pitfall: the images are reused, and each call rewrites only the 16-pixel blocks that held events
-/// in this window or the previous one (the rest are already 0): treat them as read-only (clone()
+/// in this window or the previous one (the rest are already 0), found through per-group marks: the
+/// work is proportional to the events, not to the frame. Treat the images as read-only (clone()
 /// before modifying). Assigning a different cv::Mat to a member is detected (full rebuild).
 #include <Eigen/Core>
 #include <array>
@@ -37,7 +38,7 @@ namespace fdv {
 struct CompensatedEventsView {
   TimeNs t_start = 0;
   TimeNs t_end = 0;
-  int width = 0;   ///< undistorted grid size
+  int width = 0;  ///< undistorted grid size
   int height = 0;
   std::span<const std::int32_t> pixel;  ///< row-major index v·width + u of each event, in range
   std::span<const float> t_s;           ///< event time − t_start [s]
@@ -66,17 +67,24 @@ struct TimeImages {
   int pixels_with_events = 0;
   float t_min_s = 0, t_max_s = 0;  ///< min / max of T over pixels with events
   double mean_normalized = 0;      ///< mean of N over pixels with events (threshold θ, §IV-B.1)
+  /// 16-pixel blocks that pass 1 looked at: those of the groups (16 blocks, 256 pixels) that held
+  /// events in this window or the previous one. The work bound that a sparse window's cost follows.
+  std::size_t blocks_visited = 0;
 
   // Scratch, kept between windows (no allocation once warmed up).
   cv::Mat accumulator;  ///< interleaved (count, Σt) per pixel, CV_32FC2; all 0 between calls
   /// Per 16-pixel block: bit 0 = events in this window, bit 1 = events in the previous window.
   std::vector<std::uint8_t> blocks;
+  /// Per group of 16 blocks: 1 where `blocks` may be nonzero (events now, or in the previous
+  /// window). The passes skip the other groups, so a sparse window costs its events, not the frame.
+  std::vector<std::uint8_t> groups_now, groups_before;
   std::vector<double> chunk_sums;  ///< Σ T per fixed chunk of blocks (summation order fixed)
   struct PixelTime {
     std::int32_t pixel;
     float t_s;
   };
-  std::vector<PixelTime> sorted;  ///< with several threads: the events grouped by the thread that adds them
+  std::vector<PixelTime>
+      sorted;  ///< with several threads: the events grouped by the thread that adds them
   std::array<const void*, 5> buffer_keys{};  ///< data pointers of the images when last built
 };
 
