@@ -372,6 +372,21 @@ TEST(Warp, CountsEveryDroppedEventByReason) {
   EXPECT_EQ(r.events_kept, 2u);
 }
 
+TEST(Warp, APinholeCamerasMapIsKInverseAndTheIdentityGrid) {
+  // Without distortion the map is built without the lens solver: its rays must be what the camera
+  // model gives, and each raw pixel its own grid pixel (the principal point off-centre, fx != fy).
+  const PinholeCamera pinhole{346, 260, 255.5, 250.25, 170.3, 131.7, {}};
+  const UndistortionMap map(pinhole);
+  EXPECT_EQ(map.pixels_without_inverse(), 0);
+  for (int y = 0; y < pinhole.height; ++y)
+    for (int x = 0; x < pinhole.width; ++x) {
+      const Eigen::Vector2d xn = pinhole.pixel_to_normalized({x, y});
+      ASSERT_EQ(map.ray(x, y).x, static_cast<float>(xn.x())) << x << ", " << y;
+      ASSERT_EQ(map.ray(x, y).y, static_cast<float>(xn.y())) << x << ", " << y;
+      ASSERT_EQ(map.grid_index(x, y), y * pinhole.width + x) << x << ", " << y;
+    }
+}
+
 TEST(Warp, EmptyWindowIsFine) {
   Calibration calib;
   calib.event_camera = test_camera();

@@ -11,11 +11,15 @@ UndistortionMap::UndistortionMap(const PinholeCamera& camera) : camera_(camera) 
   const std::size_t n = static_cast<std::size_t>(camera.width) * camera.height;
   rays_.resize(n);
   grid_index_.resize(n);
+  // Without distortion the lens solver returns K⁻¹·px (PinholeCamera::undistort): the same
+  // arithmetic without its per-pixel call, which was most of a new Perception's cost.
+  const bool pinhole = camera.distortion.is_zero();
   for (int y = 0; y < camera.height; ++y)
     for (int x = 0; x < camera.width; ++x) {
       const std::size_t i = static_cast<std::size_t>(y) * camera.width + x;
-      const Eigen::Vector2d xn = camera.pixel_to_normalized({x, y});
-      if (!xn.allFinite()) {
+      Eigen::Vector2d xn((x - camera.cx) / camera.fx, (y - camera.cy) / camera.fy);
+      if (!pinhole) xn = camera.undistort(xn);
+      if (!pinhole && !xn.allFinite()) {
         const float nan = std::nanf("");
         rays_[i] = {nan, nan};
         grid_index_[i] = kNoInverse;
