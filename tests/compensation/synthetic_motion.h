@@ -27,11 +27,12 @@ struct SyntheticWindow {
 };
 
 /// Points on a grid of raw pixels at t0 (spacing `spacing_px`, margin from the border), at depths
-/// in [z_min, z_max]; events every `dt_ns` for each point over [0, duration).
-inline SyntheticWindow make_window(const PinholeCamera& cam, const Eigen::Vector3d& omega_E,
-                                   const Eigen::Vector3d& v_E, TimeNs t0, TimeNs duration, TimeNs dt_ns,
-                                   int spacing_px = 48, int margin_px = 60, double z_min = 3.0,
-                                   double z_max = 6.0, unsigned seed = 7) {
+/// in [z_min, z_max]; events every `dt_ns` for each point over [0, duration). The camera's rotation
+/// R(t) relative to E0 is `rotation(t − t0 [s])`.
+template <class Rotation>
+SyntheticWindow make_window_rotating(const PinholeCamera& cam, const Rotation& rotation, const Eigen::Vector3d& v_E,
+                                     TimeNs t0, TimeNs duration, TimeNs dt_ns, int spacing_px = 48,
+                                     int margin_px = 60, double z_min = 3.0, double z_max = 6.0, unsigned seed = 7) {
   SyntheticWindow w;
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> depth(z_min, z_max), jitter(-0.45, 0.45);
@@ -46,7 +47,7 @@ inline SyntheticWindow make_window(const PinholeCamera& cam, const Eigen::Vector
   w.depth.depth_m.assign(static_cast<std::size_t>(cam.width) * cam.height, 0.0f);
   for (TimeNs t = 0; t < duration; t += dt_ns) {
     const double ts = to_seconds(t);
-    const Eigen::Matrix3d R = rotation_at(omega_E, ts);
+    const Eigen::Matrix3d R = rotation(ts);
     for (std::size_t i = 0; i < w.points.size(); ++i) {
       const Eigen::Vector3d X = R.transpose() * (w.points[i] - v_E * ts);
       if (X.z() <= 0.1) continue;
@@ -60,6 +61,16 @@ inline SyntheticWindow make_window(const PinholeCamera& cam, const Eigen::Vector
     }
   }
   return w;
+}
+
+/// make_window_rotating with the constant rate ω_E: R(t) = exp([ω]× t).
+inline SyntheticWindow make_window(const PinholeCamera& cam, const Eigen::Vector3d& omega_E,
+                                   const Eigen::Vector3d& v_E, TimeNs t0, TimeNs duration, TimeNs dt_ns,
+                                   int spacing_px = 48, int margin_px = 60, double z_min = 3.0,
+                                   double z_max = 6.0, unsigned seed = 7) {
+  return make_window_rotating(
+      cam, [&](double t_s) { return rotation_at(omega_E, t_s); }, v_E, t0, duration, dt_ns, spacing_px, margin_px,
+      z_min, z_max, seed);
 }
 
 /// Constant-rate IMU samples (IMU frame) every `period_ns` over [from, to].

@@ -270,6 +270,74 @@ TEST(Warp, RotationCompensatesPureRotationAtTheDefaultRefresh) {
             2.0);
 }
 
+TEST(Warp, IntegratedGyroFollowsARateThatChangesWithinTheWindow) {
+  // A dodge's tilt: the rate about a fixed axis ramps from 0 to 6 rad/s within the window,
+  // ω(t) = α·t, so the camera has turned by θ(t) = α·t²/2. The paper's mean rate ω̄ = α·T/2 turns
+  // by ω̄·t instead, off by α·t·(T − t)/2: α·T²/12 = 12.5 mrad (about 5 px here) on average over the
+  // window. The integrated gyro is exact at each slot's middle.
+  const Calibration calib = test_rig();
+  const Eigen::Vector3d axis_E = Eigen::Vector3d(0.4, -1.0, 0.3).normalized();
+  const double alpha = 240.0;  // rad/s²
+  const TimeNs t0 = 2 * kNsPerS, dt = 25 * kNsPerMs;
+  const auto turned = [&](double t_s) {
+    return Eigen::AngleAxisd(0.5 * alpha * t_s * t_s, axis_E).toRotationMatrix().eval();
+  };
+  const test::SyntheticWindow w = test::make_window_rotating(calib.event_camera, turned, Eigen::Vector3d::Zero(), t0, dt,
+                                                             50 * kNsPerUs);
+  // The gyro (IMU frame) every millisecond, from before the window to after it.
+  const Eigen::Vector3d axis_I = calib.R_B_I.transpose() * (calib.T_B_E.linear() * axis_E);
+  std::vector<ImuSample> imu;
+  for (TimeNs t = t0 - 5 * kNsPerMs; t <= t0 + 30 * kNsPerMs; t += kNsPerMs)
+    imu.push_back({t, axis_I * alpha * std::max(0.0, to_seconds(t - t0)), {0, 0, 9.81}});
+  for (const bool integrate : {true, false}) {
+    CompensationOptions opt;
+    opt.method = CompensationMethod::kRotation;
+    opt.rotation_refresh_ns = 10 * kNsPerUs;
+    opt.integrate_gyro = integrate;
+    auto comp = make_compensator(calib, opt);
+    const Errors e = warp_errors(w, *comp, {{}, t0, t0 + dt, imu, std::nullopt, nullptr}, calib.event_camera);
+    if (integrate) {
+      EXPECT_LT(e.max_event_px, kEventTolPx);
+      EXPECT_LT(e.median_point_error(), kMedianPointTolPx);
+    } else {
+      EXPECT_GT(e.median_point_error(), 2.0) << "the mean rate should miss a ramping rate";
+    }
+  }
+}
+
+TEST(Warp, ObservedPositionWithTheIntegratedGyroUndoesTheWarp) {
+  // observed_position must invert the warp: the rotation interpolated between slot middles, which
+  // the 1 µs refresh makes the warp's own to well under a hundredth of a pixel.
+  const Calibration calib = test_rig();
+  const PinholeCamera& cam = calib.event_camera;
+  const TimeNs t0 = kNsPerS, dt = 25 * kNsPerMs;
+  const Eigen::Vector3d axis_I(0.2, 0.9, -0.4);
+  std::vector<ImuSample> imu;
+  for (TimeNs t = t0 - 5 * kNsPerMs; t <= t0 + 30 * kNsPerMs; t += kNsPerMs)
+    imu.push_back({t, axis_I * 200.0 * to_seconds(t - t0), {0, 0, 9.81}});
+  std::mt19937 rng(3);
+  std::uniform_int_distribution<int> ux(100, 540), uy(80, 400);
+  std::vector<Event> ev;
+  for (TimeNs t = 0; t < dt; t += 20 * kNsPerUs)
+    ev.push_back({t0 + t, static_cast<std::uint16_t>(ux(rng)), static_cast<std::uint16_t>(uy(rng)), true});
+  CompensationOptions opt;
+  opt.method = CompensationMethod::kRotation;
+  opt.integrate_gyro = true;
+  opt.rotation_refresh_ns = 1 * kNsPerUs;
+  auto comp = make_compensator(calib, opt);
+  const CompensatedWindow& out = comp->compensate({ev, t0, t0 + dt, imu, std::nullopt, nullptr});
+  ASSERT_EQ(out.size(), ev.size()) << out.report.brief();
+  double worst = 0, moved = 0;
+  for (std::size_t k = 0; k < ev.size(); ++k) {
+    const Eigen::Vector2d warped(out.x()[k], out.y()[k]);
+    const Eigen::Vector2d seen = cam.undistort_pixel({ev[k].x, ev[k].y});
+    worst = std::max(worst, (comp->observed_position(warped, out.t_s()[k]) - seen).norm());
+    moved = std::max(moved, (warped - seen).norm());
+  }
+  EXPECT_LT(worst, 0.01);
+  EXPECT_GT(moved, 10.0);
+}
+
 TEST(Warp, RotationAloneLeavesTheTranslationalFlow) {
   const Calibration calib = test_rig();
   const Eigen::Vector3d omega_E(0.3, 0.2, -0.4), v_E(2.0, 0.0, 3.0);

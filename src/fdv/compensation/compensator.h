@@ -85,6 +85,10 @@ struct ContrastMaxOptions {
 struct CompensationOptions {
   CompensationMethod method = CompensationMethod::kRotationTranslation;
   TimeNs rotation_refresh_ns = 1 * kNsPerMs;    ///< R_e (and slot) refresh period, paper §IV-A "every millisecond"
+  /// Each slot's rotation from the gyro integrated from the window's start (imu_turn), instead of
+  /// the paper's mean rate ω̄·t (§IV-A). The mean rate is exact only for a rate constant over the
+  /// window; a dodge's tilt changes it by several rad/s within one.
+  bool integrate_gyro = false;
   /// IMU spacing above which a window is flagged as having an IMU gap; with no usable sample
   /// within this distance of the window the IMU counts as missing (fallback to "none").
   /// 20 ms: a healthy 200-1000 Hz IMU never leaves such a gap.
@@ -122,6 +126,8 @@ template <class V>
 void describe(V& v, CompensationOptions& o) {
   v("method", o.method, "-", "strategy: none, rotation, rotation_translation (the paper), contrast_max");
   v.ms("rotation_refresh_ms", o.rotation_refresh_ns, "rotation (and slot) refresh period, paper §IV-A");
+  v("integrate_gyro", o.integrate_gyro, "-",
+    "each slot's rotation from the gyro integrated since the window's start, not the mean rate (paper §IV-A)");
   v.ms("max_imu_gap_ms", o.max_imu_gap_ns, "IMU spacing flagged as a gap; no sample this close: IMU missing");
   v.ms("max_depth_age_ms", o.max_depth_age_ns, "registered depth farther than this from the window's middle is not used");
   v("missing_depth", o.missing_depth, "-", "an event pixel without depth: median_depth or rotation_only");

@@ -8,6 +8,7 @@
 #include <limits>
 #include <opencv2/imgproc.hpp>
 
+#include "fdv/compensation/imu_window.h"
 #include "fdv/core/lanes.h"
 #include "fdv/core/thread_pool.h"
 
@@ -280,18 +281,41 @@ WarpCompensator::WarpCompensator(CompensationMethod method, const Calibration& c
                                  const CompensationOptions& options, std::shared_ptr<const UndistortionMap> map)
     : CompensatorBase(method, calibration, options, std::move(map)) {}
 
-void WarpCompensator::build_rotation_slots(const Eigen::Vector3d& omega_E, TimeNs duration_ns) {
+void WarpCompensator::build_rotation_slots(const Eigen::Vector3d& omega_E, const CompensationInput& in,
+                                           TimeNs duration_ns) {
   const TimeNs refresh = options_.rotation_refresh_ns;
   const int n = static_cast<int>(std::max<TimeNs>(1, (duration_ns + refresh - 1) / refresh));
   slots_.resize(static_cast<std::size_t>(n) * 9);  // grows once, then reused
+  slot_rotations_.resize(static_cast<std::size_t>(n));
+  auto twice_slot_middle_ns = [&](int s) {  // from the window's start
+    const TimeNs a = s * refresh, b = std::min<TimeNs>((s + 1) * refresh, duration_ns);
+    return a + std::max(a, b);
+  };
+  slots_integrated_ = options_.integrate_gyro;
+  if (slots_integrated_) {
+    // imu_turn gives how a fixed direction's IMU coordinates change, d_I(t) = R_I·d_I(t0); the warp
+    // needs d_E(t0) = R_E_I·R_Iᵀ·R_E_Iᵀ·d_E(t). Integrated slot to slot, 25 short steps a window.
+    const Eigen::Matrix3d R_E_I = calibration_.R_E_I();
+    Eigen::Matrix3d R_I = Eigen::Matrix3d::Identity();
+    TimeNs from = in.t_start;
+    for (int s = 0; s < n && slots_integrated_; ++s) {
+      const TimeNs to = in.t_start + twice_slot_middle_ns(s) / 2;
+      const auto step = imu_turn(in.imu, from, to, options_.max_imu_gap_ns);
+      slots_integrated_ = step.has_value();
+      if (!step) break;
+      R_I = *step * R_I;
+      from = to;
+      slot_rotations_[static_cast<std::size_t>(s)] = R_E_I * R_I.transpose() * R_E_I.transpose();
+    }
+  }
   const PinholeCamera& cam = map_->camera();
   for (int s = 0; s < n; ++s) {
-    const TimeNs a = s * refresh, b = std::min<TimeNs>((s + 1) * refresh, duration_ns);
-    const double t_mid = 0.5 * to_seconds(a + std::max(a, b));
-    // Rodrigues' formula (Eigen's AngleAxis): rotation by angle |ω|·t about ω/|ω|.
-    const double angle = omega_E.norm() * t_mid;
-    const Eigen::Matrix3d R = angle > 0 ? Eigen::AngleAxisd(angle, omega_E.normalized()).toRotationMatrix()
-                                        : Eigen::Matrix3d::Identity();
+    Eigen::Matrix3d& R = slot_rotations_[static_cast<std::size_t>(s)];
+    if (!slots_integrated_) {
+      // Rodrigues' formula (Eigen's AngleAxis): rotation by angle |ω|·t about ω/|ω|.
+      const double angle = omega_E.norm() * (0.5 * to_seconds(twice_slot_middle_ns(s)));
+      R = angle > 0 ? Eigen::AngleAxisd(angle, omega_E.normalized()).toRotationMatrix() : Eigen::Matrix3d::Identity();
+    }
     float* m = slots_.data() + 9 * s;
     for (int c = 0; c < 3; ++c) {
       m[c] = static_cast<float>(cam.fx * R(0, c) + cam.cx * R(2, c));
@@ -412,9 +436,22 @@ Eigen::Vector2d WarpCompensator::observed_position(const Eigen::Vector2d& px, do
   // Forward (eqs. 6-8, header): X0 = R(t)·x + ρ·v·t, px = K·X0/z0, with x = (x, y, 1) the ray seen
   // at t. Inverse: x = Rᵀ·(λ·d0 − ρ·v·t) with d0 = K⁻¹·px and λ fixed by x_z = 1.
   const Eigen::Vector3d d0((px.x() - cam.cx) / cam.fx, (px.y() - cam.cy) / cam.fy, 1.0);
-  const double angle = rep.omega_E.norm() * t_s;
-  const Eigen::Matrix3d Rt =
-      angle > 0 ? Eigen::AngleAxisd(-angle, rep.omega_E.normalized()).toRotationMatrix() : Eigen::Matrix3d::Identity();
+  Eigen::Matrix3d Rt;
+  if (slots_integrated_ && !slot_rotations_.empty()) {
+    // Between the two slot middles around t_s (rotation at t = 0 is the identity before the first).
+    const double at = t_s / to_seconds(options_.rotation_refresh_ns) - 0.5;
+    const auto last = static_cast<double>(slot_rotations_.size() - 1);
+    const double s0 = std::isfinite(at) ? std::clamp(std::floor(at), -1.0, last) : 0.0;
+    const auto rotation_of = [&](double s) {
+      return s < 0 ? Eigen::Quaterniond::Identity()
+                   : Eigen::Quaterniond(slot_rotations_[static_cast<std::size_t>(std::min(s, last))]);
+    };
+    const double w = std::isfinite(at) ? std::clamp(at - s0, 0.0, 1.0) : 0.0;
+    Rt = rotation_of(s0).slerp(w, rotation_of(s0 + 1)).toRotationMatrix().transpose();
+  } else {
+    const double angle = rep.omega_E.norm() * t_s;
+    Rt = angle > 0 ? Eigen::AngleAxisd(-angle, rep.omega_E.normalized()).toRotationMatrix() : Eigen::Matrix3d::Identity();
+  }
   const Eigen::Vector3d r0 = Rt * d0;
   if (!(r0.z() > 0)) return px;  // behind the camera at t: no image point
   Eigen::Vector3d x = r0 / r0.z();
@@ -474,7 +511,7 @@ const CompensatedWindow& WarpCompensator::compensate(const CompensationInput& in
   p.fx = static_cast<float>(cam.fx), p.fy = static_cast<float>(cam.fy);
   p.cx = static_cast<float>(cam.cx), p.cy = static_cast<float>(cam.cy);
   if (used != CompensationMethod::kNone) {
-    build_rotation_slots(rep.omega_E, p.duration);
+    build_rotation_slots(rep.omega_E, in, p.duration);
     p.slots = slots_.data();
   }
   if (used == CompensationMethod::kRotationTranslation) {

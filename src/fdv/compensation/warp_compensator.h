@@ -17,9 +17,11 @@ class WarpCompensator final : public CompensatorBase {
   Eigen::Vector2d observed_position(const Eigen::Vector2d& px, double t_s) const override;
 
  private:
-  /// K·R_s for each refresh slot of the window (row-major 3x3 floats), R_s = exp([ω]× t_s) at
-  /// the slot's middle time t_s.
-  void build_rotation_slots(const Eigen::Vector3d& omega_E, TimeNs duration_ns);
+  /// K·R_s for each refresh slot of the window (row-major 3x3 floats), R_s the camera's rotation
+  /// from the slot's middle time t_s back to the window's start: exp([ω̄]× t_s) with the mean rate
+  /// (paper §IV-A), or the gyro integrated over [t0, t0 + t_s] with `integrate_gyro` (the mean
+  /// rate when the IMU does not cover a slot).
+  void build_rotation_slots(const Eigen::Vector3d& omega_E, const CompensationInput& in, TimeNs duration_ns);
   /// Per raw pixel inverse depth ρ = 1/z (holes filled / fallback applied) and a fallback flag,
   /// rebuilt only when the depth frame changes. False when the frame holds no usable depth.
   bool prepare_depth(const RegisteredDepth& depth);
@@ -32,6 +34,8 @@ class WarpCompensator final : public CompensatorBase {
   double warp_inverse_depth_at(const Eigen::Vector2d& x) const;
 
   std::vector<float> slots_;  ///< n_slots × 9
+  std::vector<Eigen::Matrix3d> slot_rotations_;  ///< R_s of each slot (observed_position)
+  bool slots_integrated_ = false;                ///< R_s from the integrated gyro
   // Depth cache.
   const RegisteredDepth* depth_key_ = nullptr;
   const float* depth_data_key_ = nullptr;
