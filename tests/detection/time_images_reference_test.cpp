@@ -55,6 +55,17 @@ void expect_identical(const TimeImages& a, const TimeImages& b) {
   EXPECT_NEAR(a.mean_normalized, b.mean_normalized, 1e-12);
 }
 
+// Builds `win` into `fast` (reused over windows) with `threads` and compares it with the reference.
+void build_and_compare(const Window& win, int threads, TimeImages& fast) {
+  SCOPED_TRACE(testing::Message() << threads << " threads, " << win.pixel.size() << " events");
+  CompensatedEventsView v = win.view();
+  v.threads = threads;
+  TimeImages ref;
+  build_time_images(v, fast);
+  reference_time_images(win.view(), ref);
+  expect_identical(fast, ref);
+}
+
 TEST(TimeImagesReference, OptimisedEqualsReferenceOverConsecutiveWindows) {
   // One TimeImages reused over windows of different content (the optimised builder blanks only
   // the blocks the previous window used), including an empty one and one with negative times.
@@ -99,15 +110,7 @@ TEST(TimeImagesReference, SeveralThreadsReusedOverConsecutiveWindowsEqualTheRefe
     const Window windows[] = {random_window(640, 480, 120'000, 1), random_window(640, 480, 40'000, 2),
                               Window{640, 480, {}, {}}, random_window(640, 480, 50'000, 3, -0.01f),
                               random_window(640, 480, 120'000, 5)};
-    for (const Window& win : windows) {
-      SCOPED_TRACE(testing::Message() << threads << " threads, " << win.pixel.size() << " events");
-      CompensatedEventsView v = win.view();
-      v.threads = threads;
-      TimeImages ref;
-      build_time_images(v, fast);
-      reference_time_images(win.view(), ref);
-      expect_identical(fast, ref);
-    }
+    for (const Window& win : windows) build_and_compare(win, threads, fast);
   }
 }
 
@@ -138,13 +141,7 @@ TEST(TimeImagesReference, SparseWindowsVisitOnlyTheGroupsTheyAndThePreviousOneTo
                               patch_window(kW, kH, 10, 700, 20, 50, 5)};
     std::size_t previous_groups = kAllGroups;
     for (const Window& win : windows) {
-      SCOPED_TRACE(testing::Message() << threads << " threads, " << win.pixel.size() << " events");
-      CompensatedEventsView v = win.view();
-      v.threads = threads;
-      TimeImages ref;
-      build_time_images(v, fast);
-      reference_time_images(win.view(), ref);
-      expect_identical(fast, ref);
+      build_and_compare(win, threads, fast);
       const std::size_t groups = win.pixel.empty() ? 0 : kMaxGroupsPerPatch;
       EXPECT_LE(fast.blocks_visited, (groups + previous_groups) * kGroupBlocks);
       previous_groups = groups;
