@@ -343,6 +343,29 @@ TEST(Warp, ObservedPositionWithTheIntegratedGyroUndoesTheWarp) {
   EXPECT_GT(r.moved_px, 10.0);
 }
 
+TEST(Warp, ObservedPositionWithTheIntegratedGyroIsTheMeanRatesForAConstantRate) {
+  // For a constant rate the integrated rotation is exp([ω]× t) at every knot (the window's start,
+  // the slots' middles, its end), and slerp between them on one axis is exact: at any time, from
+  // the window's start to its end, observed_position must equal the mean rate's closed form.
+  const Calibration calib = test_rig();
+  const Eigen::Vector3d omega_E(1.1, -2.0, 1.6);
+  const TimeNs t0 = 4 * kNsPerS, dt = 25 * kNsPerMs;
+  const Inputs inp = inputs_for(calib, omega_E, Eigen::Vector3d::Zero(), t0);
+  const std::vector<Event> ev{{t0 + kNsPerMs, 320, 240, true}};
+  CompensationOptions opt;
+  opt.method = CompensationMethod::kRotation;
+  auto mean_rate = make_compensator(calib, opt);
+  opt.integrate_gyro = true;
+  auto integrated = make_compensator(calib, opt);
+  for (Compensator* comp : {mean_rate.get(), integrated.get()})
+    ASSERT_EQ(comp->compensate({ev, t0, t0 + dt, inp.imu, std::nullopt, nullptr}).size(), 1u);
+  for (const double t_s : {0.0, 0.0002, 0.0005, 0.0123, 0.0247, 0.0249, 0.025}) {
+    const Eigen::Vector2d px(100, 400);
+    EXPECT_LT((integrated->observed_position(px, t_s) - mean_rate->observed_position(px, t_s)).norm(), 1e-6)
+        << "t = " << t_s;
+  }
+}
+
 TEST(Warp, RotationAloneLeavesTheTranslationalFlow) {
   const Calibration calib = test_rig();
   const Eigen::Vector3d omega_E(0.3, 0.2, -0.4), v_E(2.0, 0.0, 3.0);

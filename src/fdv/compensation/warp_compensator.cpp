@@ -286,32 +286,37 @@ void WarpCompensator::build_rotation_slots(const Eigen::Vector3d& omega_E, const
   const TimeNs refresh = options_.rotation_refresh_ns;
   const int n = static_cast<int>(std::max<TimeNs>(1, (duration_ns + refresh - 1) / refresh));
   slots_.resize(static_cast<std::size_t>(n) * 9);  // grows once, then reused
-  slot_rotations_.resize(static_cast<std::size_t>(n));
   auto twice_slot_middle_ns = [&](int s) {  // from the window's start
     const TimeNs a = s * refresh, b = std::min<TimeNs>((s + 1) * refresh, duration_ns);
     return a + std::max(a, b);
   };
-  slots_integrated_ = options_.integrate_gyro;
-  if (slots_integrated_) {
+  knots_.clear();
+  if (options_.integrate_gyro) {
     // imu_turn gives how a fixed direction's IMU coordinates change, d_I(t) = R_I·d_I(t0); the warp
-    // needs d_E(t0) = R_E_I·R_Iᵀ·R_E_Iᵀ·d_E(t). Integrated slot to slot, 25 short steps a window.
+    // needs d_E(t0) = R_E_I·R_Iᵀ·R_E_Iᵀ·d_E(t). Integrated knot to knot: the slots' middles, then
+    // the window's end (for observed_position).
     const Eigen::Matrix3d R_E_I = calibration_.R_E_I();
     Eigen::Matrix3d R_I = Eigen::Matrix3d::Identity();
-    TimeNs from = in.t_start;
-    for (int s = 0; s < n && slots_integrated_; ++s) {
-      const TimeNs to = in.t_start + twice_slot_middle_ns(s) / 2;
-      const auto step = imu_turn(in.imu, from, to, options_.max_imu_gap_ns);
-      slots_integrated_ = step.has_value();
-      if (!step) break;
+    knots_.push_back({0.0, Eigen::Quaterniond::Identity()});
+    TimeNs from = 0;
+    for (int s = 0; s <= n; ++s) {
+      const TimeNs to = s < n ? twice_slot_middle_ns(s) / 2 : duration_ns;
+      const auto step = imu_turn(in.imu, in.t_start + from, in.t_start + to, options_.max_imu_gap_ns);
+      if (!step) {
+        knots_.clear();
+        break;
+      }
       R_I = *step * R_I;
       from = to;
-      slot_rotations_[static_cast<std::size_t>(s)] = R_E_I * R_I.transpose() * R_E_I.transpose();
+      knots_.push_back({to_seconds(to), Eigen::Quaterniond(R_E_I * R_I.transpose() * R_E_I.transpose())});
     }
   }
   const PinholeCamera& cam = map_->camera();
   for (int s = 0; s < n; ++s) {
-    Eigen::Matrix3d& R = slot_rotations_[static_cast<std::size_t>(s)];
-    if (!slots_integrated_) {
+    Eigen::Matrix3d R;
+    if (!knots_.empty()) {
+      R = knots_[static_cast<std::size_t>(s) + 1].R.toRotationMatrix();
+    } else {
       // Rodrigues' formula (Eigen's AngleAxis): rotation by angle |ω|·t about ω/|ω|.
       const double angle = omega_E.norm() * (0.5 * to_seconds(twice_slot_middle_ns(s)));
       R = angle > 0 ? Eigen::AngleAxisd(angle, omega_E.normalized()).toRotationMatrix() : Eigen::Matrix3d::Identity();
@@ -437,17 +442,15 @@ Eigen::Vector2d WarpCompensator::observed_position(const Eigen::Vector2d& px, do
   // at t. Inverse: x = Rᵀ·(λ·d0 − ρ·v·t) with d0 = K⁻¹·px and λ fixed by x_z = 1.
   const Eigen::Vector3d d0((px.x() - cam.cx) / cam.fx, (px.y() - cam.cy) / cam.fy, 1.0);
   Eigen::Matrix3d Rt;
-  if (slots_integrated_ && !slot_rotations_.empty()) {
-    // Between the two slot middles around t_s (rotation at t = 0 is the identity before the first).
-    const double at = t_s / to_seconds(options_.rotation_refresh_ns) - 0.5;
-    const auto last = static_cast<double>(slot_rotations_.size() - 1);
-    const double s0 = std::isfinite(at) ? std::clamp(std::floor(at), -1.0, last) : 0.0;
-    const auto rotation_of = [&](double s) {
-      return s < 0 ? Eigen::Quaterniond::Identity()
-                   : Eigen::Quaterniond(slot_rotations_[static_cast<std::size_t>(std::min(s, last))]);
-    };
-    const double w = std::isfinite(at) ? std::clamp(at - s0, 0.0, 1.0) : 0.0;
-    Rt = rotation_of(s0).slerp(w, rotation_of(s0 + 1)).toRotationMatrix().transpose();
+  if (!knots_.empty()) {  // the integrated gyro: slerp between the knots around t_s
+    const auto after = std::upper_bound(knots_.begin(), knots_.end(), t_s,
+                                        [](double t, const RotationKnot& k) { return t < k.t_s; });
+    Eigen::Quaterniond R = after == knots_.end() ? knots_.back().R : knots_.front().R;
+    if (after != knots_.begin() && after != knots_.end()) {
+      const RotationKnot& a = *(after - 1);
+      R = a.R.slerp((t_s - a.t_s) / (after->t_s - a.t_s), after->R);
+    }
+    Rt = R.toRotationMatrix().transpose();
   } else {
     const double angle = rep.omega_E.norm() * t_s;
     Rt = angle > 0 ? Eigen::AngleAxisd(-angle, rep.omega_E.normalized()).toRotationMatrix() : Eigen::Matrix3d::Identity();

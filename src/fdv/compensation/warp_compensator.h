@@ -2,6 +2,7 @@
 /// Internal: the IMU / odometry / depth driven strategies "none", "rotation" (Falanga et al. 2020)
 /// and "rotation_translation" (the paper, eqs. 6-8). Create through make_compensator().
 /// Thread safety: not thread-safe (as CompensatorBase); one instance per thread.
+#include <Eigen/Geometry>
 #include <vector>
 
 #include "fdv/compensation/compensator_base.h"
@@ -19,8 +20,8 @@ class WarpCompensator final : public CompensatorBase {
  private:
   /// K·R_s for each refresh slot of the window (row-major 3x3 floats), R_s the camera's rotation
   /// from the slot's middle time t_s back to the window's start: exp([ω̄]× t_s) with the mean rate
-  /// (paper §IV-A), or the gyro integrated over [t0, t0 + t_s] with `integrate_gyro` (the mean
-  /// rate when the IMU does not cover a slot).
+  /// (paper §IV-A), or the gyro integrated over [t0, t0 + t_s] with `integrate_gyro`. The mean rate
+  /// stands in when the IMU does not cover a slot, which the window's `imu_gap` flag reports.
   void build_rotation_slots(const Eigen::Vector3d& omega_E, const CompensationInput& in, TimeNs duration_ns);
   /// Per raw pixel inverse depth ρ = 1/z (holes filled / fallback applied) and a fallback flag,
   /// rebuilt only when the depth frame changes. False when the frame holds no usable depth.
@@ -34,8 +35,13 @@ class WarpCompensator final : public CompensatorBase {
   double warp_inverse_depth_at(const Eigen::Vector2d& x) const;
 
   std::vector<float> slots_;  ///< n_slots × 9
-  std::vector<Eigen::Matrix3d> slot_rotations_;  ///< R_s of each slot (observed_position)
-  bool slots_integrated_ = false;                ///< R_s from the integrated gyro
+  /// With the integrated gyro: R(t) at the window's start (identity), each slot's middle and the
+  /// window's end, for observed_position to interpolate; empty with the mean rate.
+  struct RotationKnot {
+    double t_s;
+    Eigen::Quaterniond R;
+  };
+  std::vector<RotationKnot> knots_;
   // Depth cache.
   const RegisteredDepth* depth_key_ = nullptr;
   const float* depth_data_key_ = nullptr;
