@@ -3,13 +3,16 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <cstdint>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <sstream>
 #include <string>
 
 #include "fdv/core/error.h"
+#include "fdv/io/read_report.h"
 
 namespace fdv::test {
 
@@ -80,6 +83,31 @@ inline CommandRun run_command(const std::string& command, const std::string& log
   r.out = slurp(out);
   r.err = slurp(err);
   return r;
+}
+
+/// An in-memory stream holding `s`, for the readers that take one.
+inline std::unique_ptr<std::istream> text(const std::string& s) {
+  return std::make_unique<std::istringstream>(s);
+}
+
+/// Writes `text` to the file at `path`, replacing it.
+inline void write_text(const std::string& path, const std::string& text) {
+  std::ofstream(path) << text;
+}
+
+/// How many records `report` says were dropped, or repaired, for `reason` (0 when none were).
+inline std::uint64_t dropped(const ReadReport& report, const std::string& reason) {
+  const auto it = report.dropped().find(reason);
+  return it == report.dropped().end() ? 0 : it->second.count;
+}
+inline std::uint64_t repaired(const ReadReport& report, const std::string& reason) {
+  const auto it = report.repaired().find(reason);
+  return it == report.repaired().end() ? 0 : it->second.count;
+}
+/// Where the first record dropped for `reason` was ("" when none was).
+inline std::string first_where(const ReadReport& report, const std::string& reason) {
+  const auto it = report.dropped().find(reason);
+  return it == report.dropped().end() ? "" : it->second.first_where;
 }
 
 }  // namespace fdv::test

@@ -28,7 +28,7 @@ namespace fs = std::filesystem;
 constexpr int kHangSeconds = 60;
 constexpr long kMaxResidentKiB = 1024L * 1024L;  // 1 GiB, the README's bound
 
-struct Ran {
+struct GuardedRun {
   int exit_code = -1;       ///< -1 when killed by a signal
   int signal = 0;
   bool hung = false;
@@ -44,7 +44,7 @@ std::string slurp(const fs::path& p) {
 }
 
 /// Runs `fdv args...` with stdout and stderr captured to files.
-Ran run_fdv(const std::vector<std::string>& args) {
+GuardedRun run_fdv(const std::vector<std::string>& args) {
   const fs::path dir = fs::path(FDV_TEST_TMP_DIR) / "fuzz_findings_output";
   fs::create_directories(dir);
   const fs::path out = dir / "stdout.txt", err = dir / "stderr.txt";
@@ -57,7 +57,7 @@ Ran run_fdv(const std::vector<std::string>& args) {
     execv(FDV_BINARY, argv.data());
     _exit(127);
   }
-  Ran r;
+  GuardedRun r;
   int status = 0;
   rusage usage{};
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(kHangSeconds);
@@ -78,14 +78,14 @@ Ran run_fdv(const std::vector<std::string>& args) {
   return r;
 }
 
-void expect_ended_cleanly(const Ran& r, const std::string& file) {
+void expect_ended_cleanly(const GuardedRun& r, const std::string& file) {
   EXPECT_FALSE(r.hung) << file << ": still running after " << kHangSeconds << " s";
   EXPECT_EQ(r.signal, 0) << file << ": killed by signal " << r.signal << "\n" << r.err;
   EXPECT_LT(r.max_resident_kib, kMaxResidentKiB) << file << ": peak resident memory";
 }
 
 /// Exit code 1 and an error line on stderr that names the file (and `also`, when given).
-void expect_clear_error(const Ran& r, const std::string& file, const std::string& also = "") {
+void expect_clear_error(const GuardedRun& r, const std::string& file, const std::string& also = "") {
   expect_ended_cleanly(r, file);
   EXPECT_EQ(r.exit_code, 1) << file << "\n" << r.err;
   EXPECT_NE(r.err.find(file), std::string::npos) << "the error does not name the file:\n" << r.err;
@@ -98,7 +98,7 @@ void expect_clear_error(const Ran& r, const std::string& file, const std::string
 }
 
 /// `fdv info` printed its JSON summary (exit 0); returns it.
-nlohmann::json expect_summary(const Ran& r, const std::string& file) {
+nlohmann::json expect_summary(const GuardedRun& r, const std::string& file) {
   expect_ended_cleanly(r, file);
   EXPECT_EQ(r.exit_code, 0) << file << "\n" << r.err;
   try {
@@ -110,7 +110,7 @@ nlohmann::json expect_summary(const Ran& r, const std::string& file) {
 }
 
 /// A clear error, or a summary whose reader report counts the bad records as dropped.
-void expect_error_or_reported_drop(const Ran& r, const std::string& file) {
+void expect_error_or_reported_drop(const GuardedRun& r, const std::string& file) {
   if (r.exit_code == 0) {
     const auto summary = expect_summary(r, file);
     EXPECT_FALSE(summary["report"]["dropped"].empty()) << file << ": nothing reported dropped\n" << r.out;
@@ -175,7 +175,7 @@ TEST(FuzzFindings, Ros2TimeOverflowsAreDroppedOrErrors) {
 TEST(FuzzFindings, Ros2TopicSpanOverflowGivesASummaryOrAnError) {
   const auto file = finding("ros2/f5-topic-span-overflow.db3");
   FDV_REQUIRE_REAL_FILE(file);
-  const Ran r = run_fdv({"info", file});
+  const GuardedRun r = run_fdv({"info", file});
   if (r.exit_code == 0) {
     const auto summary = expect_summary(r, file);
     for (const auto& topic : summary["topics"]) EXPECT_GE(topic["rate_hz"].get<double>(), 0.0) << topic;

@@ -10,7 +10,7 @@
 namespace fdv {
 namespace {
 
-constexpr int kWidth = 346, kHeight = 260;  // the DAVIS346; its border is at -0.5 and W - 0.5
+constexpr int kDavisWidth = 346, kDavisHeight = 260;  // the DAVIS346; its border is at -0.5 and W - 0.5
 
 struct Visible {
   Eigen::Vector2d centroid;
@@ -26,7 +26,7 @@ Visible integrate(const Eigen::Vector2d& center, double r) {
     for (double x = center.x() - r; x <= center.x() + r; x += kStep) {
       if ((Eigen::Vector2d(x, y) - center).squaredNorm() > r * r) continue;
       ++n;
-      if (x < -0.5 || x > kWidth - 0.5 || y < -0.5 || y > kHeight - 0.5) continue;
+      if (x < -0.5 || x > kDavisWidth - 0.5 || y < -0.5 || y > kDavisHeight - 0.5) continue;
       ++inside;
       sum += Eigen::Vector2d(x, y);
     }
@@ -47,36 +47,36 @@ TEST(DiscSegment, ClosedFormsAgainstKnownValues) {
 }
 
 TEST(BorderCut, ClearOfTheBorderIsNotCut) {
-  EXPECT_FALSE(border_cut(square_on({100, 100}, 20), kWidth, kHeight));
+  EXPECT_FALSE(border_cut(square_on({100, 100}, 20), kDavisWidth, kDavisHeight));
   // 3 px from the left border: beyond the 2 px margin (5 %) of a 40 px square.
-  EXPECT_FALSE(border_cut(square_on({22.5, 100}, 20), kWidth, kHeight));
-  EXPECT_TRUE(border_cut(square_on({21.5, 100}, 20), kWidth, kHeight));
+  EXPECT_FALSE(border_cut(square_on({22.5, 100}, 20), kDavisWidth, kDavisHeight));
+  EXPECT_TRUE(border_cut(square_on({21.5, 100}, 20), kDavisWidth, kDavisHeight));
 }
 
 TEST(BorderCut, WholeCenterAndFractionFromTheVisibleCentroid) {
   // Discs cut by the left, bottom, right and top borders, centre inside and outside the frame.
   const double r = 30;
-  const Eigen::Vector2d centers[] = {{-0.5 + 12, 120}, {-0.5 - 14, 90}, {150, kHeight - 0.5 + 9},
-                                     {kWidth - 0.5 - 20, 130}, {200, -0.5 + 3}};
+  const Eigen::Vector2d centers[] = {{-0.5 + 12, 120}, {-0.5 - 14, 90}, {150, kDavisHeight - 0.5 + 9},
+                                     {kDavisWidth - 0.5 - 20, 130}, {200, -0.5 + 3}};
   for (const Eigen::Vector2d& center : centers) {
     SCOPED_TRACE(testing::Message() << "centre " << center.transpose());
     const Visible v = integrate(center, r);
-    const auto cut = border_cut(square_on(v.centroid, r), kWidth, kHeight);
+    const auto cut = border_cut(square_on(v.centroid, r), kDavisWidth, kDavisHeight);
     ASSERT_TRUE(cut);
     EXPECT_NEAR(cut->visible_fraction, v.fraction, 0.005);
     ASSERT_TRUE(cut->center_full);
     EXPECT_NEAR((*cut->center_full - center).norm(), 0.0, 0.1);
     EXPECT_GE(cut->visible.x0, -0.5);
-    EXPECT_LE(cut->visible.x1, kWidth - 0.5);
+    EXPECT_LE(cut->visible.x1, kDavisWidth - 0.5);
     EXPECT_GE(cut->visible.y0, -0.5);
-    EXPECT_LE(cut->visible.y1, kHeight - 0.5);
+    EXPECT_LE(cut->visible.y1, kDavisHeight - 0.5);
   }
 }
 
 TEST(BorderCut, CornerGivesTheFractionOnly) {
   const double r = 20;
   const Visible v = integrate({5, 8}, r);
-  const auto cut = border_cut(square_on(v.centroid, r), kWidth, kHeight);
+  const auto cut = border_cut(square_on(v.centroid, r), kDavisWidth, kDavisHeight);
   ASSERT_TRUE(cut);
   EXPECT_FALSE(cut->center_full);
   // The two cuts taken as independent: near the true share, not exact.

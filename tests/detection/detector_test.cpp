@@ -18,7 +18,7 @@
 namespace fdv {
 namespace {
 
-PinholeCamera lens() { return {640, 480, 400.0, 401.0, 318.0, 243.0, {-0.1, 0.01, 0.0005, -0.0003, 0.0}}; }
+using test::lens;
 
 class DetectorTest : public ::testing::Test {
  protected:

@@ -139,8 +139,8 @@ TEST(EvidenceGrid, APathFollowsTheSceneThroughTheEgoMotionMap) {
 
 // The source in a Detector: windows of uniform noise, with or without a small dim blob drifting
 // (5, 3) px a window, seen by a still camera ("none" is the exact compensation).
-constexpr int kWidth = 320, kHeight = 240;
-constexpr double kWindowS = 0.025;
+constexpr int kNoisyWidth = 320, kNoisyHeight = 240;
+constexpr double kNoisyWindowS = 0.025;
 
 struct NoisyWindows {
   std::vector<std::int32_t> pixel;
@@ -156,17 +156,17 @@ struct NoisyWindows {
     const bool blob = object == Object::kBlob;
     pixel.clear();
     t_s.clear();
-    std::uniform_int_distribution<int> x(0, kWidth - 1), y(0, kHeight - 1);
-    std::uniform_real_distribution<double> t(0, kWindowS), unit(0, 1);
+    std::uniform_int_distribution<int> x(0, kNoisyWidth - 1), y(0, kNoisyHeight - 1);
+    std::uniform_real_distribution<double> t(0, kNoisyWindowS), unit(0, 1);
     std::vector<std::pair<float, std::int32_t>> ev;
-    for (int i = 0; i < 2000; ++i) ev.push_back({static_cast<float>(t(rng)), y(rng) * kWidth + x(rng)});
+    for (int i = 0; i < 2000; ++i) ev.push_back({static_cast<float>(t(rng)), y(rng) * kNoisyWidth + x(rng)});
     blob_at = {20.0 + 5 * k, 40.0 + 3 * k};
     if (blob)
       for (int i = 0; i < 45; ++i) {  // radius 3: about 28 px, most of which fire
         const double r = 3 * std::sqrt(unit(rng)), a = 2 * M_PI * unit(rng);
         const int u = static_cast<int>(std::lround(blob_at.x() + r * std::cos(a)));
         const int v = static_cast<int>(std::lround(blob_at.y() + r * std::sin(a)));
-        ev.push_back({static_cast<float>(t(rng)), v * kWidth + u});
+        ev.push_back({static_cast<float>(t(rng)), v * kNoisyWidth + u});
       }
     if (object == Object::kEdge)
       for (int i = -24; i < 24; ++i)  // along (−3, 5), perpendicular to the motion (5, 3)
@@ -174,19 +174,19 @@ struct NoisyWindows {
           const double along = i / std::sqrt(34.0);
           const int u = static_cast<int>(std::lround(blob_at.x() - 3 * along + w));
           const int v = static_cast<int>(std::lround(blob_at.y() + 5 * along));
-          if (u >= 0 && v >= 0 && u < kWidth && v < kHeight) ev.push_back({static_cast<float>(t(rng)), v * kWidth + u});
+          if (u >= 0 && v >= 0 && u < kNoisyWidth && v < kNoisyHeight) ev.push_back({static_cast<float>(t(rng)), v * kNoisyWidth + u});
         }
     std::sort(ev.begin(), ev.end());
     for (const auto& [when, p] : ev) {
       t_s.push_back(when);
       pixel.push_back(p);
     }
-    const TimeNs start = from_seconds(k * kWindowS);
-    return {start, start + from_seconds(kWindowS), kWidth, kHeight, pixel, t_s};
+    const TimeNs start = from_seconds(k * kNoisyWindowS);
+    return {start, start + from_seconds(kNoisyWindowS), kNoisyWidth, kNoisyHeight, pixel, t_s};
   }
 };
 
-PinholeCamera small_camera() { return {.width = kWidth, .height = kHeight, .fx = 300, .fy = 300, .cx = 160, .cy = 120, .distortion = {}}; }
+PinholeCamera small_camera() { return {.width = kNoisyWidth, .height = kNoisyHeight, .fx = 300, .fy = 300, .cx = 160, .cy = 120, .distortion = {}}; }
 
 struct BlobRun {
   int found = 0;  ///< windows after the evidence could exist (warm-up + 3) with the blob found, of 26

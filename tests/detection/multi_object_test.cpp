@@ -16,7 +16,7 @@
 namespace fdv {
 namespace {
 
-PinholeCamera lens() { return {640, 480, 400.0, 401.0, 318.0, 243.0, {-0.1, 0.01, 0.0005, -0.0003, 0.0}}; }
+using test::lens;
 /// Without distortion, the compensated grid is the sensor's, border included (a barrel lens moves
 /// the sensor's border outside the undistorted grid's frame).
 PinholeCamera pinhole() { return {640, 480, 400.0, 401.0, 318.0, 243.0, {0, 0, 0, 0, 0}}; }

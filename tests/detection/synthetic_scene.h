@@ -19,6 +19,11 @@
 
 namespace fdv::test {
 
+/// A VGA camera with a mild barrel lens, the detection tests' usual sensor.
+inline PinholeCamera lens() {
+  return {640, 480, 400.0, 401.0, 318.0, 243.0, {-0.1, 0.01, 0.0005, -0.0003, 0.0}};
+}
+
 /// Whether `source` wrote diagnostics in `r` (it ran as far as them).
 inline bool ran(const DetectionResult& r, std::string_view source) {
   return std::any_of(r.source_diagnostics().begin(), r.source_diagnostics().end(),

@@ -17,13 +17,10 @@ namespace {
 using test::kF;
 using test::pixel_of;
 
-constexpr TimeNs ms(int m) { return m * kNsPerMs; }
+using test::ms;
+using test::window;
 
 using Det = WindowDetections::Det;
-
-WindowDetections window(int t0_ms, std::vector<Det> dets = {}, std::string status = "") {
-  return {ms(t0_ms), ms(t0_ms + 10), std::move(dets), std::move(status)};
-}
 
 /// A ball of radius r at depth z crossing slowly in front of the camera (2 m/s sideways).
 struct Crossing {

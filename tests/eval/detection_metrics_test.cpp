@@ -15,15 +15,12 @@ namespace {
 
 using test::pixel_of;
 
-constexpr TimeNs ms(int m) { return m * kNsPerMs; }
+using test::ms;
+using test::window;
 
 // A 0.25 m ball 5 m ahead crossing at 2 m/s: ~50 px wide, moving 2 px per 10 ms window.
 const Eigen::Vector3d kP0(-0.1, 0, 5), kV(2, 0, 0);
 Eigen::Vector3d ball_at(int t_ms) { return kP0 + 1e-3 * t_ms * kV; }
-
-WindowDetections window(int t0_ms, std::vector<WindowDetections::Det> dets = {}) {
-  return {ms(t0_ms), ms(t0_ms + 10), std::move(dets)};
-}
 
 TEST(DetectionMetrics, TheFirstBallDetectionSkipsDetectionsOffTheBall) {
   const DatasetTruth truth = test::straight_flight(kP0, kV);

@@ -11,7 +11,7 @@ namespace {
 
 using test::pixel_of;
 
-constexpr TimeNs ms(int m) { return m * kNsPerMs; }
+using test::ms;
 
 // Held still at (0.5, 0, 5) until 50 ms, then thrown across at 2 m/s along -x (in view throughout):
 // released at 50 ms, closest to the (still) vehicle at the origin when x = 0, i.e. at 300 ms, 5 m

@@ -3,12 +3,24 @@
 // distortion) at the world origin looking along +z (vehicle still, T_B_E identity), no gravity,
 // so a ball's pixel is u = cx + f X / Z, v = cy + f Y / Z by hand.
 #include <functional>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "fdv/eval/dataset_truth.h"
+#include "fdv/eval/detection_metrics.h"
 
 namespace fdv::test {
 
 constexpr double kF = 500.0, kCx = 319.5, kCy = 239.5;
+
+constexpr TimeNs ms(int m) { return m * kNsPerMs; }
+
+/// The 10 ms window starting at `t0_ms`, with its detections.
+inline WindowDetections window(int t0_ms, std::vector<WindowDetections::Det> dets = {},
+                               std::string status = "") {
+  return {ms(t0_ms), ms(t0_ms + 10), std::move(dets), std::move(status)};
+}
 
 inline Eigen::Vector2d pixel_of(const Eigen::Vector3d& p) {
   return {kCx + kF * p.x() / p.z(), kCy + kF * p.y() / p.z()};

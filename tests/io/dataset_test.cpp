@@ -180,9 +180,7 @@ TEST(OpenRecording, MissingAndUnknownInputsAreClearErrors) {
   }
 }
 
-std::unique_ptr<std::istream> text(const std::string& s) {
-  return std::make_unique<std::istringstream>(s);
-}
+using test::text;
 
 std::string events_bin(std::uint32_t w, std::uint32_t h, std::uint64_t count,
                        const std::vector<Event>& events) {

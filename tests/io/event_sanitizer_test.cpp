@@ -8,9 +8,12 @@
 #include <vector>
 
 #include "fdv/io/recording.h"
+#include "test_support.h"
 
 namespace fdv {
 namespace {
+
+using test::dropped;
 
 constexpr TimeNs kMs = 1'000'000;
 
@@ -23,11 +26,6 @@ std::vector<Event> run(EventSanitizer& s, const std::vector<std::vector<Event>>&
     first += b.size();
   }
   return out;
-}
-
-std::uint64_t dropped(const ReadReport& r, const std::string& reason) {
-  const auto it = r.dropped().find(reason);
-  return it == r.dropped().end() ? 0 : it->second.count;
 }
 
 TEST(EventSanitizer, DropsEventsBehindTheStreamOrOutsideTheSensor) {

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "fdv/core/error.h"
+#include "test_support.h"
 
 namespace fdv {
 namespace {
@@ -101,9 +102,7 @@ TEST(EscapeNonUtf8, OutputIsAcceptedByJson) {
   EXPECT_NO_THROW(nlohmann::json(escape_non_utf8(all)).dump());
 }
 
-std::unique_ptr<std::istream> text(const std::string& s) {
-  return std::make_unique<std::istringstream>(s);
-}
+using test::text;
 
 TEST(LineReader, ReadsAStreamSkippingBlankAndCommentLines) {
   LineReader lines(text("# header\n\n  1 2 \r\n3 4\n\n# end"), "mem.txt");

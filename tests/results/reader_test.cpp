@@ -12,11 +12,9 @@
 namespace fdv {
 namespace {
 
-void write(const std::string& path, const std::string& text) { std::ofstream(path) << text; }
-
 TEST(RunResults, ReadsDetectionsWithTheirTracks) {
   const std::string dir = test::scratch_dir("run_results_detections");
-  write(dir + "/detections.jsonl",
+  test::write_text(dir + "/detections.jsonl",
         R"({"t_start":0.1,"t_end":0.125,"detections":[{"t":0.11,"center":[12.5,30.25],"track":4}]})"
         "\n"
         R"({"t_start":0.125,"t_end":0.15,"detections":[]})"
@@ -34,7 +32,7 @@ TEST(RunResults, ReadsDetectionsWithTheirTracks) {
 
 TEST(RunResults, MalformedLineNamesFileAndLine) {
   const std::string dir = test::scratch_dir("run_results_bad");
-  write(dir + "/detections.jsonl",
+  test::write_text(dir + "/detections.jsonl",
         "{\"t_start\":0,\"t_end\":1,\"detections\":[]}\n{\"t_start\":0}\n");
   try {
     read_detections(dir);
@@ -49,7 +47,7 @@ TEST(RunResults, ReadsConvergedEstimatesWithTheirUsableFlag) {
   const std::string dir = test::scratch_dir("run_results_estimates");
   const std::string fields =
       R"("t0":0.05,"p0":[1,2,3],"v0":[4,5,6],"gravity":[0,0,-9.81],"t_first":0.05,"t_last":0.2)";
-  write(dir + "/trajectories.jsonl",
+  test::write_text(dir + "/trajectories.jsonl",
         R"({"t":0.1,"track":2,"method":"fusion","usable":false,"converged":false,)" + fields + "}\n" +
             R"({"t":0.15,"track":2,"method":"fusion","usable":false,"converged":true,)" + fields + "}\n" +
             // Written before "converged" existed: usable implied it, a not usable line is skipped.
@@ -67,7 +65,7 @@ TEST(RunResults, ReadsConvergedEstimatesWithTheirUsableFlag) {
   EXPECT_EQ(e[1].trajectory.p0_W, Eigen::Vector3d(1, 2, 3));
   EXPECT_EQ(e[1].trajectory.v0_W, Eigen::Vector3d(4, 5, 6));
   EXPECT_TRUE(read_estimates(dir + "/missing").empty());  // a run without 3D estimation
-  write(dir + "/trajectories.jsonl",
+  test::write_text(dir + "/trajectories.jsonl",
         R"({"t":0.1,"track":2,"method":"stereo","usable":true,)" + fields + "}\n");
   EXPECT_THROW(read_estimates(dir), InputError);
 }

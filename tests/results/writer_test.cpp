@@ -15,8 +15,6 @@
 namespace fdv {
 namespace {
 
-void write(const std::string& path, const std::string& text) { std::ofstream(path) << text; }
-
 // Every field set to a value of its own, off the defaults.
 WindowRow sample_window() {
   WindowRow w;
@@ -432,29 +430,29 @@ TEST(ResultsWriter, TimingCsvHoldsEachWindowsStageTimesAsWritten) {
 TEST(ResultsReader, MalformedLinesAreErrorsNamingFileAndLine) {
   const std::string dir = test::scratch_dir("results_malformed");
   const std::string good_window = R"({"t_start":0,"t_end":0.025,"detections":[]})";
-  write(dir + "/detections.jsonl", good_window + "\n" + good_window + "\n{\"t_start\":0.05,\"t_end\":\n");
+  test::write_text(dir + "/detections.jsonl", good_window + "\n" + good_window + "\n{\"t_start\":0.05,\"t_end\":\n");
   EXPECT_EQ(test::input_error_of(dir + "/detections.jsonl", [&] { read_windows(dir); }).substr(0, 8), "line 3 |");
-  write(dir + "/depth.jsonl", R"({"t":0.1,"track":1,"accepted":"yes"})" "\n");
+  test::write_text(dir + "/depth.jsonl", R"({"t":0.1,"track":1,"accepted":"yes"})" "\n");
   EXPECT_EQ(test::input_error_of(dir + "/depth.jsonl", [&] { read_depth(dir); }).substr(0, 8), "line 1 |");
-  write(dir + "/predictions.jsonl", R"({"t":0.1,"track":1,"closest_t":0.5})" "\n");  // no miss_distance
+  test::write_text(dir + "/predictions.jsonl", R"({"t":0.1,"track":1,"closest_t":0.5})" "\n");  // no miss_distance
   EXPECT_EQ(test::input_error_of(dir + "/predictions.jsonl", [&] { read_predictions(dir); }).substr(0, 8),
             "line 1 |");
   const std::string fields =
       R"("t0":0.05,"p0":[1,2,3],"v0":[4,5,6],"gravity":[0,0,-9.81],"t_first":0.05,"t_last":0.2)";
-  write(dir + "/trajectories.jsonl", R"({"t":0.1,"track":2,"method":"fusion","usable":true,)" + fields + "}\n" +
+  test::write_text(dir + "/trajectories.jsonl", R"({"t":0.1,"track":2,"method":"fusion","usable":true,)" + fields + "}\n" +
                                          R"({"t":0.1,"track":2,"method":"fusion","usable":true,"covariance":[1,2],)" +
                                          fields + "}\n");
   EXPECT_EQ(test::input_error_of(dir + "/trajectories.jsonl", [&] { read_trajectories(dir); }).substr(0, 8),
             "line 2 |");
-  write(dir + "/track_1_fusion.tum", "0.1 1 2 3 0 0 0 1\n0.105 1 2\n");
+  test::write_text(dir + "/track_1_fusion.tum", "0.1 1 2 3 0 0 0 1\n0.105 1 2\n");
   EXPECT_EQ(test::input_error_of(dir + "/track_1_fusion.tum", [&] { read_tum(dir + "/track_1_fusion.tum"); })
                 .substr(0, 8),
             "line 2 |");
-  write(dir + "/summary.json", R"({"input":"x"})");
+  test::write_text(dir + "/summary.json", R"({"input":"x"})");
   EXPECT_NE(test::input_error_of(dir + "/summary.json", [&] { read_summary(dir); }), "no error");
-  write(dir + "/timing.csv", "window,t_start,compensation\n0,0.1,0.5\n1,0.125\n");
+  test::write_text(dir + "/timing.csv", "window,t_start,compensation\n0,0.1,0.5\n1,0.125\n");
   EXPECT_EQ(test::input_error_of(dir + "/timing.csv", [&] { read_timing(dir); }).substr(0, 8), "line 3 |");
-  write(dir + "/timing.csv", "window,t_start,compensation\n0,0.1,fast\n");
+  test::write_text(dir + "/timing.csv", "window,t_start,compensation\n0,0.1,fast\n");
   EXPECT_EQ(test::input_error_of(dir + "/timing.csv", [&] { read_timing(dir); }).substr(0, 8), "line 2 |");
   // Files a run always writes are required; the others may be absent (no 3D estimation).
   const std::string empty = test::scratch_dir("results_missing");
@@ -519,7 +517,7 @@ TEST(ResultsWriter, DodgeDecisionsRoundTrip) {
   EXPECT_EQ(m.expected_clearance_m, 1.125);
   EXPECT_EQ(m.probability_after, 0.0625);
 
-  write(dir + "/dodge.jsonl", R"({"t":0.1,"action":"dodge"})" "\n" R"({"t":0.2,"action":"jump"})" "\n");
+  test::write_text(dir + "/dodge.jsonl", R"({"t":0.1,"action":"dodge"})" "\n" R"({"t":0.2,"action":"jump"})" "\n");
   try {
     dodge_decisions(read_dodge(dir));
     FAIL() << "no error";

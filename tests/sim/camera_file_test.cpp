@@ -12,7 +12,7 @@
 namespace fdv::sim {
 namespace {
 
-std::string write_file(const std::string& name, const std::string& text) {
+std::string write_camera_file(const std::string& name, const std::string& text) {
   const std::string path = fdv::test::scratch_dir("sim_camera_file") + "/" + name;
   std::ofstream(path) << text;
   return path;
@@ -56,7 +56,7 @@ TEST(CameraFile, AppliesTheDavis346XmlExactly) {
 }
 
 TEST(CameraFile, AppliesTheProjectYamlExactly) {
-  const std::string path = write_file("rig.yaml", R"(event_camera:
+  const std::string path = write_camera_file("rig.yaml", R"(event_camera:
   width: 320
   height: 240
   intrinsics: [301.25, 300.5, 161.75, 119.125]
@@ -84,14 +84,14 @@ TEST(CameraFile, BadFilesNameTheFile) {
   const std::string missing = fdv::test::scratch_dir("sim_camera_missing") + "/none.xml";
   EXPECT_NE(fdv::test::input_error_of(missing, [&] { load_event_camera(c, missing); }),
             "no error");
-  const std::string garbage = write_file("garbage.yaml", "event_camera: [1, 2\n");
+  const std::string garbage = write_camera_file("garbage.yaml", "event_camera: [1, 2\n");
   EXPECT_NE(fdv::test::input_error_of(garbage, [&] { load_event_camera(c, garbage); }),
             "no error");
-  const std::string xml_garbage = write_file("garbage.xml", "<?xml version=\"1.0\"?>\n<oops");
+  const std::string xml_garbage = write_camera_file("garbage.xml", "<?xml version=\"1.0\"?>\n<oops");
   EXPECT_NE(fdv::test::input_error_of(xml_garbage, [&] { load_event_camera(c, xml_garbage); }),
             "no error");
   // Readable, but a lens that folds back near the image centre cannot be rendered.
-  const std::string folding = write_file("folding.yaml", R"(event_camera:
+  const std::string folding = write_camera_file("folding.yaml", R"(event_camera:
   width: 640
   height: 480
   intrinsics: [536.3, 536.3, 320.9, 234.0]

@@ -11,7 +11,7 @@
 namespace fdv::sim {
 namespace {
 
-std::string write_file(const std::string& name, const std::string& text) {
+std::string write_config(const std::string& name, const std::string& text) {
   const std::string path = fdv::test::scratch_dir("sim_config") + "/" + name;
   std::ofstream(path) << text;
   return path;
@@ -59,7 +59,7 @@ TEST(ScenarioConfig, PresetsMatchTheIssue) {
 TEST(ScenarioConfig, YamlOverridesOnlyTheGivenFields) {
   ScenarioConfig c = make_preset("fast_forward", 3);
   const ScenarioConfig before = c;
-  const std::string path = write_file("override.yaml",
+  const std::string path = write_config("override.yaml",
                                       "duration_s: 0.25\n"
                                       "event_camera:\n  contrast_threshold_mean: 0.3\n"
                                       "vehicle:\n  motion: swing\n"
@@ -87,7 +87,7 @@ TEST(ScenarioConfig, YamlRoundTripsEveryField) {
 
 std::string error_of(const std::string& yaml) {
   ScenarioConfig c = make_preset("fast_forward", 1);
-  const std::string path = write_file("bad.yaml", yaml);
+  const std::string path = write_config("bad.yaml", yaml);
   return test::input_error_of(path, [&] { apply_scenario_yaml(c, path); });
 }
 
@@ -142,9 +142,9 @@ TEST(ScenarioConfig, MalformedStructureNamesFileAndKey) {
 }
 
 TEST(ScenarioConfig, LoadScenarioYamlChecksSizeAndSyntax) {
-  const std::string path = write_file("s.yaml", "name: swing\nseed: 3\n");
+  const std::string path = write_config("s.yaml", "name: swing\nseed: 3\n");
   EXPECT_EQ(load_scenario_yaml(path)["name"].Scalar(), "swing");
-  const std::string bad = write_file("bad.yaml", "name: [swing\n");
+  const std::string bad = write_config("bad.yaml", "name: [swing\n");
   try {
     load_scenario_yaml(bad);
     ADD_FAILURE() << "accepted";
@@ -152,7 +152,7 @@ TEST(ScenarioConfig, LoadScenarioYamlChecksSizeAndSyntax) {
     EXPECT_EQ(e.file(), bad);
     EXPECT_EQ(e.where().substr(0, 7), "line 2,");
   }
-  EXPECT_THROW(load_scenario_yaml(write_file("none/../missing.yaml", "")), InputError);
+  EXPECT_THROW(load_scenario_yaml(write_config("none/../missing.yaml", "")), InputError);
 }
 
 TEST(ScenarioConfig, ValidateNamesTheKey) {

@@ -11,7 +11,7 @@
 namespace fdv::sim {
 namespace {
 
-constexpr double kDeg = 3.141592653589793 / 180.0;
+using test::kDeg;
 
 ScenarioConfig spinning_and_accelerating() {
   ScenarioConfig c = test::still_scene(32, 24, 1.0);

@@ -4,6 +4,8 @@
 
 namespace fdv::sim::test {
 
+constexpr double kDeg = 3.141592653589793 / 180.0;  ///< radians per degree
+
 /// A camera that does not move at all (constant motion with zero rates), no ball, no depth,
 /// no noise, at a small resolution with the default field of view.
 inline ScenarioConfig still_scene(int width = 64, int height = 48, double duration_s = 0.2) {

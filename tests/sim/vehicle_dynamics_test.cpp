@@ -16,7 +16,7 @@ namespace fdv::sim {
 namespace {
 
 const Eigen::Vector3d kGravity(0, 0, -9.81);
-constexpr double kDeg = 3.141592653589793 / 180.0;
+using test::kDeg;
 
 /// Hovering still at 1.5 m, level, no vibration.
 VehicleConfig still_hover() { return test::still_scene().vehicle; }

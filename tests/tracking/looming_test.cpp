@@ -13,31 +13,31 @@ namespace fdv {
 namespace {
 
 constexpr double kF = 300, kD = 0.1;  // focal length [px], ball diameter [m]
-constexpr TimeNs kWindow = 25 * kNsPerMs;
+constexpr TimeNs kLoomingWindow = 25 * kNsPerMs;
 
 double size_at(double L0, double v, TimeNs t) { return kF * kD / (L0 - v * to_seconds(t)); }
 
 TEST(Looming, HeadOnBallGivesTheTimeToContactExactly) {
   LoomingFit fit;
   const double L0 = 3, v = 10;  // 10 px at 3 m, 24 px at 1.25 m
-  for (int k = 0; k < 8; ++k) ASSERT_TRUE(fit.add(k * kWindow, size_at(L0, v, k * kWindow), 1e3));
+  for (int k = 0; k < 8; ++k) ASSERT_TRUE(fit.add(k * kLoomingWindow, size_at(L0, v, k * kLoomingWindow), 1e3));
   EXPECT_EQ(fit.detections(), LoomingOptions{}.fit_detections);
-  const TimeNs t = 7 * kWindow;
+  const TimeNs t = 7 * kLoomingWindow;
   const auto l = fit.at(t);
   ASSERT_TRUE(l);
   EXPECT_NEAR(l->size_px, size_at(L0, v, t), 1e-9);
   ASSERT_TRUE(l->tau_s);
   EXPECT_NEAR(*l->tau_s, (L0 - v * to_seconds(t)) / v, 1e-9);  // 0.125 s
   // Evaluated ahead of the newest size too (the fit is a line in 1/θ).
-  EXPECT_NEAR(*fit.at(t + kWindow)->tau_s, (L0 - v * to_seconds(t + kWindow)) / v, 1e-9);
+  EXPECT_NEAR(*fit.at(t + kLoomingWindow)->tau_s, (L0 - v * to_seconds(t + kLoomingWindow)) / v, 1e-9);
 }
 
 TEST(Looming, ARecedingBallHasANegativeTimeToContact) {
   LoomingFit fit;
-  for (int k = 0; k < 8; ++k) fit.add(k * kWindow, size_at(0.5, -6, k * kWindow), size_at(0.5, -6, k * kWindow));
-  const auto l = fit.at(7 * kWindow);  // 60 px at 0.5 m shrinking to 19 px at 1.55 m
+  for (int k = 0; k < 8; ++k) fit.add(k * kLoomingWindow, size_at(0.5, -6, k * kLoomingWindow), size_at(0.5, -6, k * kLoomingWindow));
+  const auto l = fit.at(7 * kLoomingWindow);  // 60 px at 0.5 m shrinking to 19 px at 1.55 m
   ASSERT_TRUE(l && l->tau_s);
-  EXPECT_NEAR(*l->tau_s, -(0.5 + 6 * to_seconds(7 * kWindow)) / 6, 1e-9);
+  EXPECT_NEAR(*l->tau_s, -(0.5 + 6 * to_seconds(7 * kLoomingWindow)) / 6, 1e-9);
 }
 
 // A hand-held ball: its size stays 12 px give or take the detector's noise; no τ is claimed.
@@ -48,8 +48,8 @@ TEST(Looming, ABallThatStopsGrowingHasNoTimeToContact) {
   int claimed = 0;
   for (int trial = 0; trial < 200; ++trial) {
     LoomingFit fit;
-    for (int k = 0; k < 8; ++k) fit.add(k * kWindow, 12 + noise(rng), 50);
-    const auto l = fit.at(7 * kWindow);
+    for (int k = 0; k < 8; ++k) fit.add(k * kLoomingWindow, 12 + noise(rng), 50);
+    const auto l = fit.at(7 * kLoomingWindow);
     ASSERT_TRUE(l);
     EXPECT_NEAR(l->size_px, 12, 3 * l->size_sigma_px);
     claimed += l->tau_s.has_value();
@@ -69,14 +69,14 @@ TEST(Looming, SigmasAreCalibrated) {
   std::mt19937 rng(7);
   std::normal_distribution<double> unit(0, 1);
   const double L0 = 3, v = 12;
-  const TimeNs t = 7 * kWindow;
+  const TimeNs t = 7 * kLoomingWindow;
   const double true_tau = (L0 - v * to_seconds(t)) / v, true_size = size_at(L0, v, t);
   int trials = 0, tau1 = 0, tau2 = 0, size1 = 0, size2 = 0;
   for (int trial = 0; trial < 2000; ++trial) {
     LoomingFit fit(o);
     for (int k = 0; k < 8; ++k) {
-      const double s = size_at(L0, v, k * kWindow);
-      fit.add(k * kWindow, s + (o.size_sigma_px + o.size_sigma_fraction * s) * unit(rng), 1e3);
+      const double s = size_at(L0, v, k * kLoomingWindow);
+      fit.add(k * kLoomingWindow, s + (o.size_sigma_px + o.size_sigma_fraction * s) * unit(rng), 1e3);
     }
     const auto l = fit.at(t);
     if (!l || !l->tau_s) continue;
@@ -101,10 +101,10 @@ TEST(Looming, BadSizesAreIgnoredAndOptionsChecked) {
   EXPECT_FALSE(fit.add(0, 0, 5));
   EXPECT_FALSE(fit.add(0, -3, 5));
   EXPECT_FALSE(fit.add(0, INFINITY, INFINITY));
-  EXPECT_TRUE(fit.add(kWindow, 5, 5));
+  EXPECT_TRUE(fit.add(kLoomingWindow, 5, 5));
   EXPECT_FALSE(fit.add(0, 5, 5));  // older than the newest
   EXPECT_EQ(fit.detections(), 1);
-  EXPECT_FALSE(fit.at(kWindow));  // too few for a fit
+  EXPECT_FALSE(fit.at(kLoomingWindow));  // too few for a fit
   LoomingOptions bad;
   bad.min_detections = 1;
   EXPECT_THROW(LoomingFit{bad}, ConfigError);

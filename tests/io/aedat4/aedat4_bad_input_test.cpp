@@ -20,6 +20,9 @@
 namespace fdv {
 namespace {
 
+using test::dropped;
+using test::first_where;
+
 using namespace test::aedat4;
 
 constexpr const char* kBall = "davis346_ball_throw_person.aedat4";
@@ -37,15 +40,6 @@ std::vector<Event> converted(const std::vector<RawEvent>& raw, std::size_t first
     out.push_back({raw[i].t_us * 1000, static_cast<std::uint16_t>(raw[i].x),
                    static_cast<std::uint16_t>(raw[i].y), raw[i].polarity});
   return out;
-}
-
-std::uint64_t dropped(const ReadReport& r, const std::string& reason) {
-  const auto it = r.dropped().find(reason);
-  return it == r.dropped().end() ? 0 : it->second.count;
-}
-std::string first_where(const ReadReport& r, const std::string& reason) {
-  const auto it = r.dropped().find(reason);
-  return it == r.dropped().end() ? "" : it->second.first_where;
 }
 
 /// Expects open_aedat4(path) to throw InputError naming the file, `where` and `reason_part`.
@@ -232,9 +226,9 @@ std::vector<Event> kEventsNs() {
           {1'000'020'000, 100, 200, false}};
 }
 
-class Aedat4Compression : public ::testing::TestWithParam<int> {};
+class Aedat4SynthesisedCompression : public ::testing::TestWithParam<int> {};
 
-TEST_P(Aedat4Compression, SynthesisedFileDecodes) {
+TEST_P(Aedat4SynthesisedCompression, SynthesisedFileDecodes) {
   const int c = GetParam();
   Aedat4Synthesizer w(c, {{0, "EVTS", 346, 260}, {1, "FRME", 346, 260}, {2, "IMUS"}});
   w.packet(0, events_payload({kEvents[0], kEvents[1]}));
@@ -261,7 +255,7 @@ TEST_P(Aedat4Compression, SynthesisedFileDecodes) {
   EXPECT_EQ(r.info.height, 260);
 }
 
-INSTANTIATE_TEST_SUITE_P(AllCompressions, Aedat4Compression, ::testing::Values(0, 1, 2, 3, 4));
+INSTANTIATE_TEST_SUITE_P(AllCompressions, Aedat4SynthesisedCompression, ::testing::Values(0, 1, 2, 3, 4));
 
 TEST(Aedat4BadInput, CorruptZstdPacketIsDroppedAndReadingContinues) {
   Aedat4Synthesizer w(3, {{0, "EVTS", 346, 260}});

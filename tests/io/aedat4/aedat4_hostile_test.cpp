@@ -20,19 +20,13 @@
 namespace fdv {
 namespace {
 
+using test::dropped;
+using test::first_where;
+
 using namespace test::aedat4;
 
 std::unique_ptr<RecordingReader> open_bytes(const Bytes& b, const std::string& name) {
   return open_aedat4(std::make_unique<std::istringstream>(std::string(b.begin(), b.end())), name);
-}
-
-std::uint64_t dropped(const ReadReport& r, const std::string& reason) {
-  const auto it = r.dropped().find(reason);
-  return it == r.dropped().end() ? 0 : it->second.count;
-}
-std::string first_where(const ReadReport& r, const std::string& reason) {
-  const auto it = r.dropped().find(reason);
-  return it == r.dropped().end() ? "" : it->second.first_where;
 }
 
 const std::vector<TestEvent> kTwo = {{1'000'000, 1, 2, 1}, {1'000'010, 3, 4, 0}};

@@ -46,7 +46,7 @@ struct ReadAll {
   bool imu_ahead_of_events = false;
 };
 
-ReadAll read_all(RecordingReader& reader) {
+ReadAll read_with_chunks(RecordingReader& reader) {
   ReadAll r;
   SensorChunk chunk;
   std::vector<bool> ahead;  // per chunk
@@ -92,7 +92,7 @@ TEST_P(Aedat4Real, MatchesIndependentDecodeAndReadme) {
   EXPECT_EQ(reader->info().format, "aedat4");
   EXPECT_EQ(reader->info().width, rf.width);
   EXPECT_EQ(reader->info().height, rf.height);
-  const ReadAll got = read_all(*reader);
+  const ReadAll got = read_with_chunks(*reader);
   EXPECT_EQ(reader->report().total_dropped(), 0u) << reader->report().to_json().dump();
 
   // Every event, field by field, in file order: µs -> ns, coordinates and polarity unchanged.
@@ -128,8 +128,8 @@ TEST_P(Aedat4Real, SmallChunksGiveTheSameStream) {
   large.chunk_events = 10'000'000;
   auto a = open_aedat4(path, small);
   auto b = open_aedat4(path, large);
-  const ReadAll sa = read_all(*a);
-  const ReadAll sb = read_all(*b);
+  const ReadAll sa = read_with_chunks(*a);
+  const ReadAll sb = read_with_chunks(*b);
   EXPECT_EQ(sa.events, sb.events);
   ASSERT_EQ(sa.imu.size(), sb.imu.size());
   for (std::size_t i = 0; i < sa.imu.size(); ++i) {

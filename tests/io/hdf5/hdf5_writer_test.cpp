@@ -12,7 +12,7 @@ namespace fdv {
 namespace {
 namespace h5 = test::h5;
 
-std::vector<Event> some_events(std::size_t n) {
+std::vector<Event> sample_events(std::size_t n) {
   std::vector<Event> out;
   TimeNs t = 5'000'000'000;
   for (std::size_t i = 0; i < n; ++i) {
@@ -41,7 +41,7 @@ std::vector<h5::CdEvent> read_table(const std::string& path) {
 TEST(Hdf5Writer, TableHoldsTheEventsInMicrosecondsAndOurReaderReadsThemBack) {
   for (int gzip : {0, 4}) {
     const std::string path = test::scratch_dir("hdf5_writer_" + std::to_string(gzip)) + "/out.h5";
-    const auto events = some_events(40000);
+    const auto events = sample_events(40000);
     {
       Hdf5EventWriter w(path, 346, 260, {.gzip_level = gzip, .chunk_rows = 4096});
       w.add(std::span(events).first(12345));

@@ -18,10 +18,15 @@
 #include "fdv/io/prophesee/evt_decoder.h"
 #include "fdv/io/prophesee/prophesee_raw_reader.h"
 #include "fdv/io/recording.h"
+#include "evt_words.h"
 #include "test_support.h"
 
 namespace fdv {
 namespace {
+
+using test::dropped;
+using test::repaired;
+using test::th2;
 
 struct Result {
   std::vector<Event> events;
@@ -43,15 +48,6 @@ Result read_bytes(const std::string& bytes, const std::string& name = "memory.ra
   return read_all(open_prophesee_raw(std::make_unique<std::istringstream>(bytes), name));
 }
 
-std::uint64_t dropped(const ReadReport& r, const std::string& reason) {
-  const auto it = r.dropped().find(reason);
-  return it == r.dropped().end() ? 0 : it->second.count;
-}
-std::uint64_t repaired(const ReadReport& r, const std::string& reason) {
-  const auto it = r.repaired().find(reason);
-  return it == r.repaired().end() ? 0 : it->second.count;
-}
-
 void put16(std::string& s, std::uint32_t w) {
   s.push_back(static_cast<char>(w & 0xFF));
   s.push_back(static_cast<char>((w >> 8) & 0xFF));
@@ -64,7 +60,6 @@ void put32(std::string& s, std::uint32_t w) {
 std::uint32_t cd2(std::uint32_t t_low, std::uint32_t x, std::uint32_t y) {
   return 1u << 28 | t_low << 22 | x << 11 | y;
 }
-std::uint32_t th2(std::uint32_t high) { return 0x8u << 28 | high; }
 
 const std::string kEvt2Header = "% evt 2.0\n% geometry 640x480\n% end\n";
 const std::string kEvt3Header = "% evt 3.0\n% geometry 1280x720\n% end\n";

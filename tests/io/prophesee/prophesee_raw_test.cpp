@@ -15,10 +15,14 @@
 #include "fdv/core/error.h"
 #include "fdv/io/prophesee/prophesee_raw_reader.h"
 #include "fdv/io/recording.h"
+#include "evt_words.h"
 #include "test_support.h"
 
 namespace fdv {
 namespace {
+
+using test::dropped;
+using test::th2;
 
 ReaderOptions chunked(std::size_t chunk_events) {
   ReaderOptions o;
@@ -120,11 +124,6 @@ ReadAll read_all(RecordingReader& r) {
     all.events.insert(all.events.end(), c.events.begin(), c.events.end());
   }
   return all;
-}
-
-std::uint64_t dropped(const ReadReport& r, const std::string& reason) {
-  const auto it = r.dropped().find(reason);
-  return it == r.dropped().end() ? 0 : it->second.count;
 }
 
 bool has_note(const RecordingInfo& info, const std::string& text) {
@@ -292,7 +291,6 @@ class RawWriter {
 std::uint32_t cd(bool on, std::uint32_t t_low, std::uint32_t x, std::uint32_t y) {
   return (on ? 1u : 0u) << 28 | t_low << 22 | x << 11 | y;
 }
-std::uint32_t th2(std::uint32_t high) { return 0x8u << 28 | high; }
 // EVT 3.0 words.
 std::uint32_t addr_y(std::uint32_t y) { return y; }
 std::uint32_t addr_x(std::uint32_t x, bool on) { return 0x2000u | (on ? 0x800u : 0u) | x; }
