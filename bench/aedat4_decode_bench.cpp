@@ -32,6 +32,7 @@ void BM_Aedat4Reader(benchmark::State& state) {
       imu += chunk.imu.size();
     }
     benchmark::DoNotOptimize(events);
+    benchmark::DoNotOptimize(imu);
   }
   state.counters["events/s"] =
       benchmark::Counter(static_cast<double>(events), benchmark::Counter::kIsRate);
