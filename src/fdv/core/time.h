@@ -18,6 +18,8 @@ inline constexpr TimeNs kNsPerS = 1'000'000'000;
 
 constexpr double to_seconds(TimeNs t_ns) { return static_cast<double>(t_ns) * 1e-9; }
 inline TimeNs from_seconds(double t_s) { return static_cast<TimeNs>(std::llround(t_s * 1e9)); }
+/// Whole microseconds at or before t (the formats that store µs round time down, negatives too).
+constexpr std::int64_t floor_us(TimeNs t) { return t >= 0 ? t / 1000 : -((-t + 999) / 1000); }
 
 /// The times a sensor sample may carry: |t| < 2^62 ns (146 years either side of the input's epoch,
 /// Unix time until 2116). Outside, the time is corrupt (e.g. INT64_MIN from a damaged record), and

@@ -24,13 +24,13 @@ using lanes::vd;
 using lanes::vf;
 using lanes::vi;
 
-constexpr std::size_t kBlock = 16;
+constexpr std::size_t kBlockPixels = 16;
 /// Σ T is summed per chunk of this many blocks, then the chunks in order: a fixed order, so the
 /// result does not depend on how the blocks are split between threads.
 constexpr std::size_t kChunkBlocks = 256;
 /// Blocks per group, the unit of the marks that let the passes skip unused parts of the frame.
 constexpr std::size_t kGroupBlocks = 16;
-constexpr std::size_t kGroupPixels = kBlock * kGroupBlocks;
+constexpr std::size_t kGroupPixels = kBlockPixels * kGroupBlocks;
 static_assert(kChunkBlocks % kGroupBlocks == 0);
 constexpr std::uint8_t kNow = 1, kBefore = 2;
 using PixelTime = TimeImages::PixelTime;
@@ -121,12 +121,12 @@ Extremes pass1(const Images& im, std::uint8_t* blocks, std::size_t b0, std::size
       for (std::size_t b = g0; b < g1; ++b) {
         const std::uint8_t state = blocks[b];
         if (!state) continue;
-        const std::size_t i0 = b * kBlock, n = std::min(kBlock, npx - i0);
+        const std::size_t i0 = b * kBlockPixels, n = std::min(kBlockPixels, npx - i0);
         if (!(state & kNow)) {
           blank_block(im, i0, n);
           continue;
         }
-        if (n < kBlock) {
+        if (n < kBlockPixels) {
           for (std::size_t i = i0; i < i0 + n; ++i) pixel_pass1(im, i, x, sum_tail);
           continue;
         }
@@ -178,13 +178,13 @@ void pass2(const Images& im, std::uint8_t* blocks, std::size_t b0, std::size_t b
       const std::uint8_t state = blocks[b];
       blocks[b] = state & kNow ? kBefore : 0;
       if (!(state & kNow)) continue;
-      const std::size_t i0 = b * kBlock, n = std::min(kBlock, npx - i0);
-      if (n < kBlock) {
+      const std::size_t i0 = b * kBlockPixels, n = std::min(kBlockPixels, npx - i0);
+      if (n < kBlockPixels) {
         for (std::size_t i = i0; i < i0 + n; ++i)
           im.norm[i] = im.count[i] > 0 ? (im.mean[i] - t_min) * scale : 0.0f;
         continue;
       }
-      for (std::size_t i = i0; i < i0 + kBlock; i += 4) {
+      for (std::size_t i = i0; i < i0 + kBlockPixels; i += 4) {
         const vi has = load(im.count + i) > 0;
         store(im.norm + i, select(has, (load(im.mean + i) - vmin) * vscale, vf{}));
       }
@@ -212,7 +212,7 @@ int accumulate(const std::int32_t* __restrict pixel, const float* __restrict t_s
     if (p >= npx) continue;
     acc[2 * p] += 1.0f;
     acc[2 * p + 1] += t_s[k];
-    blocks[p / kBlock] |= kNow;
+    blocks[p / kBlockPixels] |= kNow;
     groups_now[p / kGroupPixels] = 1;
     ++count;
   }
@@ -229,7 +229,7 @@ void accumulate_pairs(const PixelTime* __restrict e, std::size_t n, float* __res
     const auto p = static_cast<std::size_t>(e[k].pixel);
     acc[2 * p] += 1.0f;
     acc[2 * p + 1] += e[k].t_s;
-    blocks[p / kBlock] |= kNow;
+    blocks[p / kBlockPixels] |= kNow;
     groups_now[p / kGroupPixels] = 1;
   }
 }
@@ -311,7 +311,7 @@ void prepare_time_images(TimeImages& out, int w, int h) {
   out.normalized.create(h, w, CV_32F);
   out.accumulator.create(h, w, CV_32FC2);
   const std::size_t npx = static_cast<std::size_t>(w) * h;
-  const std::size_t n_blocks = (npx + kBlock - 1) / kBlock;
+  const std::size_t n_blocks = (npx + kBlockPixels - 1) / kBlockPixels;
   // First use, new buffers or a new size: everything is blanked once; afterwards the images are
   // 0 outside the blocks the previous window marked.
   const std::array<const void*, 5> keys{out.count.data, out.sum_time_s.data, out.mean_time_s.data,
@@ -333,7 +333,7 @@ void build_time_images(const CompensatedEventsView& view, TimeImages& out) {
   const int w = view.width, h = view.height;
   prepare_time_images(out, w, h);
   const std::size_t npx = static_cast<std::size_t>(w) * h;
-  const std::size_t n_blocks = (npx + kBlock - 1) / kBlock;
+  const std::size_t n_blocks = (npx + kBlockPixels - 1) / kBlockPixels;
   const Images im{out.accumulator.ptr<float>(), out.count.ptr<std::int32_t>(),
                   out.sum_time_s.ptr<float>(),  out.mean_time_s.ptr<float>(),
                   out.normalized.ptr<float>(),  out.groups_now.data(),
@@ -353,7 +353,7 @@ void build_time_images(const CompensatedEventsView& view, TimeImages& out) {
   for (int i = 0; i <= parts; ++i) {
     first_block[i] = std::min(n_blocks, n_chunks * static_cast<std::size_t>(i) /
                                             static_cast<std::size_t>(parts) * kChunkBlocks);
-    split.bound[i] = std::min(npx, first_block[i] * kBlock);
+    split.bound[i] = std::min(npx, first_block[i] * kBlockPixels);
     split.first_event[i] = n * static_cast<std::size_t>(i) / static_cast<std::size_t>(parts);
   }
   std::array<Extremes, kMaxImageParts> extremes;

@@ -17,6 +17,7 @@
 ///    byte offset or line and the reason; recoverable damage (a corrupt packet, a truncated
 ///    tail) is dropped and counted so the rest of the file stays usable.
 /// Not thread-safe; one reader per thread.
+#include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <limits>
@@ -32,6 +33,8 @@
 namespace fdv {
 
 enum class StreamKind { kEvents, kImu, kDepth, kOdometry, kGroundTruth };
+/// Position of `kind` in the enumeration, for arrays indexed by stream.
+constexpr std::size_t stream_index(StreamKind kind) { return static_cast<std::size_t>(kind); }
 const char* to_string(StreamKind kind);
 
 /// One topic (channel) of a recording that has them (ROS bags): listed by `fdv info`.

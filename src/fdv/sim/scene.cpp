@@ -1,13 +1,12 @@
 #include "fdv/sim/scene.h"
 
 #include <cmath>
+#include <numbers>
 
 #include "fdv/sim/random.h"
 
 namespace fdv::sim {
 namespace {
-
-constexpr double kTwoPi = 6.283185307179586;
 
 int axis_index(const std::string& axis) { return axis == "x" ? 0 : axis == "y" ? 1 : 2; }
 
@@ -18,7 +17,7 @@ void make_octaves(Surface& s, double scale_m, Rng& rng) {
   const double amp[kOctaves] = {1.0, 0.55, 0.3};
   for (int k = 0; k < kOctaves; ++k) {
     const double spacing = scale_m * rel_spacing[k];
-    const double angle = rng.uniform(0, kTwoPi);
+    const double angle = rng.uniform(0, 2 * std::numbers::pi);
     const double c = std::cos(angle) / spacing, sn = std::sin(angle) / spacing;
     Octave& o = s.octave[k];
     o.m00 = static_cast<float>(c), o.m01 = static_cast<float>(-sn);
@@ -97,9 +96,9 @@ Scene::Scene(const SceneConfig& config, const std::vector<BallConfig>& balls, st
       dir.normalize();
       const double freq = bc.texture_frequency * rel[k];
       for (int a = 0; a < 3; ++a) b.wave[k][a] = static_cast<float>(dir[a] * freq);
-      b.phase[k] = static_cast<float>(ball_rng.uniform(0, kTwoPi));
+      b.phase[k] = static_cast<float>(ball_rng.uniform(0, 2 * std::numbers::pi));
       b.amp[k] = static_cast<float>(amp[k]);
-      b.inv_wavelength_m[k] = static_cast<float>(freq / (kTwoPi * bc.radius_m));
+      b.inv_wavelength_m[k] = static_cast<float>(freq / (2 * std::numbers::pi * bc.radius_m));
     }
     balls_.push_back(b);
   }

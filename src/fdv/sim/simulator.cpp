@@ -17,13 +17,6 @@
 namespace fdv::sim {
 namespace {
 
-/// Sample times k / rate, k = 0, 1, ... (rounded to the nanosecond).
-struct SampleClock {
-  double rate_hz;
-  std::uint64_t k = 0;
-  TimeNs next() const { return std::llround(static_cast<double>(k) * 1e9 / rate_hz); }
-};
-
 void emit_vector(YAML::Emitter& out, const Eigen::Vector3d& v) {
   out << YAML::Flow << YAML::BeginSeq;
   for (int i = 0; i < 3; ++i) out << fmt::format("{}", v[i]);
@@ -81,6 +74,13 @@ std::vector<ResolvedBall> Simulator::resolved_balls() const {
 /// Everything a run keeps between steps. Members are declared in the order they depend on one
 /// another (the camera and the depth model hold references to the scene, vehicle and pool).
 struct Simulator::Running {
+  /// Sample times k / rate, k = 0, 1, ... (rounded to the nanosecond).
+  struct SampleClock {
+    double rate_hz;
+    std::uint64_t k = 0;
+    TimeNs next() const { return std::llround(static_cast<double>(k) * 1e9 / rate_hz); }
+  };
+
   Running(const ScenarioConfig& config, const Calibration& calib, const VehicleTrajectory& path,
           const std::vector<BallTrajectory>& balls, SimulationSink& out, Flight flown)
       : flight(flown),

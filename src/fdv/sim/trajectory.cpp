@@ -4,6 +4,7 @@
 
 #include <Eigen/LU>
 #include <cmath>
+#include <numbers>
 
 #include "fdv/core/error.h"
 #include "fdv/sim/geometry.h"
@@ -11,8 +12,6 @@
 
 namespace fdv::sim {
 namespace {
-
-constexpr double kTwoPi = 6.283185307179586;
 
 Eigen::Matrix3d rotation_exp(const Eigen::Vector3d& w) { return rotation_exp_q(w).toRotationMatrix(); }
 
@@ -55,27 +54,27 @@ VehicleTrajectory::VehicleTrajectory(const VehicleConfig& config, std::uint64_t 
   const double axis_freq[3] = {1.0, 1.09, 0.93};
   for (int axis = 0; axis < 3; ++axis) {
     for (int k = 0; k < 3; ++k) {
-      const double w = kTwoPi * config.vibration_frequency_hz * rel_freq[k] * axis_freq[axis];
-      pos_[axis].add(config.vibration_position_m * rel_amp[k], w, rng.uniform(0, kTwoPi));
+      const double w = 2 * std::numbers::pi * config.vibration_frequency_hz * rel_freq[k] * axis_freq[axis];
+      pos_[axis].add(config.vibration_position_m * rel_amp[k], w, rng.uniform(0, 2 * std::numbers::pi));
       angle_[axis].add(config.vibration_angle_deg * kDegToRad * rel_amp[k], w * 1.05,
-                       rng.uniform(0, kTwoPi));
+                       rng.uniform(0, 2 * std::numbers::pi));
     }
   }
   if (config.motion == MotionKind::kHover) {
     const double wander_rel[3] = {1.0, 1.31, 0.73};
     for (int axis = 0; axis < 3; ++axis)
       pos_[axis].add(config.wander_position_m * (axis == 2 ? 0.5 : 1.0),
-                     kTwoPi * config.wander_frequency_hz * wander_rel[axis],
-                     rng.uniform(0, kTwoPi));
+                     2 * std::numbers::pi * config.wander_frequency_hz * wander_rel[axis],
+                     rng.uniform(0, 2 * std::numbers::pi));
   }
   angle_[1].offset = config.nose_down_deg * kDegToRad;
   angle_[2].offset = psi0;
   if (config.motion == MotionKind::kSwing) {
-    const double omega = kTwoPi * config.swing_frequency_hz;
-    const double phase = rng.uniform(0, kTwoPi);
+    const double omega = 2 * std::numbers::pi * config.swing_frequency_hz;
+    const double phase = rng.uniform(0, 2 * std::numbers::pi);
     const double roll = config.swing_roll_deg * kDegToRad;
     angle_[0].add(roll, omega, phase);
-    angle_[2].add(config.swing_yaw_deg * kDegToRad, omega, phase + kTwoPi / 4);
+    angle_[2].add(config.swing_yaw_deg * kDegToRad, omega, phase + 2 * std::numbers::pi / 4);
     // Lateral sway whose acceleration is the one the roll tilt produces (small-angle thrust
     // tilt: y'' = -g roll in the left direction).
     const double sway = gravity_W.norm() * roll / (omega * omega);

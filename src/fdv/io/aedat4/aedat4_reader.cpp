@@ -35,7 +35,7 @@ constexpr std::uint64_t kHeaderAt = kAedat4Magic.size();
 constexpr std::uint64_t kPacketHeaderBytes = 8;
 /// Bound that keeps a damaged IOHeader size field from asking for absurd memory (a real header
 /// is a few KiB: the XML description of a handful of streams).
-constexpr std::uint32_t kMaxHeaderBytes = 64u << 20;
+constexpr std::uint32_t kMaxIoHeaderBytes = 64u << 20;
 /// Largest stored (compressed) payload read: LZ4 and Zstd expand incompressible data by less
 /// than 1/128 (LZ4 n/255 + 16 bytes per block, Zstd about n/256), so any packet that inflates
 /// to at most kAedat4MaxPacketBytes fits.
@@ -104,7 +104,7 @@ const tinyxml2::XMLElement* child_node(const tinyxml2::XMLElement* parent, const
   return nullptr;
 }
 
-bool parse_int(std::string_view s, int& out) {
+bool parse_trimmed_int(std::string_view s, int& out) {
   while (!s.empty() && s.front() == ' ') s.remove_prefix(1);
   while (!s.empty() && s.back() == ' ') s.remove_suffix(1);
   const auto r = std::from_chars(s.data(), s.data() + s.size(), out);
@@ -131,7 +131,7 @@ std::map<std::int32_t, StreamDesc> parse_streams(const char* xml, std::size_t si
   for (auto* n = out_info->FirstChildElement("node"); n; n = n->NextSiblingElement("node")) {
     const char* name = n->Attribute("name");
     int id = 0;
-    if (!name || !parse_int(name, id) || id < 0)
+    if (!name || !parse_trimmed_int(name, id) || id < 0)
       fail("stream node name \"" + escape_non_utf8(name ? name : "") +
            "\" is not a non-negative integer id");
     StreamDesc s;
@@ -140,7 +140,7 @@ std::map<std::int32_t, StreamDesc> parse_streams(const char* xml, std::size_t si
     if (const auto* info = child_node(n, "info")) {
       for (auto [key, value] : {std::pair{"sizeX", &s.width}, std::pair{"sizeY", &s.height}}) {
         const char* text = attr_text(info, key);
-        if (text && !parse_int(text, *value))
+        if (text && !parse_trimmed_int(text, *value))
           fail("stream " + std::to_string(id) + " " + key + " \"" + escape_non_utf8(text) +
                "\" is not an integer");
       }
@@ -347,7 +347,7 @@ class Aedat4Reader final : public RecordingReader {
       throw InputError(path_, at_byte(kHeaderAt),
                        "truncated header: the file ends before the IOHeader size");
     const std::uint32_t size = load_u32(prefix);
-    if (size < 8 || size > kMaxHeaderBytes)
+    if (size < 8 || size > kMaxIoHeaderBytes)
       throw InputError(path_, at_byte(kHeaderAt),
                        "IOHeader size " + std::to_string(size) + " is not plausible");
     if (kHeaderAt + 4 + size > file_size_)

@@ -18,8 +18,6 @@ namespace {
 constexpr std::int32_t kEventsStream = 0, kImuStream = 1;
 constexpr int kMaxSide = std::numeric_limits<std::int16_t>::max();
 
-std::int64_t floor_us(TimeNs t) { return t >= 0 ? t / 1000 : -((-t + 999) / 1000); }
-
 const char* compression_name(Aedat4Compression c) {
   return c == Aedat4Compression::kLz4 ? "LZ4" : c == Aedat4Compression::kZstd ? "ZSTD" : "NONE";
 }

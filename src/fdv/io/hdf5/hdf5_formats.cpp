@@ -9,7 +9,7 @@
 namespace fdv {
 namespace {
 
-const hdf5::PluginApi& plugin(const std::string& needed_for) {
+const hdf5::PluginApi& hdf5_plugin(const std::string& needed_for) {
   return *static_cast<const hdf5::PluginApi*>(load_plugin_api(hdf5::kPluginName, hdf5::kPluginEntry, needed_for));
 }
 
@@ -18,12 +18,12 @@ const hdf5::PluginApi& plugin(const std::string& needed_for) {
 bool looks_like_hdf5(std::string_view head) { return head.starts_with(kHdf5Magic); }
 
 std::unique_ptr<RecordingReader> open_hdf5(const std::string& path, const ReaderOptions& options) {
-  return plugin(path).open(path, options);
+  return hdf5_plugin(path).open(path, options);
 }
 
 std::unique_ptr<RecordingReader> open_hdf5_image(std::string image, const std::string& name,
                                                  const ReaderOptions& options) {
-  return plugin(name).open_image(std::move(image), name, options);
+  return hdf5_plugin(name).open_image(std::move(image), name, options);
 }
 
 std::string Hdf5WriterOptions::validate() const {
@@ -38,7 +38,7 @@ Hdf5EventWriter::Hdf5EventWriter(const std::string& path, int width, int height,
   if (width < 1 || height < 1 || width > 65536 || height > 65536)
     throw ConfigError(path + ": HDF5 (Metavision layout) holds pixels as uint16: sensor size " +
                       std::to_string(width) + "x" + std::to_string(height) + " is outside 1..65536");
-  backend_ = plugin(path).create_writer(path, width, height, options);
+  backend_ = hdf5_plugin(path).create_writer(path, width, height, options);
 }
 
 Hdf5EventWriter::~Hdf5EventWriter() {

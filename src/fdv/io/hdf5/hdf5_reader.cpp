@@ -28,16 +28,10 @@ struct Row {
   std::int32_t x, y, p;
 };
 
+using hdf5::CdEvent;
+
 /// "first event at or after time t": Metavision's CD/indexes (t = ts + the table's time base) and
 /// DSEC's ms_to_idx (t = k ms).
-/// Metavision's EventCD record as stored (x u16 @0, y u16 @2, p i16 @4, t i64 @8): read as it
-/// is when the file's type is exactly this, which spares HDF5's field-by-field conversion.
-struct CdEvent {
-  std::uint16_t x, y;
-  std::int16_t p;
-  std::int64_t t;
-};
-
 struct IndexEntry {
   std::int64_t id;
   std::int64_t t_us;

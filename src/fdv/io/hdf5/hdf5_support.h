@@ -1,12 +1,23 @@
 #pragma once
-/// What the HDF5 reader and writer share: an owning handle for HDF5 identifiers, the reason
-/// HDF5 gave for its last failure, and the filter-plugin search path. Internal to fdv::io.
+/// What the HDF5 reader and writer share: Metavision's event record, an owning handle for HDF5
+/// identifiers, the reason HDF5 gave for its last failure, and the filter-plugin search path.
+/// Internal to fdv::io.
 #include <hdf5.h>
 
+#include <cstdint>
 #include <string>
 #include <utility>
 
 namespace fdv::hdf5 {
+
+/// Metavision's EventCD record as stored (x u16 @0, y u16 @2, p i16 @4, t i64 @8: 16 bytes). The
+/// writer stores it; the reader reads it as it is when a file's type is exactly this, which spares
+/// HDF5's field-by-field conversion.
+struct CdEvent {
+  std::uint16_t x, y;
+  std::int16_t p;
+  std::int64_t t;
+};
 
 /// Owns one HDF5 identifier (file, group, dataset, dataspace, type, property list, attribute)
 /// and closes it with H5Idec_ref, which fits every kind.

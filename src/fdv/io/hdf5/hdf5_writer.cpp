@@ -14,17 +14,11 @@ using hdf5::Id;
 /// Index period of Metavision's CD/indexes [µs].
 constexpr std::int64_t kIndexPeriodUs = 2000;
 
-struct CdEvent {  // Metavision's EventCD record: 16 bytes, t at byte 8
-  std::uint16_t x, y;
-  std::int16_t p;
-  std::int64_t t;
-};
+using hdf5::CdEvent;
 struct IndexRow {
   std::uint64_t id;
   std::int64_t ts;
 };
-
-std::int64_t floor_us(TimeNs t) { return t >= 0 ? t / 1000 : -((-t + 999) / 1000); }
 
 /// Hdf5EventWriter's work: the tables, their index and the file.
 class TableWriter final : public hdf5::EventWriterBackend {

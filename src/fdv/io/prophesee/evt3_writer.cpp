@@ -13,8 +13,6 @@ constexpr unsigned kTimeHigh = 0x8;  // time bits 23..12 [µs]
 constexpr std::int64_t kPeriodUs = 1 << 12;
 constexpr std::size_t kFlushWords = 1 << 16;
 
-std::int64_t floor_us(TimeNs t) { return t >= 0 ? t / 1000 : -((-t + 999) / 1000); }
-
 }  // namespace
 
 Evt3Writer::Evt3Writer(const std::string& path, int width, int height)

@@ -87,8 +87,6 @@ std::string topic_list(const std::vector<TopicInfo>& topics) {
   return s;
 }
 
-std::size_t index(StreamKind k) { return static_cast<std::size_t>(k); }
-
 }  // namespace
 
 bool supported(MessageType type, Dialect dialect) {
@@ -175,7 +173,7 @@ std::vector<SelectedTopic> select_topics(const std::string& file,
     take(stream, *chosen);
   }
   std::sort(out.begin(), out.end(),
-            [](const auto& a, const auto& b) { return index(a.stream) < index(b.stream); });
+            [](const auto& a, const auto& b) { return stream_index(a.stream) < stream_index(b.stream); });
   for (const auto& s : out)
     notes.push_back(std::string(to_string(s.stream)) + ": " + s.topic + " (" + s.type_name + ")");
   return out;

@@ -8,11 +8,6 @@
 #include "fdv/io/rosbag/message_cursor.h"
 
 namespace fdv::bag {
-namespace {
-
-std::size_t index(StreamKind k) { return static_cast<std::size_t>(k); }
-
-}  // namespace
 
 MessageDecoder::MessageDecoder(Dialect dialect) : dialect_(dialect) {
   last_t_.fill(std::numeric_limits<TimeNs>::min());
@@ -39,7 +34,7 @@ bool MessageDecoder::accept_time(StreamKind stream, TimeNs& t, std::optional<Tim
     report.drop(std::string(to_string(stream)) + ": " + latest_->second, where);
     return false;
   }
-  TimeNs& last = last_t_[index(stream)];
+  TimeNs& last = last_t_[stream_index(stream)];
   if (t < last) {
     report.drop(std::string(to_string(stream)) + ": timestamp went backwards", where);
     return false;

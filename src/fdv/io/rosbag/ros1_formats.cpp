@@ -8,19 +8,19 @@
 namespace fdv {
 namespace {
 
-const ros1::PluginApi& plugin(const std::string& needed_for) {
+const ros1::PluginApi& ros1_plugin(const std::string& needed_for) {
   return *static_cast<const ros1::PluginApi*>(load_plugin_api(ros1::kPluginName, ros1::kPluginEntry, needed_for));
 }
 
 }  // namespace
 
 std::unique_ptr<RecordingReader> open_ros1_bag(const std::string& path, const ReaderOptions& options) {
-  return plugin(path).open(path, options);
+  return ros1_plugin(path).open(path, options);
 }
 
 std::unique_ptr<RecordingReader> open_ros1_bag_bytes(const std::string& bytes, const std::string& name,
                                                      const ReaderOptions& options) {
-  return plugin(name).open_bytes(bytes, name, options);
+  return ros1_plugin(name).open_bytes(bytes, name, options);
 }
 
 }  // namespace fdv

@@ -40,7 +40,7 @@ std::string parse_row(const std::vector<std::string_view>& f, std::size_t n, Tim
 }
 
 /// imu.txt: t ax ay az gx gy gz (accelerometer first; dataset web page / paper Table 1).
-std::string parse_imu(const std::vector<std::string_view>& f, ImuSample& s) {
+std::string parse_rpg_imu(const std::vector<std::string_view>& f, ImuSample& s) {
   double v[6];
   if (auto why = parse_row(f, 7, s.t, v); !why.empty()) return why;
   s.accel_m_s2 = {v[0], v[1], v[2]};
@@ -144,7 +144,7 @@ class EventLines {
 };
 
 template <typename T>
-std::vector<T> read_all(TableStream<T>&& stream, ReadReport& report) {
+std::vector<T> read_table(TableStream<T>&& stream, ReadReport& report) {
   std::vector<T> out;
   stream.take_until(std::numeric_limits<TimeNs>::max(), std::numeric_limits<std::size_t>::max(),
                     out, report);
@@ -156,7 +156,7 @@ class RpgTextReader final : public RecordingReader {
   RpgTextReader(const std::string& dir, const ReaderOptions& options)
       : chunk_events_(std::max<std::size_t>(1, options.chunk_events)),
         events_(LineReader((fs::path(dir) / kRpgEventsFile).string())),
-        imu_(fs::path(dir) / "imu.txt", "imu", parse_imu, ' '),
+        imu_(fs::path(dir) / "imu.txt", "imu", parse_rpg_imu, ' '),
         groundtruth_(fs::path(dir) / "groundtruth.txt", "groundtruth", parse_groundtruth, ' ') {
     info_.path = dir;
     info_.format = "rpg_text";
@@ -232,13 +232,13 @@ std::vector<Event> read_rpg_events(std::unique_ptr<std::istream> in, const std::
 
 std::vector<ImuSample> read_rpg_imu(std::unique_ptr<std::istream> in, const std::string& name,
                                     ReadReport& report) {
-  return read_all(TableStream<ImuSample>(LineReader(std::move(in), name), "imu", parse_imu, ' '),
+  return read_table(TableStream<ImuSample>(LineReader(std::move(in), name), "imu", parse_rpg_imu, ' '),
                   report);
 }
 
 std::vector<OdometrySample> read_rpg_groundtruth(std::unique_ptr<std::istream> in,
                                                  const std::string& name, ReadReport& report) {
-  return read_all(TableStream<OdometrySample>(LineReader(std::move(in), name), "groundtruth",
+  return read_table(TableStream<OdometrySample>(LineReader(std::move(in), name), "groundtruth",
                                               parse_groundtruth, ' '),
                   report);
 }
