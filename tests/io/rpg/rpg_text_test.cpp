@@ -282,9 +282,7 @@ TEST(RpgText, FolderWithoutEventsIsNotRecognised) {
   EXPECT_THROW(open_rpg_text(dir), InputError);
 }
 
-std::unique_ptr<std::istream> text(const std::string& s) {
-  return std::make_unique<std::istringstream>(s);
-}
+using test::text;
 
 // The in-memory entry points read what the folder reader reads, with the same drops.
 TEST(RpgText, InMemoryEntryPointsParseOneFileEach) {
