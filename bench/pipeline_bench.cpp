@@ -8,6 +8,8 @@
 //   build-perf/bench/pipeline_bench --rate 5 --seconds 60 --sim-seconds 0.4     # memory
 //   build-perf/bench/pipeline_bench --rate 5 --burst-rate 50                       # overload
 //   build-perf/bench/pipeline_bench ... --windows-csv w.csv   # every window's stage times
+//   build-perf/bench/pipeline_bench --rate 5 --seconds 3600 --rss-csv rss.csv --minutes-csv min.csv
+//                                                               # soak: an hour of stream
 //
 // How the event rate is reached (docs/BENCHMARKS.md): the preset is simulated once at its own
 // contrast threshold to measure its natural rate, then again with the contrast threshold (mean,
@@ -23,6 +25,10 @@
 // results (everything the pipeline did in between: depth registration and segmentation,
 // estimation); "real-time lag" replays those work times against the 25 ms window period
 // (lag_k = max(0, lag_{k-1} + work_k − Δt)): bounded lag means a live stream keeps up.
+// Soak (--minutes-csv, --rss-csv): RSS is read every second of stream time and the window latency
+// summarised per minute of it. The per-window samples are then kept for the current minute only
+// (their buffers reused), so that the benchmark's own bookkeeping does not grow with the run: the
+// closing table then covers the last minute.
 // Overload: --burst-rate adds uniformly random events (a flicker-like burst) for --burst-ms every
 // --burst-every-s; the windower's decimation keeps each window bounded and reports the dropped
 // events.
@@ -164,7 +170,16 @@ struct Args {
   int warmup_windows = 8;
   std::string json;
   std::string windows_csv;
+  std::string rss_csv;      // soak: RSS every second of stream
+  std::string minutes_csv;  // soak: window latency per minute of stream
 };
+
+using CsvFile = std::unique_ptr<std::FILE, int (*)(std::FILE*)>;
+CsvFile open_csv(const std::string& path, const char* header) {
+  CsvFile f(path.empty() ? nullptr : std::fopen(path.c_str(), "w"), &std::fclose);
+  if (f) std::fputs(header, f.get());
+  return f;
+}
 
 int run(const Args& a) {
   cv::setNumThreads(a.threads);
@@ -200,17 +215,31 @@ int run(const Args& a) {
   const double window_ms = to_seconds(opt.windows.window_ns) * 1e3;
   PerceptionCallbacks cb;
   const std::vector<RegisteredSource> sources = registered_sources();
-  std::unique_ptr<std::FILE, int (*)(std::FILE*)> windows_csv(nullptr, &std::fclose);
-  if (!a.windows_csv.empty()) {
-    windows_csv.reset(std::fopen(a.windows_csv.c_str(), "w"));
-    if (!windows_csv) {
-      std::fprintf(stderr, "cannot write %s\n", a.windows_csv.c_str());
+  std::string header = "window,events,status,detected,compensation,time_images,segmentation,preprocess,";
+  for (const RegisteredSource& source : sources) header += std::string(source.name) + ",";
+  const CsvFile windows_csv = open_csv(a.windows_csv, (header + "refine,detection,front_end\n").c_str());
+  const CsvFile rss_csv = open_csv(a.rss_csv, "second,rss_mb,windows,lag_ms\n");
+  const CsvFile minutes_csv = open_csv(
+      a.minutes_csv, "minute,windows,window_total_median_ms,window_total_p99_ms,window_total_max_ms,"
+                     "work_median_ms,work_p99_ms,rss_mb\n");
+  for (const auto& [path, file] : {std::pair{&a.windows_csv, &windows_csv}, {&a.rss_csv, &rss_csv},
+                                   {&a.minutes_csv, &minutes_csv}})
+    if (!path->empty() && !*file) {
+      std::fprintf(stderr, "cannot write %s\n", path->c_str());
       return 2;
     }
-    std::string header = "window,events,status,detected,compensation,time_images,segmentation,preprocess,";
-    for (const RegisteredSource& source : sources) header += std::string(source.name) + ",";
-    std::fputs((header + "refine,detection,front_end\n").c_str(), windows_csv.get());
-  }
+  const bool soak = static_cast<bool>(minutes_csv);
+  // Closes a minute of stream for the soak: its latency row, then the samples start afresh.
+  auto close_minute = [&](long minute, bool start_afresh) {
+    const Distribution& total_ms = stage["window total"];
+    std::fprintf(minutes_csv.get(), "%ld,%zu,%.4f,%.4f,%.4f,%.4f,%.4f,%.2f\n", minute, total_ms.v.size(),
+                 total_ms.quantile(0.5), total_ms.quantile(0.99), total_ms.max(), work.quantile(0.5),
+                 work.quantile(0.99), static_cast<double>(status_kb("VmRSS")) / 1024);
+    std::fflush(minutes_csv.get());
+    if (!start_afresh) return;
+    for (auto& [name, d] : stage) d.v.clear();
+    for (Distribution* d : {&work, &work_cpu, &depth_ms, &estimate_ms}) d->v.clear();
+  };
   cb.on_window = [&](const WindowResult& w) {
     const double now = pipeline_clock(), now_cpu = pipeline_cpu();
     const double work_ms = now - last_window_clock, cpu_ms = now_cpu - last_window_cpu;
@@ -269,7 +298,18 @@ int run(const Args& a) {
     in_pipeline_cpu_ms += thread_cpu_ms() - push_start_cpu;
   };
   const auto wall0 = Clock::now();
+  constexpr TimeNs kNsPerSecond = 1000 * kNsPerMs;
+  auto sample_rss = [&](long second) {
+    if (rss_csv)
+      std::fprintf(rss_csv.get(), "%ld,%.2f,%llu,%.3f\n", second, static_cast<double>(status_kb("VmRSS")) / 1024,
+                   static_cast<unsigned long long>(windows), lag);
+  };
   for (TimeNs t = 0; t < total; t += kNsPerMs) {
+    if (t > 0 && t % kNsPerSecond == 0) {
+      const long second = static_cast<long>(t / kNsPerSecond);
+      sample_rss(second);
+      if (soak && second % 60 == 0) close_minute(second / 60, true);
+    }
     const TimeNs loop = t / period, offset = loop * period,
                  t_in = t - offset;  // time within the simulation
     if (t_in == 0) ie = ii = io = id = 0;
@@ -318,12 +358,16 @@ int run(const Args& a) {
     timed([&] { perception.push_events(slice); });
   }
   timed([&] { perception.finish(); });
+  const long last_second = static_cast<long>((total + kNsPerSecond - 1) / kNsPerSecond);
+  sample_rss(last_second);
+  if (soak) close_minute((last_second + 59) / 60, false);
   const double wall_s = ms_between(wall0, Clock::now()) / 1e3;
   rusage ru{};
   getrusage(RUSAGE_SELF, &ru);
   const long hwm_kb = status_kb("VmHWM");
 
   const double stream_s = to_seconds(total);
+  if (soak) std::printf("# soak: the per-window statistics below are the last minute's (--minutes-csv has each)\n");
   std::printf(
       "# preset %s seed %llu, %.2f s stream (simulation %.2f s looped), contrast threshold x%.3f\n",
       a.preset.c_str(), static_cast<unsigned long long>(a.seed), stream_s, to_seconds(period),
@@ -340,12 +384,14 @@ int run(const Args& a) {
       static_cast<double>(burst_events) * 1e-6, static_cast<unsigned long long>(windows),
       a.warmup_windows, static_cast<unsigned long long>(detections));
   std::printf("%-30s %10s %10s %10s\n", "per window [ms]", "median", "p99", "max");
-  for (const char* k :
-       {"compensation", "time_images", "compensation+time_images", "segmentation+preprocess",
-        "fit+retrieval", "refine", "motion cue", "count cue", "detection, other", "detection (all)",
-        "front end (comp+detection)", "tracking", "window total"}) {
+  std::vector<std::string> rows = {"compensation", "time_images", "compensation+time_images", "segmentation+preprocess"};
+  for (const RegisteredSource& source : sources) rows.push_back("source " + std::string(source.name));
+  for (const char* k : {"refine", "detection, other", "detection (all)", "front end (comp+detection)", "tracking",
+                        "window total"})
+    rows.emplace_back(k);
+  for (const std::string& k : rows) {
     const Distribution& d = stage[k];
-    std::printf("%-30s %10.3f %10.3f %10.3f\n", k, d.quantile(0.5), d.quantile(0.99), d.max());
+    std::printf("%-30s %10.3f %10.3f %10.3f\n", k.c_str(), d.quantile(0.5), d.quantile(0.99), d.max());
   }
   std::printf("%-30s %10.3f %10.3f %10.3f\n", "work per window (all stages)", work.quantile(0.5),
               work.quantile(0.99), work.max());
@@ -429,6 +475,10 @@ int main(int argc, char** argv) {
   app.add_option("--windows-csv", a.windows_csv,
                  "also write every window's stage times [ms], status and event count to this CSV file (to find what "
                  "makes the slow windows slow)");
+  app.add_option("--rss-csv", a.rss_csv, "soak: write the resident memory every second of stream to this CSV file");
+  app.add_option("--minutes-csv", a.minutes_csv,
+                 "soak: write the window latency of every minute of stream to this CSV file (per-window samples are "
+                 "then kept for one minute only)");
   CLI11_PARSE(app, argc, argv);
   return fdv::run(a);
 }
