@@ -7,15 +7,18 @@
 // rotation ≥ 100 M ev/s, rotation_translation ≥ 60 M ev/s; whole detection per window median
 // ≤ 2 ms, p99 ≤ 3 ms on one thread, median ≤ 1 ms on both cores. "/threads:2" runs split the
 // per-event stages in two (CompensationOptions::threads, CompensatedEventsView::threads) and let
-// OpenCV use two threads; every other benchmark runs with cv::setNumThreads(1).
+// OpenCV use two threads; every other benchmark runs with cv::setNumThreads(1). BM_MemoryBandwidth
+// and BM_TimeImagesFrame give the memory bound of the per-pixel passes at 1280x720.
 //
 //   cmake --build build-perf --target frontend_bench && build-perf/bench/frontend_bench
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
 #include <chrono>
+#include <cstdint>
 #include <ctime>
 #include <random>
+#include <vector>
 
 #include <cstdio>
 #include <map>
@@ -271,6 +274,41 @@ void BM_TimeImagesSparse(benchmark::State& state, int width, int height) {
 }
 BENCHMARK_CAPTURE(BM_TimeImagesSparse, 640x480, 640, 480)->Arg(100)->Arg(2000)->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_TimeImagesSparse, 1280x720, 1280, 720)->Arg(100)->Arg(2000)->Unit(benchmark::kMicrosecond);
+
+// A dense window: `events` events on uniformly random pixels of the whole frame, alternating with
+// another such window (forward flight at 1280x720 is about 105 k events a window, and touches
+// most of the frame's blocks). "frame_bytes" is the bytes the two passes move per window by
+// time_images.cpp's layout: 40 per visited pixel (pass 1 reads the 8-byte accumulator and writes
+// it back as 0, writes I, Σt and T, 4 bytes each; pass 2 reads I and T and writes N); as a rate,
+// it is the bandwidth the passes reach (docs/BENCHMARKS.md, "Bytes per window").
+void BM_TimeImagesFrame(benchmark::State& state, int width, int height) {
+  const auto events = static_cast<std::size_t>(state.range(0));
+  std::vector<std::int32_t> px[2];
+  std::vector<float> t[2];
+  std::mt19937 rng(3);
+  std::uniform_int_distribution<std::int32_t> pixel(0, width * height - 1);
+  for (int k = 0; k < 2; ++k)
+    for (std::size_t i = 0; i < events; ++i) {
+      px[k].push_back(pixel(rng));
+      t[k].push_back(static_cast<float>(to_seconds(kWindow)) * static_cast<float>(i) / static_cast<float>(events));
+    }
+  TimeImages ti;
+  prepare_time_images(ti, width, height);
+  std::size_t k = 0;
+  double visited_pixels = 0;
+  for (auto _ : state) {
+    const CompensatedEventsView v{0, kWindow, width, height, px[k], t[k]};
+    build_time_images(v, ti);
+    benchmark::DoNotOptimize(ti.mean_normalized);
+    visited_pixels += 16.0 * static_cast<double>(ti.blocks_visited);
+    k ^= 1;
+  }
+  constexpr double kPassBytesPerPixel = 40;
+  state.counters["frame_bytes"] = benchmark::Counter(kPassBytesPerPixel * visited_pixels, benchmark::Counter::kIsRate);
+  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(events));
+}
+BENCHMARK_CAPTURE(BM_TimeImagesFrame, 640x480, 640, 480)->Arg(50'000)->Arg(125'000)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_TimeImagesFrame, 1280x720, 1280, 720)->Arg(105'000)->Arg(300'000)->Unit(benchmark::kMillisecond);
 
 // Per-window time is measured as the thread's CPU time: this machine is shared (other builds
 // run at the same time), and wall time then mostly measures the scheduler.
@@ -554,6 +592,35 @@ void BM_BadInputWindow(benchmark::State& state, bool overload) {
 }
 BENCHMARK_CAPTURE(BM_BadInputWindow, overload, true)->Unit(benchmark::kMillisecond)->Iterations(30);
 BENCHMARK_CAPTURE(BM_BadInputWindow, hot_pixels, false)->Unit(benchmark::kMillisecond)->Iterations(300);
+
+// This core's memory bandwidth: the bound of the front end's per-pixel passes (docs/BENCHMARKS.md,
+// "Bytes per window"). Plain loops with ordinary stores, as the passes have (no streaming stores,
+// no memcpy): read sums the buffer, write fills it, copy reads one and writes another (bytes count
+// both). Buffers of range(0) MiB: 1 stays in the L2, 16 in the L3, 256 goes to DRAM.
+enum class MemoryAccess { kRead, kWrite, kCopy };
+void BM_MemoryBandwidth(benchmark::State& state, MemoryAccess access) {
+  const std::size_t n = (static_cast<std::size_t>(state.range(0)) << 20) / sizeof(std::uint64_t);
+  std::vector<std::uint64_t> from(n, 1), to(n, 0);
+  std::uint64_t sweep = 0;
+  for (auto _ : state) {
+    ++sweep;
+    if (access == MemoryAccess::kRead) {
+      std::uint64_t sum = 0;
+      for (std::uint64_t v : from) sum += v;
+      benchmark::DoNotOptimize(sum);
+    } else if (access == MemoryAccess::kWrite) {
+      for (std::uint64_t& v : to) v = sweep;
+    } else {
+      for (std::size_t i = 0; i < n; ++i) to[i] = from[i] + sweep;
+    }
+    benchmark::ClobberMemory();
+  }
+  const std::size_t moved = (access == MemoryAccess::kCopy ? 2 : 1) * n * sizeof(std::uint64_t);
+  state.SetBytesProcessed(static_cast<std::int64_t>(state.iterations() * moved));
+}
+BENCHMARK_CAPTURE(BM_MemoryBandwidth, read, MemoryAccess::kRead)->Arg(1)->Arg(16)->Arg(256)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_MemoryBandwidth, write, MemoryAccess::kWrite)->Arg(1)->Arg(16)->Arg(256)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_MemoryBandwidth, copy, MemoryAccess::kCopy)->Arg(1)->Arg(16)->Arg(256)->Unit(benchmark::kMillisecond);
 
 /// Console output as usual, and the CPU time of every run kept for the speed-up table.
 class RecordingReporter : public benchmark::ConsoleReporter {
