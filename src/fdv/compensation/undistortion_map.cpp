@@ -3,10 +3,11 @@
 #include <cmath>
 
 #include "fdv/core/error.h"
+#include "fdv/core/fuzz_coverage.h"
 
 namespace fdv {
 
-UndistortionMap::UndistortionMap(const PinholeCamera& camera) : camera_(camera) {
+FDV_NO_FUZZ_COVERAGE UndistortionMap::UndistortionMap(const PinholeCamera& camera) : camera_(camera) {
   if (const auto why = camera.validate(); !why.empty()) throw ConfigError("event camera: " + why);
   const std::size_t n = static_cast<std::size_t>(camera.width) * camera.height;
   rays_.resize(n);
@@ -17,17 +18,21 @@ UndistortionMap::UndistortionMap(const PinholeCamera& camera) : camera_(camera) 
   for (int y = 0; y < camera.height; ++y)
     for (int x = 0; x < camera.width; ++x) {
       const std::size_t i = static_cast<std::size_t>(y) * camera.width + x;
-      Eigen::Vector2d xn((x - camera.cx) / camera.fx, (y - camera.cy) / camera.fy);
-      if (!pinhole) xn = camera.undistort(xn);
-      if (!pinhole && !xn.allFinite()) {
-        const float nan = std::nanf("");
-        rays_[i] = {nan, nan};
-        grid_index_[i] = kNoInverse;
-        ++pixels_without_inverse_;
-        continue;
+      // Plain doubles, not an Eigen vector: in the fuzz build each element access was a call.
+      double nx = (x - camera.cx) / camera.fx, ny = (y - camera.cy) / camera.fy;
+      if (!pinhole) {
+        const Eigen::Vector2d xn = camera.undistort({nx, ny});
+        nx = xn.x(), ny = xn.y();
+        if (!std::isfinite(nx) || !std::isfinite(ny)) {
+          const float nan = std::nanf("");
+          rays_[i] = {nan, nan};
+          grid_index_[i] = kNoInverse;
+          ++pixels_without_inverse_;
+          continue;
+        }
       }
-      rays_[i] = {static_cast<float>(xn.x()), static_cast<float>(xn.y())};
-      const double u = camera.fx * xn.x() + camera.cx, v = camera.fy * xn.y() + camera.cy;
+      rays_[i] = {static_cast<float>(nx), static_cast<float>(ny)};
+      const double u = camera.fx * nx + camera.cx, v = camera.fy * ny + camera.cy;
       if (u >= -0.5 && v >= -0.5 && u < camera.width - 0.5 && v < camera.height - 0.5) {
         const int ui = static_cast<int>(u + 0.5), vi = static_cast<int>(v + 0.5);
         grid_index_[i] = vi * camera.width + ui;

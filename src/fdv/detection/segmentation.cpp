@@ -6,6 +6,7 @@
 #include <cstring>
 #include <limits>
 
+#include "fdv/core/fuzz_coverage.h"
 #include "fdv/core/lanes.h"
 #include "fdv/core/thread_pool.h"
 
@@ -79,7 +80,7 @@ constexpr int kStripRows = 32;
 
 /// max of p[0, n), n ≥ 1 (no NaN), four lanes at a time in four independent chains (one chain
 /// waited on each comparison's latency). The maximum is exact in any order.
-inline float row_max(const float* p, int n) {
+FDV_NO_FUZZ_COVERAGE inline float row_max(const float* p, int n) {
   using lanes::vf;
   int x = 0;
   float mx = p[0];
@@ -124,7 +125,7 @@ struct RowMaximum {
 /// detector's first candidate search costs nothing more). Returns r1.
 // AVX2 clone (chosen at run time): the plain loops below vectorise 8 lanes wide instead of 4. Lane-wise
 // adds, products, minima and maxima, no FMA: the same results as the baseline build, to the bit.
-FDV_AVX2_CLONES __attribute__((flatten)) cv::Rect
+FDV_AVX2_CLONES FDV_NO_FUZZ_COVERAGE __attribute__((flatten)) cv::Rect
 open_mean_square(const cv::Mat& S, const cv::Rect& s_bounds, int h1, int h2, cv::Mat& P, cv::Mat& a, cv::Mat& b,
                  std::vector<float>& line, RowMaximum& best, int part = 0, int parts = 1) {
   const cv::Rect image(0, 0, S.cols, S.rows);
@@ -189,7 +190,7 @@ void zero_rect(cv::Mat& m, const cv::Rect& r) {
     std::memset(m.ptr<std::uint8_t>(y) + 4 * static_cast<std::size_t>(c.x), 0, 4 * static_cast<std::size_t>(c.width));
 }
 
-MaxLocation first_maximum(const cv::Mat& m, const cv::Rect& r) {
+FDV_NO_FUZZ_COVERAGE MaxLocation first_maximum(const cv::Mat& m, const cv::Rect& r) {
   CV_Assert(m.type() == CV_32F);
   const cv::Rect c = r & cv::Rect(0, 0, m.cols, m.rows);
   MaxLocation best{0, c.tl()};
@@ -218,7 +219,7 @@ namespace {
 
 // AVX2 clone, as open_mean_square.
 /// segment() over the rows [y0, y1) of S (created).
-FDV_AVX2_CLONES SegmentResult
+FDV_AVX2_CLONES FDV_NO_FUZZ_COVERAGE SegmentResult
 segment_rows(const TimeImages& ti, float th, std::int32_t min_count, cv::Mat& S, int y0, int y1) {
   SegmentResult res;
   int x_lo = S.cols, x_hi = -1, y_lo = S.rows, y_hi = -1;

@@ -6,6 +6,7 @@
 #include <cstring>
 #include <limits>
 
+#include "fdv/core/fuzz_coverage.h"
 #include "fdv/core/lanes.h"
 #include "fdv/core/thread_pool.h"
 
@@ -53,7 +54,7 @@ struct Images {
 
   /// The first group in [g, end) in use, or end. Tests eight marks at once where it can: a sparse
   /// window's scan is then a few dozen tests, even at 1280x720 (3,600 groups).
-  std::size_t next_group_in_use(std::size_t g, std::size_t end) const {
+  FDV_NO_FUZZ_COVERAGE std::size_t next_group_in_use(std::size_t g, std::size_t end) const {
     while (g < end) {
       if (g % 8 == 0 && g + 8 <= end) {
         std::uint64_t now = 0, before = 0;
@@ -80,7 +81,7 @@ struct Extremes {
 };
 
 /// One pixel of pass 1 (tail of an image whose size is not a multiple of 16).
-void pixel_pass1(const Images& im, std::size_t i, Extremes& x, double& sum_t) {
+FDV_NO_FUZZ_COVERAGE void pixel_pass1(const Images& im, std::size_t i, Extremes& x, double& sum_t) {
   const float c = im.acc[2 * i], s = im.acc[2 * i + 1];
   const float t = s / (c > 0 ? c : 1.0f);  // c = 0 implies s = 0: T = 0
   im.count[i] = static_cast<std::int32_t>(c);
@@ -95,7 +96,7 @@ void pixel_pass1(const Images& im, std::size_t i, Extremes& x, double& sum_t) {
   }
 }
 
-void blank_block(const Images& im, std::size_t i0, std::size_t n) {
+FDV_NO_FUZZ_COVERAGE void blank_block(const Images& im, std::size_t i0, std::size_t n) {
   std::memset(im.count + i0, 0, n * sizeof(std::int32_t));
   std::memset(im.sum + i0, 0, n * sizeof(float));
   std::memset(im.mean + i0, 0, n * sizeof(float));
@@ -104,7 +105,7 @@ void blank_block(const Images& im, std::size_t i0, std::size_t n) {
 
 /// Pass 1 over blocks [b0, b1): I, Σt, T from the accumulator (which is reset to 0 on the way),
 /// min/max T, pixel count and Σ T per chunk. b0 and b1 are multiples of kChunkBlocks (or the end).
-Extremes pass1(const Images& im, std::uint8_t* blocks, std::size_t b0, std::size_t b1,
+FDV_NO_FUZZ_COVERAGE Extremes pass1(const Images& im, std::uint8_t* blocks, std::size_t b0, std::size_t b1,
                std::size_t npx, double* chunk_sums) {
   Extremes x;
   vf lo = vf{} + x.t_min, hi = vf{} + x.t_max;
@@ -165,7 +166,7 @@ Extremes pass1(const Images& im, std::uint8_t* blocks, std::size_t b0, std::size
 
 /// Pass 2 over blocks [b0, b1): N = (T − t_min)·scale where I > 0, else 0; block states advance
 /// (this window becomes the previous one).
-void pass2(const Images& im, std::uint8_t* blocks, std::size_t b0, std::size_t b1, std::size_t npx,
+FDV_NO_FUZZ_COVERAGE void pass2(const Images& im, std::uint8_t* blocks, std::size_t b0, std::size_t b1, std::size_t npx,
            float t_min, float scale) {
   const vf vmin = vf{} + t_min, vscale = vf{} + scale;
   const std::size_t last_group = (b1 + kGroupBlocks - 1) / kGroupBlocks;
@@ -197,7 +198,7 @@ void pass2(const Images& im, std::uint8_t* blocks, std::size_t b0, std::size_t b
 /// Events whose pixel is out of range are skipped. A function of its own with restrict pointers:
 /// inside the caller's lambda every byte store to `blocks` made GCC reload all the pointers and
 /// bounds per event.
-int accumulate(const std::int32_t* __restrict pixel, const float* __restrict t_s, std::size_t n,
+FDV_NO_FUZZ_COVERAGE int accumulate(const std::int32_t* __restrict pixel, const float* __restrict t_s, std::size_t n,
                std::size_t npx, float* __restrict acc, std::uint8_t* __restrict blocks,
                std::uint8_t* __restrict groups_now) {
   int count = 0;
@@ -220,7 +221,7 @@ int accumulate(const std::int32_t* __restrict pixel, const float* __restrict t_s
 }
 
 /// accumulate() over (pixel, time) pairs already known to be in range.
-void accumulate_pairs(const PixelTime* __restrict e, std::size_t n, float* __restrict acc,
+FDV_NO_FUZZ_COVERAGE void accumulate_pairs(const PixelTime* __restrict e, std::size_t n, float* __restrict acc,
                       std::uint8_t* __restrict blocks, std::uint8_t* __restrict groups_now) {
   constexpr std::size_t kPrefetch = 64;
   for (std::size_t k = 0; k < n; ++k) {
@@ -259,7 +260,7 @@ struct Partition {
 
 /// sort_by_owner for two parts, the common case: the counts and both cursors stay in registers
 /// (the general version's count and cursor arrays made a dependency chain through memory).
-void sort_by_owner_2(Partition& part, int i, const std::int32_t* pixel, const float* t_s,
+FDV_NO_FUZZ_COVERAGE void sort_by_owner_2(Partition& part, int i, const std::int32_t* pixel, const float* t_s,
                      PixelTime* sorted) {
   const std::size_t e0 = part.first_event[i], e1 = part.first_event[i + 1];
   const std::size_t b1 = part.bound[1], b2 = part.bound[2];
@@ -284,7 +285,7 @@ void sort_by_owner_2(Partition& part, int i, const std::int32_t* pixel, const fl
   }
 }
 
-void sort_by_owner(Partition& part, int i, const std::int32_t* pixel, const float* t_s,
+FDV_NO_FUZZ_COVERAGE void sort_by_owner(Partition& part, int i, const std::int32_t* pixel, const float* t_s,
                    PixelTime* sorted) {
   if (part.parts == 2) return sort_by_owner_2(part, i, pixel, t_s, sorted);
   const std::size_t e0 = part.first_event[i], e1 = part.first_event[i + 1];
