@@ -28,7 +28,7 @@
 // Soak (--minutes-csv, --rss-csv): RSS is read every second of stream time and the window latency
 // summarised per minute of it. The per-window samples are then kept for the current minute only
 // (their buffers reused), so that the benchmark's own bookkeeping does not grow with the run: the
-// closing table then covers the last minute.
+// closing table and --json then cover the last minute.
 // Overload: --burst-rate adds uniformly random events (a flicker-like burst) for --burst-ms every
 // --burst-every-s; the windower's decimation keeps each window bounded and reports the dropped
 // events.
