@@ -2,8 +2,11 @@
 # A recorded fuzz campaign: each target in turn until a number of executions, from its grown
 # corpus and its seeds, then one row of docs/FORMATS.md's campaign table per target.
 #   fuzz/campaign.sh BUILD_DIR TARGET:RUNS...
-# BUILD_DIR is the fuzz build of fuzz/run.sh. Meant to run on an otherwise idle core, or under
+# BUILD_DIR is the fuzz build of fuzz/run.sh, with its fdv and fuzz_ros1_seed_writer (the seed
+# script runs both), not only the fuzz targets. Meant to run on an otherwise idle core, or under
 # `nice -n 19` beside other work (the rate is then a share of a core, and the table says so).
+# FDV_FUZZ_TIMEOUT is libFuzzer's wall-clock limit per input, 10 s by default; a campaign that gets
+# a small share of a core needs more, or its slow inputs end it as timeouts.
 # A finding stops that target (its input under BUILD_DIR/fuzz/findings/TARGET/) and the script
 # goes on with the next; the exit status is 1 if any target found something.
 set -euo pipefail
@@ -23,7 +26,7 @@ for spec in "$@"; do
   start=$(date +%s)
   found=none
   # A long run's RSS grows with ASan's quarantine and the corpus (FORMATS.md "Fuzzing").
-  if ! "$build/fuzz/$target" -runs="$runs" -timeout=10 -rss_limit_mb=2048 -max_len=65536 \
+  if ! "$build/fuzz/$target" -runs="$runs" -timeout="${FDV_FUZZ_TIMEOUT:-10}" -rss_limit_mb=2048 -max_len=65536 \
       -print_final_stats=1 -artifact_prefix="$findings/" "$corpus" "$build/fuzz/seeds/$target" > "$log" 2>&1; then
     found="$(grep -m1 -oE 'ERROR: [^ ]+: [a-z-]+|contract broken: .*' "$log" || echo 'stopped: see log')"
     status=1
