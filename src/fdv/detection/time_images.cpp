@@ -105,8 +105,8 @@ FDV_NO_FUZZ_COVERAGE void blank_block(const Images& im, std::size_t i0, std::siz
 
 /// Pass 1 over blocks [b0, b1): I, Σt, T from the accumulator (which is reset to 0 on the way),
 /// min/max T, pixel count and Σ T per chunk. b0 and b1 are multiples of kChunkBlocks (or the end).
-FDV_NO_FUZZ_COVERAGE Extremes pass1(const Images& im, std::uint8_t* blocks, std::size_t b0, std::size_t b1,
-               std::size_t npx, double* chunk_sums) {
+FDV_NO_FUZZ_COVERAGE Extremes pass1(const Images& im, std::uint8_t* blocks, std::size_t b0,
+                                    std::size_t b1, std::size_t npx, double* chunk_sums) {
   Extremes x;
   vf lo = vf{} + x.t_min, hi = vf{} + x.t_max;
   vi pixels{};
@@ -166,8 +166,8 @@ FDV_NO_FUZZ_COVERAGE Extremes pass1(const Images& im, std::uint8_t* blocks, std:
 
 /// Pass 2 over blocks [b0, b1): N = (T − t_min)·scale where I > 0, else 0; block states advance
 /// (this window becomes the previous one).
-FDV_NO_FUZZ_COVERAGE void pass2(const Images& im, std::uint8_t* blocks, std::size_t b0, std::size_t b1, std::size_t npx,
-           float t_min, float scale) {
+FDV_NO_FUZZ_COVERAGE void pass2(const Images& im, std::uint8_t* blocks, std::size_t b0,
+                                std::size_t b1, std::size_t npx, float t_min, float scale) {
   const vf vmin = vf{} + t_min, vscale = vf{} + scale;
   const std::size_t last_group = (b1 + kGroupBlocks - 1) / kGroupBlocks;
   for (std::size_t g = im.next_group_in_use(b0 / kGroupBlocks, last_group); g < last_group;
@@ -198,9 +198,10 @@ FDV_NO_FUZZ_COVERAGE void pass2(const Images& im, std::uint8_t* blocks, std::siz
 /// Events whose pixel is out of range are skipped. A function of its own with restrict pointers:
 /// inside the caller's lambda every byte store to `blocks` made GCC reload all the pointers and
 /// bounds per event.
-FDV_NO_FUZZ_COVERAGE int accumulate(const std::int32_t* __restrict pixel, const float* __restrict t_s, std::size_t n,
-               std::size_t npx, float* __restrict acc, std::uint8_t* __restrict blocks,
-               std::uint8_t* __restrict groups_now) {
+FDV_NO_FUZZ_COVERAGE int accumulate(const std::int32_t* __restrict pixel,
+                                    const float* __restrict t_s, std::size_t n, std::size_t npx,
+                                    float* __restrict acc, std::uint8_t* __restrict blocks,
+                                    std::uint8_t* __restrict groups_now) {
   int count = 0;
   // The accumulator is larger than L2 and events are scattered over it: prefetch ahead.
   constexpr std::size_t kPrefetch = 64;
@@ -221,8 +222,9 @@ FDV_NO_FUZZ_COVERAGE int accumulate(const std::int32_t* __restrict pixel, const 
 }
 
 /// accumulate() over (pixel, time) pairs already known to be in range.
-FDV_NO_FUZZ_COVERAGE void accumulate_pairs(const PixelTime* __restrict e, std::size_t n, float* __restrict acc,
-                      std::uint8_t* __restrict blocks, std::uint8_t* __restrict groups_now) {
+FDV_NO_FUZZ_COVERAGE void accumulate_pairs(const PixelTime* __restrict e, std::size_t n,
+                                           float* __restrict acc, std::uint8_t* __restrict blocks,
+                                           std::uint8_t* __restrict groups_now) {
   constexpr std::size_t kPrefetch = 64;
   for (std::size_t k = 0; k < n; ++k) {
     if (k + kPrefetch < n)
@@ -260,8 +262,8 @@ struct Partition {
 
 /// sort_by_owner for two parts, the common case: the counts and both cursors stay in registers
 /// (the general version's count and cursor arrays made a dependency chain through memory).
-FDV_NO_FUZZ_COVERAGE void sort_by_owner_2(Partition& part, int i, const std::int32_t* pixel, const float* t_s,
-                     PixelTime* sorted) {
+FDV_NO_FUZZ_COVERAGE void sort_by_owner_2(Partition& part, int i, const std::int32_t* pixel,
+                                          const float* t_s, PixelTime* sorted) {
   const std::size_t e0 = part.first_event[i], e1 = part.first_event[i + 1];
   const std::size_t b1 = part.bound[1], b2 = part.bound[2];
   std::size_t second = 0, outside = 0;
@@ -285,8 +287,8 @@ FDV_NO_FUZZ_COVERAGE void sort_by_owner_2(Partition& part, int i, const std::int
   }
 }
 
-FDV_NO_FUZZ_COVERAGE void sort_by_owner(Partition& part, int i, const std::int32_t* pixel, const float* t_s,
-                   PixelTime* sorted) {
+FDV_NO_FUZZ_COVERAGE void sort_by_owner(Partition& part, int i, const std::int32_t* pixel,
+                                        const float* t_s, PixelTime* sorted) {
   if (part.parts == 2) return sort_by_owner_2(part, i, pixel, t_s, sorted);
   const std::size_t e0 = part.first_event[i], e1 = part.first_event[i + 1];
   std::array<std::size_t, kMaxImageParts + 1> count{};
