@@ -6,7 +6,12 @@
 # script runs both), not only the fuzz targets. Meant to run on an otherwise idle core, or under
 # `nice -n 19` beside other work (the rate is then a share of a core, and the table says so).
 # FDV_FUZZ_TIMEOUT is libFuzzer's wall-clock limit per input, 10 s by default; a campaign that gets
-# a small share of a core needs more, or its slow inputs end it as timeouts.
+# a small share of a core needs more, or its slow inputs end it as timeouts. FDV_FUZZ_MAX_LEN is
+# the largest input in bytes, 65536 by default; a smaller one fuzzes shorter inputs (a corpus
+# input above it is cut), so a table row run with it says so. ASAN_OPTIONS defaults to
+# malloc_context_size=4: allocation stacks of 4 frames, not 30. Over hours of deeply nested YAML
+# the sanitizer's store of distinct stacks grew until saving one was 25 % of fuzz_options' time;
+# a finding's report then names 4 frames, and its kept input replays in full.
 # A finding stops that target (its input under BUILD_DIR/fuzz/findings/TARGET/) and the script
 # goes on with the next; the exit status is 1 if any target found something.
 set -euo pipefail
@@ -14,6 +19,7 @@ cd "$(dirname "$0")/.."
 build=$(realpath "$1")
 shift
 /usr/bin/python3 fuzz/make_seeds.py "$build" > /dev/null
+export ASAN_OPTIONS=${ASAN_OPTIONS:-malloc_context_size=4}
 
 stat() { grep -E "^stat::$2:" "$1" | awk '{print $2}'; }
 status=0
@@ -26,7 +32,7 @@ for spec in "$@"; do
   start=$(date +%s)
   found=none
   # A long run's RSS grows with ASan's quarantine and the corpus (FORMATS.md "Fuzzing").
-  if ! "$build/fuzz/$target" -runs="$runs" -timeout="${FDV_FUZZ_TIMEOUT:-10}" -rss_limit_mb=2048 -max_len=65536 \
+  if ! "$build/fuzz/$target" -runs="$runs" -timeout="${FDV_FUZZ_TIMEOUT:-10}" -rss_limit_mb=2048 -max_len="${FDV_FUZZ_MAX_LEN:-65536}" \
       -print_final_stats=1 -artifact_prefix="$findings/" "$corpus" "$build/fuzz/seeds/$target" > "$log" 2>&1; then
     found="$(grep -m1 -oE 'ERROR: [^ ]+: [a-z-]+|contract broken: .*' "$log" || echo 'stopped: see log')"
     status=1
