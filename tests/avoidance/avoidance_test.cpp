@@ -172,6 +172,47 @@ TEST(DodgePlan, PerAxisLimitRespected) {
   EXPECT_GT(std::abs(a.z()), 1.0);
 }
 
+/// The angle of the thrust f = a − g from the vertical for a commanded acceleration a [deg].
+double thrust_tilt_deg(const Eigen::Vector3d& a) {
+  const Eigen::Vector3d f = a - Eigen::Vector3d(0, 0, -9.81);
+  return std::atan2(f.head<2>().norm(), f.z()) * 180 / std::numbers::pi;
+}
+
+// A quadrotor's thrust tilt (VehicleLimits::max_tilt_deg). Straight down it can only fall (|g|),
+// which still beats any other dodge of a ball passing just above. Sideways 10 m/s² tilts 45.55°,
+// within 60°: nothing changes. A passage up and to the left asks for a dodge down and to the
+// right, whose full 10 m/s² would tilt 68.8°: capped, the plan stays within 60°. With 30° and a
+// passage to the left, the plan rises as little as it must to keep the full 10 m/s²: the best
+// direction is where the tilt's cap meets the norm's.
+TEST(DodgePlan, TheThrustTiltCapsEachDirection) {
+  DodgeOptions o;
+  o.limits.max_tilt_deg = 60;
+  const CollisionRisk above = threat({0, 0, 0.2}, 0.4, 0.15, 0.8);
+  EXPECT_TRUE(plan_dodge(above, hovering(1.0), o, kR).maneuver.acceleration_W.isApprox(Eigen::Vector3d(0, 0, -9.81), 1e-9));
+
+  const CollisionRisk left = threat({0, 0.2, 0}, 0.4, 0.15, 0.8);
+  const Eigen::Vector3d sideways = plan_dodge(left, hovering(1.0), o, kR).maneuver.acceleration_W;
+  EXPECT_TRUE(sideways.isApprox(Eigen::Vector3d(0, -10, 0), 1e-9)) << sideways.transpose();
+  EXPECT_NEAR(thrust_tilt_deg(sideways), 45.55, 0.01);  // atan(10 / 9.81)
+
+  const CollisionRisk up_left = threat({0, 0.15, 0.15}, 0.4, 0.15, 0.8);
+  const Eigen::Vector3d free = plan_dodge(up_left, hovering(1.0), DodgeOptions{}, kR).maneuver.acceleration_W;
+  EXPECT_NEAR(thrust_tilt_deg(free), 68.8, 0.1) << free.transpose();
+  const Eigen::Vector3d capped = plan_dodge(up_left, hovering(1.0), o, kR).maneuver.acceleration_W;
+  EXPECT_LT(capped.y(), 0.0);
+  EXPECT_LT(capped.z(), 0.0);
+  EXPECT_LE(thrust_tilt_deg(capped), 60.0 + 1e-9) << capped.transpose();
+
+  o.limits.max_tilt_deg = 30;
+  o.directions = 3600;
+  const Eigen::Vector3d kink = plan_dodge(left, hovering(1.0), o, kR).maneuver.acceleration_W;
+  EXPECT_LT(kink.y(), 0.0);
+  EXPECT_GT(kink.z(), 0.0);
+  EXPECT_NEAR(kink.norm(), 10.0, 1e-9) << kink.transpose();
+  EXPECT_LE(thrust_tilt_deg(kink), 30.0 + 1e-9);
+  EXPECT_GE(thrust_tilt_deg(kink), 29.8) << kink.transpose();
+}
+
 // The trigger: high probability acts; low probability with time left does not; a probability
 // above late_probability acts once t_c <= t_need + late_margin_s.
 TEST(DodgePlan, TriggerPolicy) {
@@ -362,6 +403,13 @@ TEST(DodgeOptions, InvalidLimitsNameTheKey) {
   o = {};
   o.limits.min_height_m = std::nan("");
   EXPECT_NE(error_of(o).find("limits.min_height_m"), std::string::npos);
+  o = {};
+  o.limits.max_tilt_deg = 0;
+  EXPECT_NE(error_of(o).find("limits.max_tilt_deg"), std::string::npos) << error_of(o);
+  o.limits.max_tilt_deg = 181;
+  EXPECT_NE(error_of(o).find("limits.max_tilt_deg"), std::string::npos);
+  o.limits.max_tilt_deg = std::nan("");
+  EXPECT_NE(error_of(o).find("limits.max_tilt_deg"), std::string::npos);
   o = {};
   o.late_probability = 0.01;  // below cancel_probability
   EXPECT_NE(error_of(o).find("cancel_probability < late_probability"), std::string::npos);

@@ -60,11 +60,26 @@ Eigen::Matrix<double, 2, 3> dodge_plane(const Eigen::Vector3d& relative_velocity
   return E;
 }
 
-/// The largest acceleration along unit `u` within the limits: the norm, each axis, and the floor
-/// (the height at the manoeuvre's end, `end_s` from now, with the current vertical velocity).
+/// The gravity the thrust works against: W's z axis is up.
+constexpr double kGravity_m_s2 = 9.81;
+
+/// The largest acceleration s along unit `u` whose thrust f = s·u + |g|·up tilts at most θ from up.
+/// Along that ray the tilt grows with s towards u's own angle α from up, so only α > θ caps s: in
+/// the triangle (0, |g|·up, f) the law of sines gives s ≤ |g| sin θ / sin(α − θ). Straight down
+/// (α = π) that is |g| for any θ: free fall, no thrust.
+double max_acceleration_by_tilt(const Eigen::Vector3d& u, double max_tilt_deg) {
+  const double theta = max_tilt_deg * std::numbers::pi / 180;
+  const double alpha = std::acos(std::clamp(u.z(), -1.0, 1.0));
+  if (alpha <= theta) return std::numeric_limits<double>::infinity();
+  return kGravity_m_s2 * std::sin(theta) / std::sin(alpha - theta);
+}
+
+/// The largest acceleration along unit `u` within the limits: the norm, each axis, the thrust
+/// tilt, and the floor (the height at the manoeuvre's end, `end_s` from now, with the current
+/// vertical velocity).
 double max_acceleration_along(const Eigen::Vector3d& u, const VehicleLimits& limits, const OdometrySample& vehicle,
                               double end_s) {
-  double a = limits.max_acceleration_m_s2;
+  double a = std::min(limits.max_acceleration_m_s2, max_acceleration_by_tilt(u, limits.max_tilt_deg));
   for (int i = 0; i < 3; ++i)
     if (std::abs(u(i)) > 0) a = std::min(a, limits.max_acceleration_per_axis_m_s2(i) / std::abs(u(i)));
   const double held_s = std::max(0.0, end_s - limits.response_delay_s);
@@ -121,6 +136,8 @@ std::string VehicleLimits::validate() const {
   if (auto err = bad_duration("response_delay_s", response_delay_s); !err.empty()) return err;
   if (auto err = bad_duration("attitude_lag_s", attitude_lag_s); !err.empty()) return err;
   if (std::isnan(min_height_m)) return "min_height_m must be a number (got nan)";
+  if (!(max_tilt_deg > 0 && max_tilt_deg <= 180))
+    return fmt::format("max_tilt_deg must be in (0, 180] (got {})", max_tilt_deg);
   return {};
 }
 
