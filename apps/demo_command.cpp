@@ -12,6 +12,7 @@
 #include "apps/commands.h"
 #include "apps/evaluate.h"
 #include "fdv/estimation/collision.h"
+#include "fdv/pipeline/options_yaml.h"
 #include "fdv/results/reader.h"
 #include "fdv/results/run.h"
 #include "fdv/sim/dataset_cache.h"
@@ -27,6 +28,7 @@ struct DemoArgs {
   std::string out = "demo_out";
   std::string scenario = "hover_headon";
   std::uint64_t seed = 1;
+  std::string config;  ///< `fdv run --config` YAML; empty = the defaults
   bool closed_loop = false;
 };
 
@@ -35,11 +37,12 @@ void demo(const DemoArgs& args) {
   const std::string dataset = (fs::path(args.out) / "dataset").string();
   const std::string results = (fs::path(args.out) / "results").string();
   const sim::ScenarioConfig config = sim::make_preset(args.scenario, args.seed);
+  const PerceptionOptions options = args.config.empty() ? PerceptionOptions{} : load_perception_options_file(args.config);
   if (args.closed_loop) {
     // The pipeline runs inside the simulation and the vehicle flies its decisions: the dataset
     // written is the flown one (never a cached open-loop one: the folder is replaced).
     fs::remove_all(dataset);
-    fly_with_perception(config, PerceptionOptions{}, dataset, results);
+    fly_with_perception(config, options, dataset, results);
   } else {
     // Simulated again only when the folder does not hold this scenario and seed already.
     sim::ensure_simulated(config, dataset);
@@ -47,6 +50,7 @@ void demo(const DemoArgs& args) {
     also.on_warning = [](const std::string& w) { spdlog::warn("{}", w); };
     RunRequest request;
     request.input = dataset;
+    request.options = options;
     RecordingRun(std::move(request)).into(results, also);
   }
   const nlohmann::json metrics = evaluate(results, dataset);
@@ -172,6 +176,7 @@ void add_demo_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--scenario", args.scenario, "simulator preset")->capture_default_str();
   cmd->add_option("--seed", args.seed, "random seed")->capture_default_str();
+  cmd->add_option("--config", args.config, "YAML options of the pipeline (as `fdv run --config`)");
   cmd->add_flag("--closed-loop", args.closed_loop,
                 "run the pipeline inside the simulation and fly its decisions (the sensors see the dodge)");
   cmd->callback([] { demo(args); });

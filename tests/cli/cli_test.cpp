@@ -316,6 +316,17 @@ TEST(CliBadInput, AMissingInputIsAClearErrorNamingThePath) {
   EXPECT_NE(r.output.find("no_such_recording.aedat4"), std::string::npos) << r.output;
 }
 
+TEST(CliDemo, AConfigThatDoesNotLoadIsAClearErrorBeforeAnySimulation) {
+  const fs::path out = test::scratch_dir("cli_demo_config");
+  const fs::path config = out / "bad.yaml";
+  std::ofstream(config) << "dodge:\n  limits:\n    max_tilt_deg: 0\n";
+  const Ran r = fdv("demo --config " + config.string() + " --out " + (out / "demo").string());
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("bad.yaml"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("max_tilt_deg"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(out / "demo" / "dataset"));
+}
+
 // `fdv dodge-eval` on one throw (random_throw seed 6: 346x260, a hovering vehicle, a threat
 // passing 7 cm from the body; about 6 s): the file's keys, the simulated
 // truth against the drawn throw, and --keep's folders.
