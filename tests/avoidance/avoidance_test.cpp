@@ -77,20 +77,54 @@ TEST(DodgePlan, DeadAheadIsPerpendicularAtTheLimitAndScoredByTheRiceMean) {
   EXPECT_TRUE(plan.trigger);
 }
 
-// The vehicle's attitude lag plans as a further delay: the same dead-ahead threat with a 0.08 s lag
-// gains the displacement ½ a (t_ca − delay − lag)² and needs 0.08 s more, and the set-point still
-// starts after the response delay alone.
-TEST(DodgePlan, TheAttitudeLagIsPlannedAsAFurtherDelay) {
+// The vehicle's attitude lag delays the horizontal part of a manoeuvre only: a quadrotor must tilt
+// to accelerate sideways, while its collective thrust moves it up or down at once. Sideways (the
+// vertical axis limited to nothing), a dead-ahead threat with a 0.08 s lag gains ½ a (t_ca − delay
+// − lag)² and needs 0.08 s more; free to climb, it climbs, gaining ½ a (t_ca − delay)² and needing
+// no more time than without a lag. The set-point starts after the response delay alone.
+TEST(DodgePlan, TheAttitudeLagDelaysTheHorizontalPartOnly) {
+  const CollisionRisk dead_ahead = threat(Eigen::Vector3d::Zero(), 0.35, 0.2, 0.9);
   DodgeOptions o;
-  const DodgePlan without = plan_dodge(threat(Eigen::Vector3d::Zero(), 0.35, 0.2, 0.9), hovering(1.0), o, kR);
+  o.limits.max_acceleration_per_axis_m_s2.z() = 1e-9;
+  const DodgePlan sideways = plan_dodge(dead_ahead, hovering(1.0), o, kR);
   o.limits.attitude_lag_s = 0.08;
-  const DodgePlan with = plan_dodge(threat(Eigen::Vector3d::Zero(), 0.35, 0.2, 0.9), hovering(1.0), o, kR);
-  const double displacement_m = 0.5 * 10.0 * 0.22 * 0.22;
-  EXPECT_NEAR(with.maneuver.expected_clearance_m, rice_mean(displacement_m, 0.2) - kR, 1e-6);
-  EXPECT_NEAR(with.time_needed_s - without.time_needed_s, 0.08, 1e-12);
-  EXPECT_EQ(with.maneuver.start_t, at(1.05));
+  const DodgePlan sideways_lag = plan_dodge(dead_ahead, hovering(1.0), o, kR);
+  EXPECT_NEAR(std::abs(sideways_lag.maneuver.acceleration_W.y()), 10.0, 1e-6);
+  EXPECT_NEAR(sideways_lag.maneuver.expected_clearance_m, rice_mean(0.5 * 10.0 * 0.22 * 0.22, 0.2) - kR, 1e-6);
+  EXPECT_NEAR(sideways_lag.time_needed_s - sideways.time_needed_s, 0.08, 1e-9);
+  EXPECT_EQ(sideways_lag.maneuver.start_t, at(1.05));
+
+  o.limits.max_acceleration_per_axis_m_s2.z() = 1e3;
+  const DodgePlan climb_lag = plan_dodge(dead_ahead, hovering(1.0), o, kR);
+  o.limits.attitude_lag_s = 0;
+  const DodgePlan climb = plan_dodge(dead_ahead, hovering(1.0), o, kR);
+  EXPECT_TRUE(climb_lag.maneuver.acceleration_W.isApprox(Eigen::Vector3d(0, 0, 10), 1e-9));
+  EXPECT_NEAR(climb_lag.maneuver.expected_clearance_m, rice_mean(0.5 * 10.0 * 0.30 * 0.30, 0.2) - kR, 1e-6);
+  EXPECT_NEAR(climb_lag.time_needed_s, climb.time_needed_s, 1e-9);
+
   o.limits.attitude_lag_s = -0.1;
   EXPECT_NE(o.validate().find("attitude_lag_s"), std::string::npos);
+}
+
+// A manoeuvre partly sideways, partly down (the vertical axis limited to 6 m/s²): the time it
+// needs lies between none and all of the lag, where the displacement, vertical at once and
+// horizontal after the lag, first reaches the gap.
+TEST(DodgePlan, TheTimeNeededOfAMixedManoeuvreSolvesTheSplitDisplacement) {
+  const CollisionRisk up_left = threat({0, 0.15, 0.15}, 0.5, 0.05, 0.9);
+  DodgeOptions o;
+  o.limits.attitude_lag_s = 0.08;
+  o.limits.max_acceleration_per_axis_m_s2.z() = 6;
+  const DodgePlan plan = plan_dodge(up_left, hovering(1.0), o, kR);
+  const Eigen::Vector3d a = plan.maneuver.acceleration_W;
+  ASSERT_LT(a.y(), -1.0);
+  ASSERT_LT(a.z(), -1.0);
+  const double T = plan.time_needed_s - 0.05;  // after the response delay
+  const double sideways_m = 0.5 * std::hypot(a.x(), a.y()) * std::pow(T - 0.08, 2);
+  const double down_m = 0.5 * std::abs(a.z()) * T * T;
+  EXPECT_NEAR(std::hypot(sideways_m, down_m), plan.clear_m, 1e-9);
+  const double direct_s = std::sqrt(2 * plan.clear_m / a.norm());
+  EXPECT_GT(T, direct_s + 0.01) << a.transpose();
+  EXPECT_LT(T, direct_s + 0.08 - 0.01);
 }
 
 // Anisotropic and degenerate uncertainty: the clearance the planner reports is the adaptive

@@ -90,6 +90,31 @@ double max_acceleration_along(const Eigen::Vector3d& u, const VehicleLimits& lim
   return a;
 }
 
+/// E·Δ, the body's displacement in the dodge plane `after_delay_s` after the set-point `a` takes
+/// effect: its vertical part at once (a quadrotor changes its collective thrust without turning),
+/// its horizontal part only after the attitude lag (it must tilt first), as a further delay.
+/// Written as the whole of `a` at once minus what the lag holds back, exactly zero without a lag.
+Eigen::Vector2d displacement_in_plane(const Eigen::Matrix<double, 2, 3>& E, const Eigen::Vector3d& a,
+                                      double after_delay_s, double attitude_lag_s) {
+  const double at_once_s2 = 0.5 * std::pow(std::max(0.0, after_delay_s), 2);
+  const double held_back_s2 = at_once_s2 - 0.5 * std::pow(std::max(0.0, after_delay_s - attitude_lag_s), 2);
+  return E * a * at_once_s2 - E * Eigen::Vector3d(a.x(), a.y(), 0) * held_back_s2;
+}
+
+/// The time after the delay by which the displacement of `a` (in the plane of E, where `a` lies)
+/// reaches `clear_m`: it grows with time, reaching it between sqrt(2·clear/|a|) (all of `a`
+/// vertical) and the attitude lag later (all horizontal).
+double time_to_displace(const Eigen::Matrix<double, 2, 3>& E, const Eigen::Vector3d& a, double clear_m,
+                        double attitude_lag_s) {
+  const double direct_s = std::sqrt(2 * clear_m / a.norm());
+  double lo = direct_s, hi = direct_s + attitude_lag_s;
+  for (int i = 0; i < 60 && hi - lo > 1e-12; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (displacement_in_plane(E, a, mid, attitude_lag_s).norm() < clear_m ? lo : hi) = mid;
+  }
+  return hi;
+}
+
 /// Nodes of the angular rule below: its error on a kinked integrand (a near-degenerate Gaussian
 /// far from the origin) is O(1/N²), below 1e-5 relative at 256; smooth ones converge exponentially.
 constexpr int kCauchyNodes = 256;
@@ -179,9 +204,8 @@ DodgePlan plan_dodge(const CollisionRisk& risk, const VehicleState& vehicle, con
   const Eigen::Matrix<double, 2, 3> E = dodge_plane(risk.relative_velocity_W);
   const Eigen::Vector2d miss = E * (closest.object_W - closest.vehicle_W);
   const Eigen::Matrix2d miss_cov = E * risk.closest_offset_covariance_W * E.transpose();
-  // Δ = a·lever·u; the vehicle's attitude lag plans as a further delay (VehicleLimits).
-  const double lag_s = delay_s + limits.attitude_lag_s;
-  const double lever_s2 = 0.5 * std::pow(std::max(0.0, closest_s - lag_s), 2);
+  // Δ by the closest approach, the attitude lag delaying its horizontal part (VehicleLimits).
+  const double after_delay_s = closest_s - delay_s, lag_s = limits.attitude_lag_s;
 
   std::vector<Eigen::Vector3d> candidates(options.directions);
   std::vector<double> scores(options.directions);
@@ -189,7 +213,7 @@ DodgePlan plan_dodge(const CollisionRisk& risk, const VehicleState& vehicle, con
     const double theta = 2 * std::numbers::pi * k / options.directions;
     const Eigen::Vector3d u = std::cos(theta) * E.row(0).transpose() + std::sin(theta) * E.row(1).transpose();
     candidates[k] = max_acceleration_along(u, limits, vehicle.odometry, end_s) * u;
-    scores[k] = expected_norm(miss - E * candidates[k] * lever_s2, miss_cov) - R;
+    scores[k] = expected_norm(miss - displacement_in_plane(E, candidates[k], after_delay_s, lag_s), miss_cov) - R;
   }
   // Near-ties (e.g. a dead-ahead threat with isotropic uncertainty) go to the most upward
   // direction: away from the ground, as the paper's hovering vehicle does.
@@ -216,7 +240,7 @@ DodgePlan plan_dodge(const CollisionRisk& risk, const VehicleState& vehicle, con
   m.acceleration_W = best_a;
   m.start_t = vehicle.odometry.t + from_seconds(delay_s);
   m.duration_s = std::max(0.0, end_s - delay_s);
-  const Eigen::Vector2d shifted = miss - E * best_a * lever_s2;
+  const Eigen::Vector2d shifted = miss - displacement_in_plane(E, best_a, after_delay_s, lag_s);
   m.expected_clearance_m = expected_norm(shifted, miss_cov) - R;
   m.probability_after = gaussian_disc_probability(shifted, miss_cov, R);
 
@@ -224,8 +248,8 @@ DodgePlan plan_dodge(const CollisionRisk& risk, const VehicleState& vehicle, con
   plan.time_to_act_on_s = risk.nominal.contact ? std::max(0.0, risk.nominal.time_to_contact_s) : closest_s;
   plan.clear_m = std::max(0.0, R + options.clear_sigmas * risk.miss_distance_sigma_m - miss.norm());
   const double accel = best_a.norm();
-  plan.time_needed_s = plan.clear_m == 0 ? lag_s
-                       : accel > 0       ? lag_s + std::sqrt(2 * plan.clear_m / accel)
+  plan.time_needed_s = plan.clear_m == 0 ? delay_s
+                       : accel > 0       ? delay_s + time_to_displace(E, best_a, plan.clear_m, lag_s)
                                          : std::numeric_limits<double>::infinity();
   const double p = risk.probability;
   const double t_c = plan.time_to_act_on_s;

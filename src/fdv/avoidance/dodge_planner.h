@@ -40,11 +40,13 @@ struct VehicleLimits {
   Eigen::Vector3d max_acceleration_per_axis_m_s2 = Eigen::Vector3d::Constant(1e3);
   /// From the decision to the set-point taking effect [s].
   double response_delay_s = 0.05;
-  /// The time constant of the vehicle's thrust tilt [s]: a quadrotor reaches a lateral
+  /// The time constant of the vehicle's thrust tilt [s]: a quadrotor reaches a horizontal
   /// acceleration only by tilting, a first-order lag that for a small tilt costs the position
-  /// what a further delay of this much would. Planned as such: added to the delay in t_need and
-  /// in the displacement the manoeuvre gains (not in its start). 0: a vehicle that accelerates at
-  /// once, as the kinematic replay of `fdv dodge-eval` assumes; the simulator's is 0.08 s.
+  /// what a further delay of this much would, while its collective thrust changes the vertical
+  /// acceleration at once. Planned as such: a further delay of the horizontal part of the
+  /// displacement the manoeuvre gains, and so of t_need (not of its start). 0: a vehicle that
+  /// accelerates at once, as the kinematic replay of `fdv dodge-eval` assumes; the simulator's
+  /// is 0.08 s.
   double attitude_lag_s = 0.0;
   /// Forbidden: any downward component that would bring the body below this height in W's z by
   /// the end of the manoeuvre [m]. The default, -1000 m, is no floor (-infinity is accepted too).
@@ -64,7 +66,7 @@ void describe(V& v, VehicleLimits& o) {
   v("max_acceleration_per_axis_m_s2", o.max_acceleration_per_axis_m_s2, "m/s²",
     "largest commanded acceleration along W's x, y, z (1000 = none)");
   v("response_delay_s", o.response_delay_s, "s", "from the decision to the set-point taking effect");
-  v("attitude_lag_s", o.attitude_lag_s, "s", "thrust tilt time constant, planned as a further delay (0 = none)");
+  v("attitude_lag_s", o.attitude_lag_s, "s", "thrust tilt time constant, planned as a further delay of the horizontal part (0 = none)");
   v("min_height_m", o.min_height_m, "m", "no downward manoeuvre below this height in W (-1000 = no floor)");
   v("max_tilt_deg", o.max_tilt_deg, "deg", "largest thrust tilt from the vertical (180 = none)");
 }
