@@ -188,6 +188,55 @@ TEST(SimFlight, ACommandedRunWithoutCommandsRendersExactlyAsThePathRun) {
   EXPECT_TRUE(path_run.body_unflown.empty());  // only a commanded run emits it
 }
 
+// A fork at 0.25 s commanded to dodge renders what one run given the same command renders, and
+// the run it was forked from goes on as if there had been no fork. The scene has every random
+// stream on (pixel noise, IMU and odometry noise, depth noise) and two threads.
+TEST(SimFlight, AForkFliesItsCommandExactlyAsOneRunWouldAndLeavesTheOriginalAsItWas) {
+  const ScenarioConfig c = small_throw();
+  const TimeNs fork_t = from_seconds(0.25), command_t = from_seconds(0.3);
+  const Eigen::Vector3d dodge(0, 6, 0);
+
+  MemorySink one_run;
+  Simulator reference(c);
+  reference.begin(one_run, Flight::kCommanded);
+  while (reference.simulated_until() < fork_t) reference.step();
+  reference.command(command_t, dodge);
+  while (reference.step()) {
+  }
+  const SimulationSummary reference_summary = reference.finish();
+
+  MemorySink original_sink;
+  Simulator original(c);
+  original.begin(original_sink, Flight::kCommanded);
+  while (original.simulated_until() < fork_t) original.step();
+  MemorySink fork_sink = original_sink;  // the fork's streams carry on from what was rendered
+  Simulator fork(original, fork_sink);
+  EXPECT_EQ(fork.simulated_until(), original.simulated_until());
+  fork.command(command_t, dodge);
+  while (fork.step()) {
+  }
+  const SimulationSummary fork_summary = fork.finish();
+  test::expect_same_streams(fork_sink, one_run);
+  EXPECT_EQ(fork_summary.events, reference_summary.events);
+  EXPECT_EQ(fork_summary.imu, reference_summary.imu);
+  EXPECT_EQ(fork_summary.flight.commands, 1u);
+  EXPECT_GT(fork_sink.body.back().p_W_B.y() - fork_sink.body_unflown.back().p_W_B.y(), 0.05);
+
+  while (original.step()) {
+  }
+  EXPECT_EQ(original.finish().flight.commands, 0u);
+  MemorySink path_run;
+  Simulator(c).run(path_run);
+  path_run.body_unflown = path_run.body;  // a path run has no unflown path: it is its path
+  test::expect_same_streams(original_sink, path_run);
+}
+
+TEST(SimFlight, OnlyARunCanBeForked) {
+  const Simulator idle(test::still_scene(32, 24, 0.02));
+  MemorySink sink;
+  EXPECT_THROW(Simulator(idle, sink), ConfigError);
+}
+
 TEST(SimFlight, CallsOutOfOrderAreErrors) {
   Simulator sim(test::still_scene(32, 24, 0.02));
   MemorySink sink;

@@ -29,10 +29,10 @@ struct EventCameraSim::LensGrid {
 EventCameraSim::EventCameraSim(const ScenarioConfig& config, const Calibration& calib,
                                const Scene& scene, const FlownVehicle& vehicle,
                                const std::vector<BallTrajectory>& balls, ThreadPool& pool)
-    : config_(config),
-      scene_(scene),
-      vehicle_(vehicle),
-      balls_(balls),
+    : config_(&config),
+      scene_(&scene),
+      vehicle_(&vehicle),
+      balls_(&balls),
       calib_(calib),
       width_(calib.event_camera.width),
       height_(calib.event_camera.height),
@@ -40,7 +40,7 @@ EventCameraSim::EventCameraSim(const ScenarioConfig& config, const Calibration& 
       resolution_ns_(std::max<TimeNs>(1, from_seconds(config.event_camera.timestamp_resolution_s))),
       jitter_ns_(config.event_camera.timestamp_jitter_s * 1e9),
       dark_(static_cast<float>(config.event_camera.dark_current_lux)),
-      pool_(pool) {
+      pool_(&pool) {
   if (balls.size() > kMaxBalls) throw ConfigError("at most 8 balls");
   lay_out_tiles();
   LensGrid lens = trace_pixel_rays();
@@ -56,11 +56,18 @@ EventCameraSim::EventCameraSim(const ScenarioConfig& config, const Calibration& 
   }
 }
 
+EventCameraSim::EventCameraSim(const EventCameraSim& state, const ScenarioConfig& config,
+                               const Scene& scene, const FlownVehicle& vehicle,
+                               const std::vector<BallTrajectory>& balls, ThreadPool& pool)
+    : EventCameraSim(state) {
+  config_ = &config, scene_ = &scene, vehicle_ = &vehicle, balls_ = &balls, pool_ = &pool;
+}
+
 // Tiles, and the per-pixel arrays in tile-major order: each tile's pixels are contiguous (blocks
 // padded to 32 pixels), so threads working on neighbouring tiles share at most the cache line at
 // a block boundary instead of one per image row.
 void EventCameraSim::lay_out_tiles() {
-  const int ts = config_.event_camera.tile_px;
+  const int ts = config_->event_camera.tile_px;
   tiles_x_ = (width_ + ts - 1) / ts;
   tiles_y_ = (height_ + ts - 1) / ts;
   tiles_.resize(static_cast<std::size_t>(tiles_x_) * tiles_y_);
@@ -90,7 +97,7 @@ EventCameraSim::LensGrid EventCameraSim::trace_pixel_rays() const {
   const auto n = static_cast<std::size_t>(width_) * height_;
   LensGrid lens;
   lens.ray_x.resize(n), lens.ray_y.resize(n);
-  pool_.parallel_for(static_cast<std::size_t>(height_), [&](std::size_t row) {
+  pool_->parallel_for(static_cast<std::size_t>(height_), [&](std::size_t row) {
     const int v = static_cast<int>(row);
     Eigen::Vector2d guess((0 - cam.cx) / cam.fx, (v - cam.cy) / cam.fy);
     for (int u = 0; u < width_; ++u) {
@@ -178,8 +185,8 @@ void EventCameraSim::aim_tile(Tile& tile) const {
 // Each pixel's own contrast thresholds, background-activity rate and hot-pixel state, drawn from
 // the tile's stream in pixel order: the same pixels for any thread count.
 void EventCameraSim::draw_pixel_constants(const Tile& tile, std::size_t tile_index) {
-  const auto& ec = config_.event_camera;
-  Rng setup = Rng::stream(config_.seed, RngStream::kPixelSetup, tile_index);
+  const auto& ec = config_->event_camera;
+  Rng setup = Rng::stream(config_->seed, RngStream::kPixelSetup, tile_index);
   auto draw_threshold = [&] {
     const double c = ec.contrast_threshold_mean + ec.contrast_threshold_spread * setup.normal();
     return static_cast<float>(std::max(c, ec.contrast_threshold_min));
@@ -204,9 +211,9 @@ void EventCameraSim::draw_pixel_constants(const Tile& tile, std::size_t tile_ind
 
 void EventCameraSim::initialize(TimeNs t0) {
   const Frame f = make_frame(t0);
-  pool_.parallel_for(tiles_.size(), [&](std::size_t i) {
+  pool_->parallel_for(tiles_.size(), [&](std::size_t i) {
     Tile& tile = tiles_[i];
-    tile.panels = scene_.all_panels();
+    tile.panels = scene_->all_panels();
     tile.balls = (1u << f.ball_count) - 1u;
     const int area = (tile.x1 - tile.x0) * (tile.y1 - tile.y0);
     std::vector<float> li(area);
@@ -238,7 +245,7 @@ void EventCameraSim::run_chunk(TimeNs t0, TimeNs t1, std::vector<Event>& events,
   plan_chunk(t0, t1);
   // The frames most tiles sample at (n <= kCachedSteps equal steps), computed once.
   frame_cache_.resize(kCachedSteps * (kCachedSteps + 1) / 2);
-  pool_.parallel_for(frame_cache_.size(), [&](std::size_t i) {
+  pool_->parallel_for(frame_cache_.size(), [&](std::size_t i) {
     int n = 1;
     while (static_cast<int>(i) >= n * (n + 1) / 2) ++n;
     const int k = static_cast<int>(i) - (n - 1) * n / 2 + 1;
@@ -249,8 +256,8 @@ void EventCameraSim::run_chunk(TimeNs t0, TimeNs t1, std::vector<Event>& events,
   for (std::size_t i = 0; i < order_.size(); ++i) order_[i] = i;
   std::stable_sort(order_.begin(), order_.end(),
                    [&](std::size_t a, std::size_t b) { return tiles_[a].steps > tiles_[b].steps; });
-  pool_.parallel_for(order_.size(),
-                     [&](std::size_t i) { process_tile(tiles_[order_[i]], t0, t1); });
+  pool_->parallel_for(order_.size(),
+                      [&](std::size_t i) { process_tile(tiles_[order_[i]], t0, t1); });
 
   std::size_t total = 0;
   for (const Tile& tile : tiles_) {
@@ -313,8 +320,8 @@ void EventCameraSim::plan_chunk(TimeNs t0, TimeNs t1) {
   const std::vector<PanelBox> panel_boxes = bound_panels(motion);
   const std::vector<BallSweep> sweeps = sweep_balls(motion);
   const double dt_s = to_seconds(t1 - t0);
-  pool_.parallel_for(tiles_.size(),
-                     [&](std::size_t i) { plan_tile(i, motion, panel_boxes, sweeps, dt_s); });
+  pool_->parallel_for(tiles_.size(),
+                      [&](std::size_t i) { plan_tile(i, motion, panel_boxes, sweeps, dt_s); });
 }
 
 // Every motion bound below starts from the camera's exact motion at the plan samples.
@@ -325,7 +332,7 @@ EventCameraSim::CameraMotion EventCameraSim::sample_camera_motion(TimeNs t0, Tim
   CameraMotion m;
   for (int k = 0; k < kPlanSamples; ++k) {
     m.t_s[k] = to_seconds(t0) + dt_s * k / (kPlanSamples - 1);
-    const BodyState s = vehicle_.at(m.t_s[k]);
+    const BodyState s = vehicle_->at(m.t_s[k]);
     m.R_E_W[k] = (s.R_W_B * R_B_E).transpose();
     m.o_W[k] = s.p_W + s.R_W_B * p_B_E;
     m.v_cam_W[k] = s.v_W + s.R_W_B * s.omega_B.cross(p_B_E);
@@ -340,9 +347,9 @@ EventCameraSim::CameraMotion EventCameraSim::sample_camera_motion(TimeNs t0, Tim
 // if a corner is near or behind the camera plane.
 std::vector<EventCameraSim::PanelBox> EventCameraSim::bound_panels(
     const CameraMotion& motion) const {
-  std::vector<PanelBox> boxes(scene_.panel_count());
+  std::vector<PanelBox> boxes(scene_->panel_count());
   for (std::size_t i = 0; i < boxes.size(); ++i) {
-    const auto corners = scene_.panel_corners(static_cast<int>(i));
+    const auto corners = scene_->panel_corners(static_cast<int>(i));
     PanelBox box{1e9, -1e9, 1e9, -1e9, false};
     double max_step = 0;
     Eigen::Vector2d prev[4];
@@ -371,15 +378,16 @@ std::vector<EventCameraSim::PanelBox> EventCameraSim::bound_panels(
 // A tile renders only the balls whose swept silhouette may touch it, and samples at their speed.
 std::vector<EventCameraSim::BallSweep> EventCameraSim::sweep_balls(
     const CameraMotion& motion) const {
-  std::vector<BallSweep> sweeps(balls_.size());
-  for (std::size_t b = 0; b < balls_.size(); ++b) {
+  std::vector<BallSweep> sweeps(balls_->size());
+  for (std::size_t b = 0; b < balls_->size(); ++b) {
     BallSweep& bp = sweeps[b];
-    const double r = balls_[b].config().radius_m;
-    const double spin = balls_[b].config().spin_W_rad_s.norm();
+    const double r = (*balls_)[b].config().radius_m;
+    const double spin = (*balls_)[b].config().spin_W_rad_s.norm();
     double alpha[kPlanSamples];
     for (int k = 0; k < kPlanSamples; ++k) {
       // A ball that does not exist yet is planned at its release position (its state then).
-      const BallState bs = balls_[b].at(std::max(motion.t_s[k], balls_[b].config().release_t_s));
+      const BallState bs =
+          (*balls_)[b].at(std::max(motion.t_s[k], (*balls_)[b].config().release_t_s));
       const Eigen::Vector3d c = motion.R_E_W[k] * (bs.p_W - motion.o_W[k]);
       const double dist = c.norm();
       if (dist <= r * 1.05) bp.everywhere = true;
@@ -415,7 +423,7 @@ void EventCameraSim::plan_tile(std::size_t tile_index, const CameraMotion& motio
     else
       rate = std::max(rate, ball_rate(tile, sweeps[b]));
   }
-  const auto& ec = config_.event_camera;
+  const auto& ec = config_->event_camera;
   const double steps = std::ceil(rate * dt_s / ec.max_motion_px);
   tile.capped = capped || steps >= ec.max_steps_per_chunk;
   tile.steps = tile.capped ? ec.max_steps_per_chunk : std::max(1, static_cast<int>(steps));
@@ -490,16 +498,16 @@ double EventCameraSim::ball_rate(const Tile& tile, const BallSweep& sweep) {
 
 EventCameraSim::Frame EventCameraSim::make_frame(TimeNs t) const {
   Frame f;
-  const BodyState s = vehicle_.at(to_seconds(t));
+  const BodyState s = vehicle_->at(to_seconds(t));
   const Eigen::Matrix3d R_W_E = s.R_W_B * calib_.T_B_E.linear();
   const Eigen::Vector3d o = s.p_W + s.R_W_B * calib_.T_B_E.translation();
   for (int r = 0; r < 3; ++r) {
     f.o[r] = static_cast<float>(o[r]);
     for (int c = 0; c < 3; ++c) f.R[3 * r + c] = static_cast<float>(R_W_E(r, c));
   }
-  f.ball_count = static_cast<int>(balls_.size());
+  f.ball_count = static_cast<int>(balls_->size());
   for (int b = 0; b < f.ball_count; ++b) {
-    const BallState bs = balls_[b].at(to_seconds(t));
+    const BallState bs = (*balls_)[b].at(to_seconds(t));
     BallFrame& bf = f.ball[b];
     float len2 = 0;
     for (int r = 0; r < 3; ++r) {
@@ -508,7 +516,7 @@ EventCameraSim::Frame EventCameraSim::make_frame(TimeNs t) const {
       for (int c = 0; c < 3; ++c) bf.R_O_W[3 * r + c] = static_cast<float>(bs.R_W_O(c, r));
     }
     bf.oc_len = std::sqrt(len2);
-    bf.r = static_cast<float>(balls_[b].config().radius_m);
+    bf.r = static_cast<float>((*balls_)[b].config().radius_m);
     bf.alpha = bf.oc_len > bf.r ? std::asin(bf.r / bf.oc_len) : 1.5707963f;
     bf.index = b;
     bf.exists = bs.exists;
@@ -623,14 +631,14 @@ EventCameraSim::GroupShading EventCameraSim::shade_static_scene(const Tile& tile
   using namespace lanes;
   vf t;
   vi surf;
-  scene_.cast_static_v(f.o, g.d, g.inv_d, tile.panels, t, surf);
+  scene_->cast_static_v(f.o, g.d, g.inv_d, tile.panels, t, surf);
   GroupShading s;
   if (all_equal(surf)) {
-    s.intensity = scene_.static_radiance_v(surf[0], t, f.o, g.d, g.footprint);
+    s.intensity = scene_->static_radiance_v(surf[0], t, f.o, g.d, g.footprint);
   } else {  // the group straddles a surface boundary: shade lane by lane
     for (int k = 0; k < kLanes; ++k) {
       const float dk[3] = {g.d[0][k], g.d[1][k], g.d[2][k]};
-      s.intensity[k] = scene_.static_radiance(RayHit{t[k], surf[k]}, f.o, dk, g.footprint[k]);
+      s.intensity[k] = scene_->static_radiance(RayHit{t[k], surf[k]}, f.o, dk, g.footprint[k]);
     }
   }
   s.z = t;
@@ -682,9 +690,9 @@ void EventCameraSim::shade_ball(const BallFrame& ball, const float* dir, float n
                         Ro[3] * nrm[0] + Ro[4] * nrm[1] + Ro[5] * nrm[2],
                         Ro[6] * nrm[0] + Ro[7] * nrm[1] + Ro[8] * nrm[2]};
   const float cos_inc = -(dir[0] * nrm[0] + dir[1] * nrm[1] + dir[2] * nrm[2]);
-  const float ball_i = scene_.ball_radiance(ball.index, nrm, n_o, t_unit, pixel_angle, cos_inc);
+  const float ball_i = scene_->ball_radiance(ball.index, nrm, n_o, t_unit, pixel_angle, cos_inc);
   intensity = coverage * ball_i + (1 - coverage) * intensity;
-  label = static_cast<std::int16_t>(scene_.ball_look(ball.index).id);
+  label = static_cast<std::int16_t>(scene_->ball_look(ball.index).id);
   z = z_ball;
 }
 
@@ -702,7 +710,7 @@ void EventCameraSim::push_event(Tile& tile, double t_ns, int x, int y, bool on, 
 
 void EventCameraSim::add_noise(Tile& tile, TimeNs t0, TimeNs t1) {
   if (tile.noise_next > t1) return;  // no pixel of the tile is due in this chunk
-  const double on_fraction = config_.event_camera.background_on_fraction;
+  const double on_fraction = config_->event_camera.background_on_fraction;
   TimeNs next = std::numeric_limits<TimeNs>::max();
   std::size_t p = tile.offset;
   for (int y = tile.y0; y < tile.y1; ++y)

@@ -17,6 +17,10 @@
 /// Determinism: tiles are independent (per-pixel state, per-tile random streams seeded from
 /// (seed, tile)), the output of a chunk is sorted by (t, y, x, polarity, label), so the result
 /// is byte-identical for any thread count. Not thread-safe itself (it uses the pool's threads).
+///
+/// Forking (Simulator's fork): a copy of an engine's whole state, pixel memories and random streams
+/// included, reading its own copies of the scene, the vehicle and the balls, renders on exactly as
+/// the original would.
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -48,6 +52,12 @@ class EventCameraSim {
                  const FlownVehicle& vehicle, const std::vector<BallTrajectory>& balls,
                  ThreadPool& pool);
 
+  /// `state`'s engine as it is now, reading `config`, `scene`, `vehicle`, `balls` (equal to the
+  /// ones `state` reads) and rendering on `pool` instead.
+  EventCameraSim(const EventCameraSim& state, const ScenarioConfig& config, const Scene& scene,
+                 const FlownVehicle& vehicle, const std::vector<BallTrajectory>& balls,
+                 ThreadPool& pool);
+
   /// Renders every pixel at t0 and sets the references (no events).
   void initialize(TimeNs t0);
   /// Simulates (t0, t1] and appends its events, sorted, with one label each.
@@ -56,6 +66,8 @@ class EventCameraSim {
   const EventCameraStats& stats() const { return stats_; }
 
  private:
+  EventCameraSim(const EventCameraSim&) = default;  // only through the fork above
+
   struct LabeledEvent {
     TimeNs t;
     std::uint16_t x, y;
@@ -148,16 +160,17 @@ class EventCameraSim {
                   TimeNs t1);
   void add_noise(Tile& tile, TimeNs t0, TimeNs t1);
 
-  const ScenarioConfig& config_;
-  const Scene& scene_;
-  const FlownVehicle& vehicle_;
-  const std::vector<BallTrajectory>& balls_;
+  // What the engine reads, not owns (pointers, so that a fork can read its own copies).
+  const ScenarioConfig* config_;
+  const Scene* scene_;
+  const FlownVehicle* vehicle_;
+  const std::vector<BallTrajectory>* balls_;
   Calibration calib_;
   int width_, height_;
   TimeNs refractory_ns_, resolution_ns_;
   double jitter_ns_;
   float dark_;
-  ThreadPool& pool_;
+  ThreadPool* pool_;
   // per pixel, tile-major (see pixel())
   std::vector<float> ray_x_, ray_y_;  ///< normalised undistorted coordinates of the pixel centre
   std::vector<float> footprint_;      ///< pixel angle · |d| (see Scene::static_radiance)

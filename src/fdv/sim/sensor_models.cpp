@@ -80,9 +80,14 @@ DepthModel::DepthModel(const DepthCameraConfig& config, const Calibration& calib
     : config_(config),
       camera_(*calib.depth_camera),
       T_B_D_(calib.T_B_D),
-      scene_(scene),
+      scene_(&scene),
       seed_(seed),
-      pool_(pool) {}
+      pool_(&pool) {}
+
+DepthModel::DepthModel(const DepthModel& state, const Scene& scene, ThreadPool& pool)
+    : DepthModel(state) {
+  scene_ = &scene, pool_ = &pool;
+}
 
 DepthFrame DepthModel::render(TimeNs t, const BodyState& body, const std::vector<BallState>& balls,
                               const std::vector<double>& radii, std::uint64_t frame_index) const {
@@ -103,7 +108,7 @@ DepthFrame DepthModel::render(TimeNs t, const BodyState& body, const std::vector
   }
   const std::size_t nb = balls.size();
 
-  pool_.parallel_for(static_cast<std::size_t>(H), [&](std::size_t row) {
+  pool_->parallel_for(static_cast<std::size_t>(H), [&](std::size_t row) {
     const int v = static_cast<int>(row);
     for (int u = 0; u < W; ++u) {
       const float x = static_cast<float>((u - camera_.cx) / camera_.fx);
@@ -112,7 +117,7 @@ DepthFrame DepthModel::render(TimeNs t, const BodyState& body, const std::vector
                           Rf[6] * x + Rf[7] * y + Rf[8]};
       float inv[3];
       Scene::safe_inverse(d, inv);
-      float z = scene_.cast_static(of, d, inv, scene_.all_panels()).t;
+      float z = scene_->cast_static(of, d, inv, scene_->all_panels()).t;
       const double norm = std::sqrt(static_cast<double>(x) * x + static_cast<double>(y) * y + 1.0);
       for (std::size_t b = 0; b < nb; ++b) {
         if (!balls[b].exists) continue;
@@ -134,7 +139,7 @@ DepthFrame DepthModel::render(TimeNs t, const BodyState& body, const std::vector
   // correlation, so noise_correlation_px = 1 reproduces independent noise exactly).
   std::vector<std::uint8_t> hole(clean.size(), 0);
   cv::Mat noise(H, W, CV_64F);
-  pool_.parallel_for(static_cast<std::size_t>(H), [&](std::size_t row) {
+  pool_->parallel_for(static_cast<std::size_t>(H), [&](std::size_t row) {
     const int v = static_cast<int>(row);
     Rng rng =
         Rng::stream(seed_, RngStream::kDepth, frame_index * 65536 + static_cast<std::uint64_t>(v));
@@ -162,7 +167,7 @@ DepthFrame DepthModel::render(TimeNs t, const BodyState& body, const std::vector
     cv::blur(noise, noise, cv::Size(c, c), cv::Point(-1, -1), cv::BORDER_REFLECT_101);
     noise *= c;
   }
-  pool_.parallel_for(static_cast<std::size_t>(H), [&](std::size_t row) {
+  pool_->parallel_for(static_cast<std::size_t>(H), [&](std::size_t row) {
     const int v = static_cast<int>(row);
     const double* g = noise.ptr<double>(v);
     for (int u = 0; u < W; ++u) {

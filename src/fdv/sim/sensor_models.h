@@ -62,6 +62,8 @@ class DepthModel {
  public:
   DepthModel(const DepthCameraConfig& config, const Calibration& calib, const Scene& scene,
              std::uint64_t seed, ThreadPool& pool);
+  /// `state`'s model reading `scene` (equal to the one `state` reads) on `pool`: a fork of a run.
+  DepthModel(const DepthModel& state, const Scene& scene, ThreadPool& pool);
   /// The frame at time t; `frame_index` selects the random streams.
   DepthFrame render(TimeNs t, const BodyState& body, const std::vector<BallState>& balls,
                     const std::vector<double>& radii, std::uint64_t frame_index) const;
@@ -70,9 +72,10 @@ class DepthModel {
   DepthCameraConfig config_;
   PinholeCamera camera_;
   Eigen::Isometry3d T_B_D_;
-  const Scene& scene_;
+  // Not owned (pointers, so that a fork can read its own copies).
+  const Scene* scene_;
   std::uint64_t seed_;
-  ThreadPool& pool_;
+  ThreadPool* pool_;
 };
 
 }  // namespace fdv::sim

@@ -101,6 +101,30 @@ struct Simulator::Running {
     for (const auto& b : balls) radii.push_back(b.config().radius_m);
   }
 
+  /// A fork of `state`, reading the forked simulator's own configuration, path and balls.
+  Running(const Running& state, const ScenarioConfig& config, const VehicleTrajectory& path,
+          const std::vector<BallTrajectory>& balls, SimulationSink& out)
+      : flight(state.flight),
+        sink(out),
+        wall0(state.wall0),
+        pool(config.threads),
+        scene(state.scene),
+        vehicle(state.vehicle, path),
+        camera(state.camera, config, scene, vehicle, balls, pool),
+        imu(state.imu),
+        odometry(state.odometry),
+        radii(state.radii),
+        summary(state.summary),
+        t_end(state.t_end),
+        chunk(state.chunk),
+        t_done(state.t_done),
+        imu_clock(state.imu_clock),
+        odo_clock(state.odo_clock),
+        truth_clock(state.truth_clock),
+        depth_clock(state.depth_clock) {
+    if (state.depth) depth.emplace(*state.depth, scene, pool);
+  }
+
   Flight flight;
   SimulationSink& sink;
   std::chrono::steady_clock::time_point wall0 = std::chrono::steady_clock::now();
@@ -119,6 +143,15 @@ struct Simulator::Running {
   std::vector<Event> events;
   std::vector<std::int16_t> labels;
 };
+
+Simulator::Simulator(const Simulator& running, SimulationSink& sink)
+    : config_(running.config_),
+      calib_(running.calib_),
+      vehicle_(std::make_unique<VehicleTrajectory>(*running.vehicle_)),
+      balls_(running.balls_) {
+  if (!running.running_) throw ConfigError("simulator: a fork needs a run begun with begin()");
+  running_ = std::make_unique<Running>(*running.running_, config_, *vehicle_, balls_, sink);
+}
 
 Simulator::~Simulator() = default;
 

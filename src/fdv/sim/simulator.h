@@ -24,6 +24,13 @@
 ///   SimulationSummary summary = sim.finish();
 ///
 /// Without any command, a commanded run renders exactly what run() renders.
+///
+/// Forking a stepwise run: several manoeuvres from one simulated past.
+///
+///   sim::Simulator fork(sim, fork_sink);     // sim's run as it is now, streaming into fork_sink
+///   fork.command(t, a_W);                    // only the fork flies it
+///   while (fork.step()) { ... }              // renders what sim would have rendered after
+///   fork.finish();                           // the same command; sim runs on untouched
 #include <cstdint>
 #include <memory>
 #include <span>
@@ -120,6 +127,11 @@ class Simulator {
   /// Throws ConfigError ("key: reason") for an invalid configuration, a throw that cannot be
   /// solved, or a vehicle path that leaves the room.
   explicit Simulator(ScenarioConfig config);
+  /// A fork of `running`'s stepwise run at its simulated_until(): a copy of its whole state (the
+  /// vehicle's commands, every sensor's random streams, the counts so far), whose next chunks go
+  /// to `sink`. The two then run independently; the fork's summary counts the whole run. Throws
+  /// ConfigError when `running` has no run begun.
+  Simulator(const Simulator& running, SimulationSink& sink);
   ~Simulator();
   Simulator(const Simulator&) = delete;
   Simulator& operator=(const Simulator&) = delete;

@@ -16,11 +16,16 @@ constexpr double kFloorBrakeStart = 0.5;
 
 FlownVehicle::FlownVehicle(const VehicleTrajectory& path, const VehicleResponseConfig& response,
                            const Eigen::Vector3d& gravity_W)
-    : path_(path),
+    : path_(&path),
       response_(response),
       gravity_(gravity_W),
       up_(-gravity_W.normalized()),
       step_s_(response.step_s) {}
+
+FlownVehicle::FlownVehicle(const FlownVehicle& state, const VehicleTrajectory& path)
+    : FlownVehicle(state) {
+  path_ = &path;
+}
 
 void FlownVehicle::command(TimeNs t, const Eigen::Vector3d& a_W) {
   if (!a_W.allFinite()) throw ConfigError("vehicle command: the acceleration is not finite");
@@ -49,7 +54,7 @@ Eigen::Vector3d FlownVehicle::command_at(std::size_t k) {
   // The height controller's floor, in the vertical of gravity: brake a descent once stopping at
   // the floor needs half of |g| (braking at up to |g| then always stops it there), keep braking
   // as needed until the descent stops, then hold that height while the command points down.
-  const BodyState path = path_.at(t);
+  const BodyState path = path_->at(t);
   const double gap = (path.p_W + nodes_[k].p).dot(up_) - response_.min_height_m;
   const double climb = (path.v_W + nodes_[k].v).dot(up_);
   const double g = gravity_.norm();
@@ -115,7 +120,7 @@ void FlownVehicle::advance_to(double t_s) {
 }
 
 BodyState FlownVehicle::at(double t_s) const {
-  BodyState s = path_.at(t_s);
+  BodyState s = path_->at(t_s);
   if (!deviates_at(t_s) || nodes_.size() < 2) return s;
   const auto last = static_cast<double>(nodes_.size() - 2);
   const double x = std::min((t_s - t0_s_) / step_s_, last + 1.0);

@@ -50,6 +50,9 @@ class FlownVehicle {
  public:
   FlownVehicle(const VehicleTrajectory& path, const VehicleResponseConfig& response,
                const Eigen::Vector3d& gravity_W);
+  /// `state`'s vehicle as it is now (its commands and integrated deviation), flying on `path`
+  /// (equal to the one `state` flies on): a fork of a run.
+  FlownVehicle(const FlownVehicle& state, const VehicleTrajectory& path);
 
   /// Commanded acceleration `a_W` on top of the path's from `t` on. Throws ConfigError for a
   /// non-finite acceleration.
@@ -60,12 +63,14 @@ class FlownVehicle {
   /// taken effect.
   BodyState at(double t_s) const;
   /// The path's state at `t_s`: where the vehicle would have been without any command.
-  BodyState unflown_at(double t_s) const { return path_.at(t_s); }
+  BodyState unflown_at(double t_s) const { return path_->at(t_s); }
   /// True once a command has taken effect (the flown path may differ from the path).
   bool deviates_at(double t_s) const { return !nodes_.empty() && t_s > t0_s_; }
   const FlightCounters& counters() const { return counters_; }
 
  private:
+  FlownVehicle(const FlownVehicle&) = default;  // only through the fork above
+
   /// The deviation from the path at a grid node. Over the step after it the acceleration runs
   /// linearly from `a` to `a + da` and the tilt turns at the constant rate `w_W`.
   struct Node {
@@ -83,7 +88,7 @@ class FlownVehicle {
                                          const Eigen::Quaterniond& q) const;
   double node_time(std::size_t k) const { return t0_s_ + step_s_ * static_cast<double>(k); }
 
-  const VehicleTrajectory& path_;
+  const VehicleTrajectory* path_;  ///< not owned (a pointer, so that a fork can fly its own copy)
   VehicleResponseConfig response_;
   Eigen::Vector3d gravity_, up_;
   double step_s_;
