@@ -8,6 +8,7 @@
 #include "fdv/sim/random_throw.h"
 #include "fdv/sim/simulator.h"
 #include "fdv/tables/dodge_eval.h"
+#include "sim/sim_test_util.h"
 
 namespace fdv {
 namespace {
@@ -81,6 +82,69 @@ TEST(ClosedLoop, APipelineThatDecidesNothingFliesThePathAndSeesTheOpenLoopScene)
   ASSERT_EQ(f.truth.body.size(), open.body.size());
   for (std::size_t i = 0; i < open.body.size(); ++i) EXPECT_EQ(f.truth.body[i].p_W_B, open.body[i].p_W_B);
   EXPECT_EQ(f.truth.objects.size(), open.objects.size());
+}
+
+/// Two flights are the same: decisions, windows, the flown truth, what the vehicle model did.
+void expect_same_flight(const ClosedLoopFlight& a, const ClosedLoopFlight& b) {
+  ASSERT_EQ(a.decisions.size(), b.decisions.size());
+  for (std::size_t i = 0; i < a.decisions.size(); ++i) {
+    EXPECT_EQ(a.decisions[i].t, b.decisions[i].t);
+    EXPECT_EQ(a.decisions[i].action, b.decisions[i].action);
+    EXPECT_EQ(a.decisions[i].effective_t, b.decisions[i].effective_t);
+    ASSERT_EQ(a.decisions[i].maneuver.has_value(), b.decisions[i].maneuver.has_value());
+    if (a.decisions[i].maneuver) {
+      EXPECT_EQ(a.decisions[i].maneuver->acceleration_W, b.decisions[i].maneuver->acceleration_W);
+    }
+  }
+  ASSERT_EQ(a.windows.size(), b.windows.size());
+  for (std::size_t i = 0; i < a.windows.size(); ++i) {
+    ASSERT_EQ(a.windows[i].detections.size(), b.windows[i].detections.size()) << "window " << i;
+    for (std::size_t k = 0; k < a.windows[i].detections.size(); ++k) {
+      EXPECT_EQ(a.windows[i].detections[k].center_raw, b.windows[i].detections[k].center_raw);
+      EXPECT_EQ(a.windows[i].detections[k].track, b.windows[i].detections[k].track);
+    }
+  }
+  ASSERT_EQ(a.truth.body.size(), b.truth.body.size());
+  for (std::size_t i = 0; i < a.truth.body.size(); ++i)
+    EXPECT_EQ(a.truth.body[i].p_W_B, b.truth.body[i].p_W_B);
+  EXPECT_EQ(a.truth.objects.size(), b.truth.objects.size());
+  EXPECT_EQ(a.flight.commands, b.flight.commands);
+  EXPECT_EQ(a.flight.late, b.flight.late);
+}
+
+// Three methods through one simulation (fly_with_perceptions): two that dodge the head-on throw
+// (hover_headon seed 1 at 320x240), each then on its own fork, and one that decides nothing and
+// rides the shared simulation to its end. Each flies exactly as it does alone, and the open loop
+// riding along gets exactly the scene of a simulation without commands.
+TEST(ClosedLoop, MethodsSharingOneSimulationFlyExactlyAsEachDoesAlone) {
+  sim::ScenarioConfig config = sim::make_preset("hover_headon", 1);
+  sim::set_event_resolution(config, 320, 240);
+  config.depth_camera.width = 320, config.depth_camera.height = 240;
+  config.depth_camera.fx = config.depth_camera.fy = 192.85, config.depth_camera.cx = 160,
+  config.depth_camera.cy = 120;
+  config.duration_s = 0.9;  // both dodging methods decide at 0.80 s
+  config.threads = 1;
+  PerceptionOptions ours;
+  ours.threads = 1;
+  std::map<std::string, PerceptionOptions> methods{
+      {"ours", ours}, {"rotation", ours}, {"none", ours}};
+  methods["rotation"].compensation.method = CompensationMethod::kRotation;
+  methods["none"].dodge_from = DodgeSource::kNone;
+
+  sim::MemorySink open_loop, path_run;
+  const std::map<std::string, ClosedLoopFlight> shared =
+      fly_with_perceptions(config, methods, {}, &open_loop);
+  sim::Simulator(config).run(path_run);
+  sim::test::expect_same_streams(open_loop, path_run);
+  ASSERT_EQ(shared.size(), methods.size());
+  for (const auto& [name, options] : methods) {
+    SCOPED_TRACE(name);
+    expect_same_flight(shared.at(name), fly_with_perception(config, options));
+  }
+  // What the test is for: two methods forked while a third rode on to the end.
+  EXPECT_GT(shared.at("ours").flight.commands, 0u);
+  EXPECT_GT(shared.at("rotation").flight.commands, 0u);
+  EXPECT_TRUE(shared.at("none").decisions.empty());
 }
 
 }  // namespace

@@ -21,14 +21,33 @@ std::string read_text(const fs::path& path) {
   s << in.rdbuf();
   return s.str();
 }
+
+/// The configuration and the simulator's revision: either changed = another dataset.
+std::string fingerprint(const ScenarioConfig& config) {
+  return fmt::format("# fdv simulator revision {}\n{}", kSimulatorRevision, to_yaml(config));
+}
+
 }  // namespace
 
-std::string ensure_simulated(const ScenarioConfig& config, const std::string& dir) {
-  // The configuration and the simulator's revision: either changed = another dataset.
-  const std::string fingerprint =
-      fmt::format("# fdv simulator revision {}\n{}", kSimulatorRevision, to_yaml(config));
+bool is_simulated(const ScenarioConfig& config, const std::string& dir) {
   const fs::path marker = fs::path(dir) / kSimulationMarker;
-  if (fs::exists(marker) && read_text(marker) == fingerprint) {
+  return fs::exists(marker) && read_text(marker) == fingerprint(config);
+}
+
+// The marker last, via a rename, so that a folder with a marker is always complete.
+void mark_simulated(const ScenarioConfig& config, const std::string& dir) {
+  const fs::path marker = fs::path(dir) / kSimulationMarker;
+  const fs::path tmp = marker.string() + ".tmp";
+  {
+    std::ofstream out(tmp);
+    out << fingerprint(config);
+    if (!out) throw InputError(tmp.string(), "", "cannot write the cache marker");
+  }
+  fs::rename(tmp, marker);
+}
+
+std::string ensure_simulated(const ScenarioConfig& config, const std::string& dir) {
+  if (is_simulated(config, dir)) {
     spdlog::debug("reusing the simulated dataset {}", dir);
     return dir;
   }
@@ -45,14 +64,7 @@ std::string ensure_simulated(const ScenarioConfig& config, const std::string& di
     simulator.run(sink);
     sink.finish(simulator.manifest_yaml());
   }
-  // The marker last, via a rename, so that a folder with a marker is always complete.
-  const fs::path tmp = marker.string() + ".tmp";
-  {
-    std::ofstream out(tmp);
-    out << fingerprint;
-    if (!out) throw InputError(tmp.string(), "", "cannot write the cache marker");
-  }
-  fs::rename(tmp, marker);
+  mark_simulated(config, dir);
   return dir;
 }
 

@@ -20,6 +20,11 @@ std::string ensure_simulated(const std::string& preset, std::uint64_t seed,
                              const std::string& cache_dir);
 /// The same for any configuration, into `dir`.
 std::string ensure_simulated(const ScenarioConfig& config, const std::string& dir);
+/// Whether `dir` holds a complete simulation of `config` at this simulator revision (its marker).
+bool is_simulated(const ScenarioConfig& config, const std::string& dir);
+/// Marks `dir`, just written whole by a DatasetSink from `config`'s simulation without commands, as
+/// complete, for ensure_simulated to reuse. Throws InputError when the marker cannot be written.
+void mark_simulated(const ScenarioConfig& config, const std::string& dir);
 inline constexpr const char* kSimulationMarker = "simulation_complete.yaml";
 
 }  // namespace fdv::sim

@@ -79,59 +79,185 @@ class LoopSink : public sim::SimulationSink {
   sim::DatasetSink* dataset_;
 };
 
-}  // namespace
+/// Forwards every stream to each of the sinks it holds (the methods that ride one simulation), and
+/// to `open_loop` all but the unflown path (in the open loop the flown path is the path).
+class FanOutSink : public sim::SimulationSink {
+ public:
+  std::vector<sim::SimulationSink*> sinks;
+  sim::SimulationSink* open_loop = nullptr;
 
-ClosedLoopFlight fly_with_perception(const sim::ScenarioConfig& config, const PerceptionOptions& options,
-                                     const std::string& dataset_dir, const std::string& run_dir) {
-  ClosedLoopFlight out;
-  sim::Simulator simulator(config);
-  std::vector<DodgeDecision> pending;
-  PerceptionCallbacks also;
-  also.on_window = [&](const WindowResult& w) {
-    out.windows.push_back(window_detections(w));
-    out.window_total_ms.push_back(w.timings.total_ms);
-  };
-  also.on_dodge = [&](const DodgeDecision& d) { pending.push_back(d); };
-  RunRecorder recorder(run_dir, also);
-  std::optional<sim::DatasetSink> dataset;
-  if (!dataset_dir.empty()) dataset.emplace(dataset_dir, simulator.calibration());
-  Perception perception(simulator.calibration(), options, recorder.callbacks());
-  LoopSink sink(perception, dataset ? &*dataset : nullptr);
+  void on_events(std::span<const Event> events, std::span<const std::int16_t> labels) override {
+    each([&](sim::SimulationSink& s) { s.on_events(events, labels); });
+  }
+  void on_imu(const ImuSample& x) override {
+    each([&](sim::SimulationSink& s) { s.on_imu(x); });
+  }
+  void on_depth(const DepthFrame& x) override {
+    each([&](sim::SimulationSink& s) { s.on_depth(x); });
+  }
+  void on_odometry(const OdometrySample& x) override {
+    each([&](sim::SimulationSink& s) { s.on_odometry(x); });
+  }
+  void on_body_truth(const OdometrySample& x) override {
+    each([&](sim::SimulationSink& s) { s.on_body_truth(x); });
+  }
+  void on_unflown_body_truth(const OdometrySample& x) override {
+    for (auto* s : sinks) s->on_unflown_body_truth(x);
+  }
+  void on_object_truth(const ObjectState& x) override {
+    each([&](sim::SimulationSink& s) { s.on_object_truth(x); });
+  }
 
-  // The simulation waits for the pipeline: each chunk is processed before the next is rendered,
-  // and the decisions it made are commanded before then.
-  simulator.begin(sink, sim::Flight::kCommanded);
-  auto command_pending = [&] {
-    for (const DodgeDecision& d : pending) {
-      out.decisions.push_back(d);
+ private:
+  template <class Call>
+  void each(Call call) {
+    for (auto* s : sinks) call(*s);
+    if (open_loop) call(*open_loop);
+  }
+};
+
+/// One method in the loop: its pipeline fed by the simulator it rides, the decisions it has made
+/// and not yet flown, and what it keeps.
+class MethodInLoop {
+ public:
+  MethodInLoop(const sim::Simulator& simulator, const PerceptionOptions& options,
+               const FlightOutputs& outputs)
+      : options_(options), outputs_(outputs), recorder_(outputs.run_dir, record_also()) {
+    if (!outputs.dataset_dir.empty())
+      dataset_.emplace(outputs.dataset_dir, simulator.calibration());
+    perception_.emplace(simulator.calibration(), options, recorder_.callbacks());
+    sink_.emplace(*perception_, dataset_ ? &*dataset_ : nullptr);
+  }
+
+  sim::SimulationSink& sink() { return *sink_; }
+  /// Whether a decision not yet flown changes the set-point.
+  bool has_setpoints() const {
+    return std::any_of(pending_.begin(), pending_.end(),
+                       [](const DodgeDecision& d) { return !setpoint_changes(d).empty(); });
+  }
+  /// The decisions made since the last call, flown by `simulator`.
+  void command_pending(sim::Simulator& simulator) {
+    for (const DodgeDecision& d : pending_) {
+      out_.decisions.push_back(d);
       for (const SetpointChange& c : setpoint_changes(d)) simulator.command(c.t, c.acceleration_W);
     }
-    pending.clear();
+    pending_.clear();
+  }
+  /// The rest of the scene on `simulator`, which this method now flies alone.
+  void fly_on(sim::Simulator& simulator) {
+    command_pending(simulator);
+    while (simulator.step()) command_pending(simulator);
+  }
+  /// After the scene: the pipeline's last windows, the results written, the flight.
+  ClosedLoopFlight finish(const sim::ScenarioConfig& config, sim::Simulator& simulator) {
+    perception_->finish();
+    command_pending(
+        simulator);  // decisions on the last window come after the scene: nothing left to fly
+    out_.flight = simulator.finish().flight;
+    if (dataset_) dataset_->finish(simulator.manifest_yaml());
+
+    RunSummary run;
+    run.input = outputs_.dataset_dir.empty() ? "closed loop (not written)" : outputs_.dataset_dir;
+    run.format = "fdv_dataset";
+    run.width = config.event_camera.width;
+    run.height = config.event_camera.height;
+    run.calibration = "from the simulation";
+    run.method_requested = run.method = to_string(options_.compensation.method);
+    run.threads = options_.threads;
+    run.counts = perception_->counters();
+    run.options = to_json(options_);
+    run.detector_in_use = detector_in_use(options_, simulator.calibration().event_camera);
+    recorder_.finish(std::move(run));
+
+    out_.truth = truth_frame(config);
+    out_.truth.body = std::move(sink_->body);
+    out_.truth.objects = std::move(sink_->objects);
+    return std::move(out_);
+  }
+
+ private:
+  PerceptionCallbacks record_also() {
+    PerceptionCallbacks also;
+    also.on_window = [this](const WindowResult& w) {
+      out_.windows.push_back(window_detections(w));
+      out_.window_total_ms.push_back(w.timings.total_ms);
+    };
+    also.on_dodge = [this](const DodgeDecision& d) { pending_.push_back(d); };
+    return also;
+  }
+
+  PerceptionOptions options_;
+  FlightOutputs outputs_;
+  ClosedLoopFlight out_;
+  std::vector<DodgeDecision> pending_;
+  RunRecorder recorder_;
+  std::optional<sim::DatasetSink> dataset_;
+  std::optional<Perception> perception_;
+  std::optional<LoopSink> sink_;
+};
+
+}  // namespace
+
+std::map<std::string, ClosedLoopFlight> fly_with_perceptions(
+    const sim::ScenarioConfig& config, const std::map<std::string, PerceptionOptions>& methods,
+    const std::map<std::string, FlightOutputs>& outputs, sim::SimulationSink* open_loop) {
+  sim::Simulator shared(config);
+  std::map<std::string, std::unique_ptr<MethodInLoop>> riding;  // the methods on `shared`
+  for (const auto& [name, options] : methods) {
+    const auto kept = outputs.find(name);
+    riding[name] = std::make_unique<MethodInLoop>(
+        shared, options, kept == outputs.end() ? FlightOutputs{} : kept->second);
+  }
+  FanOutSink fan_out;
+  fan_out.open_loop = open_loop;
+  // With the open loop riding too, the shared simulation is never commanded: every method forks.
+  auto alone = [&] { return riding.size() == 1 && !open_loop; };
+  auto ride = [&] {
+    fan_out.sinks.clear();
+    for (auto& [name, method] : riding) fan_out.sinks.push_back(&method->sink());
   };
-  while (simulator.step()) command_pending();
-  perception.finish();
-  command_pending();  // decisions on the last window come after the scene: nothing left to fly
-  const sim::SimulationSummary summary = simulator.finish();
-  out.flight = summary.flight;
-  if (dataset) dataset->finish(simulator.manifest_yaml());
+  ride();
 
-  RunSummary run;
-  run.input = dataset_dir.empty() ? "closed loop (not written)" : dataset_dir;
-  run.format = "fdv_dataset";
-  run.width = config.event_camera.width;
-  run.height = config.event_camera.height;
-  run.calibration = "from the simulation";
-  run.method_requested = run.method = to_string(options.compensation.method);
-  run.threads = options.threads;
-  run.counts = perception.counters();
-  run.options = to_json(options);
-  run.detector_in_use = detector_in_use(options, simulator.calibration().event_camera);
-  recorder.finish(std::move(run));
+  // The simulation waits for the pipelines: each chunk is processed before the next is rendered,
+  // and the decisions made on it are commanded before then. A method's first set-point forks the
+  // simulation for it, unless nothing else rides it; the fork flies to the scene's end at once.
+  std::map<std::string, ClosedLoopFlight> flights;
+  shared.begin(fan_out, sim::Flight::kCommanded);
+  while (shared.step()) {
+    for (auto it = riding.begin(); it != riding.end();) {
+      MethodInLoop& method = *it->second;
+      if (!method.has_setpoints() || alone()) {
+        method.command_pending(shared);
+        ++it;
+        continue;
+      }
+      sim::Simulator own(shared, method.sink());
+      method.fly_on(own);
+      flights[it->first] = method.finish(config, own);
+      it = riding.erase(it);
+      ride();
+    }
+  }
+  // The methods that rode to the end: each finishes on a fork at the end (its last decisions
+  // may command it), the last on the shared simulation itself unless the open loop rode it.
+  while (!riding.empty()) {
+    auto it = riding.begin();
+    if (alone()) {
+      flights[it->first] = it->second->finish(config, shared);
+    } else {
+      sim::Simulator own(shared, it->second->sink());
+      flights[it->first] = it->second->finish(config, own);
+    }
+    riding.erase(it);
+  }
+  return flights;
+}
 
-  out.truth = truth_frame(config);
-  out.truth.body = std::move(sink.body);
-  out.truth.objects = std::move(sink.objects);
-  return out;
+ClosedLoopFlight fly_with_perception(const sim::ScenarioConfig& config,
+                                     const PerceptionOptions& options,
+                                     const std::string& dataset_dir, const std::string& run_dir) {
+  return std::move(
+      fly_with_perceptions(config, {{"", options}}, {{"", {dataset_dir, run_dir}}}).at(""));
 }
 
 ClosedLoopFlight fly_oracle(const sim::ScenarioConfig& config, const DatasetTruth& truth, int ball,

@@ -5,15 +5,21 @@
 /// manoeuvre they caused (docs/AVOIDANCE.md, "Closed loop").
 ///
 ///   ClosedLoopFlight f = fly_with_perception(config, options);        // ours or a baseline
+///   auto flights = fly_with_perceptions(config, {{"ours", a}, {"mono", b}});  // one simulation
 ///   ClosedLoopFlight o = fly_oracle(config, open_loop_truth, ball, window_ends, start, options);
-///   DatasetTruth d = fly_decisions(config, open_loop_truth, open_loop_decisions);  // dynamics only
+///   DatasetTruth d = fly_decisions(config, open_loop_truth, open_loop_decisions);  // dynamics
+///   only
 ///
 /// A decision made on a window takes effect at the window's end plus the response delay (its
 /// manoeuvre's start_t); the loop waits for the pipeline (the simulation does not run on while a
 /// window is processed), and reports the pipeline's time per window to compare with that delay.
 /// The oracles plan on the true ball and the flown vehicle state: they need the vehicle model
-/// only, not the rendering. Deterministic for a configuration. Thread safety: each call owns its
+/// only, not the rendering. Several methods share one simulation until each first commands a
+/// set-point, where the simulation is forked for it (sim::Simulator's fork): each flies exactly as
+/// it would alone, and the part of the scene before the decisions is rendered once. Deterministic
+/// for a configuration. Thread safety: each call owns its
 /// state; calls may run on different threads.
+#include <map>
 #include <optional>
 #include <span>
 #include <string>
@@ -24,6 +30,7 @@
 #include "fdv/eval/detection_metrics.h"
 #include "fdv/pipeline/perception.h"
 #include "fdv/sim/scenario_config.h"
+#include "fdv/sim/simulator.h"
 #include "fdv/sim/vehicle_dynamics.h"
 
 namespace fdv {
@@ -40,6 +47,22 @@ struct ClosedLoopFlight {
 /// when not empty, the flown dataset and the run's results folder are written there.
 ClosedLoopFlight fly_with_perception(const sim::ScenarioConfig& config, const PerceptionOptions& options,
                                      const std::string& dataset_dir = "", const std::string& run_dir = "");
+
+/// Where a method's flight is written; an empty path: not written.
+struct FlightOutputs {
+  std::string dataset_dir;  ///< the flown dataset
+  std::string run_dir;      ///< the run's results folder
+};
+
+/// Every method of `methods` (by name) in the loop, each flown exactly as fly_with_perception
+/// flies it alone, from one simulation forked at each method's first set-point. `outputs`: where
+/// a method's flight is written (a method without an entry: nowhere). `open_loop`, when given,
+/// also gets the whole scene flown without any command: the open loop's streams (no unflown path),
+/// as sim::Simulator::run gives them. Flights by method name.
+std::map<std::string, ClosedLoopFlight> fly_with_perceptions(
+    const sim::ScenarioConfig& config, const std::map<std::string, PerceptionOptions>& methods,
+    const std::map<std::string, FlightOutputs>& outputs = {},
+    sim::SimulationSink* open_loop = nullptr);
 
 /// An oracle in the loop: at each of `window_ends` from `start` on, the planner gets ball `ball`'s
 /// true state (from `truth`, which the vehicle does not change) and the flown vehicle state,

@@ -16,6 +16,7 @@
 #include "fdv/pipeline/options_yaml.h"
 #include "fdv/results/run.h"
 #include "fdv/sim/dataset_cache.h"
+#include "fdv/sim/dataset_sink.h"
 #include "fdv/sim/random_throw.h"
 #include "fdv/tables/closed_loop.h"
 #include "fdv/tables/experiment.h"
@@ -118,10 +119,33 @@ void add_maneuver_perception(DodgeOutcome& o, const ManeuverPerception& p) {
   o.track_survived = p.track_survived;
 }
 
-/// Every method flown through the closed loop, and every open-loop decision list through the
-/// vehicle model alone (dodge_eval.h). `dir`: where flights are kept (empty: nowhere).
-void fly_every_method(DodgeThrow& row, const sim::ScenarioConfig& config, const DatasetTruth& truth,
-                      const DodgeEvalOptions& options, const std::string& dir) {
+/// Every perception method flown through the closed loop, in one simulation that also writes the
+/// open loop's dataset to `open_loop_dataset` (the scene before any decision is the same). `dir`:
+/// where flights are kept (empty: nowhere).
+std::map<std::string, ClosedLoopFlight> fly_perception_methods(
+    const sim::ScenarioConfig& config, const DodgeEvalOptions& options, const std::string& dir,
+    const std::string& open_loop_dataset) {
+  const std::map<std::string, PerceptionOptions> variants = perception_variants(options.perception);
+  std::map<std::string, FlightOutputs> kept;
+  if (!dir.empty())
+    for (const auto& [method, perception] : variants) {
+      const std::string keep = method == "ours" ? dir : dir + "/" + method;
+      kept[method] = {keep + "/dataset", keep + "/run"};
+    }
+  std::filesystem::remove_all(open_loop_dataset);
+  sim::DatasetSink open_loop(open_loop_dataset, config.calibration());
+  std::map<std::string, ClosedLoopFlight> flights =
+      fly_with_perceptions(config, variants, kept, &open_loop);
+  open_loop.finish(sim::Simulator(config).manifest_yaml());
+  sim::mark_simulated(config, open_loop_dataset);
+  return flights;
+}
+
+/// The closed loop's outcomes of every method (the perception methods' `flights`, the oracles
+/// flown here), and every open-loop decision list through the vehicle model alone (dodge_eval.h).
+void score_closed_loop(DodgeThrow& row, const sim::ScenarioConfig& config,
+                       const DatasetTruth& truth, const DodgeEvalOptions& options,
+                       const std::map<std::string, ClosedLoopFlight>& flights) {
   const int ball = truth.radius_m.begin()->first;
   const double radius = options.perception.prediction.safety_radius_m;
   const std::optional<TimeNs> contact = true_contact_time(truth, ball, radius);
@@ -132,10 +156,7 @@ void fly_every_method(DodgeThrow& row, const sim::ScenarioConfig& config, const 
         scored(row, method, dodge_outcome(fly_decisions(config, truth, open_loop), ball, open_loop, radius, false), contact);
   }
   auto seconds_to_ns = [](std::optional<double> s) { return s ? std::optional(from_seconds(*s)) : std::nullopt; };
-  for (const auto& [method, perception] : perception_variants(options.perception)) {
-    const std::string keep = dir.empty() ? "" : (method == "ours" ? dir : dir + "/" + method);
-    const ClosedLoopFlight f =
-        fly_with_perception(config, perception, keep.empty() ? "" : keep + "/dataset", keep.empty() ? "" : keep + "/run");
+  for (const auto& [method, f] : flights) {
     DodgeOutcome o = scored(row, method, dodge_outcome(f.truth, ball, f.decisions, radius, false), contact);
     if (o.decision_t) add_maneuver_perception(o, maneuver_perception(f.truth, ball, f.windows, *o.decision_t));
     row.outcomes[method] = o;
@@ -268,11 +289,16 @@ DodgeThrow evaluate_dodge_throw(std::uint64_t seed, const DodgeEvalOptions& opti
   // go under open_loop/.
   const std::string open_dir = options.closed_loop ? throw_dir + "/open_loop" : throw_dir;
   const std::string dataset = open_dir + "/dataset";
-  sim::ensure_simulated(config, dataset);
+  std::map<std::string, ClosedLoopFlight> flights;
+  if (options.closed_loop)
+    flights = fly_perception_methods(config, options, options.keep ? throw_dir : "", dataset);
+  else
+    sim::ensure_simulated(config, dataset);
   DodgeThrow row = score_dodge_dataset(dataset, options, options.keep ? open_dir + "/run" : "");
   row.seed = seed;
   row.parameters = sim::to_json(parameters);
-  if (options.closed_loop) fly_every_method(row, config, load_dataset_truth(dataset), options, options.keep ? throw_dir : "");
+  if (options.closed_loop)
+    score_closed_loop(row, config, load_dataset_truth(dataset), options, flights);
   if (!options.keep) std::filesystem::remove_all(dataset);
   row.seconds = std::chrono::duration<double>(Clock::now() - start).count();
   return row;

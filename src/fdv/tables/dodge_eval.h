@@ -19,7 +19,8 @@
 /// scene rendered again as the vehicle model flies the method's decisions, the method deciding on
 /// what it sees. `outcomes` then hold the closed-loop figures, `open_loop_outcomes` the kinematic
 /// replay's above, and `dynamics_outcomes` the open-loop decisions flown by the vehicle model
-/// without rendering again (what the dynamics alone change).
+/// without rendering again (what the dynamics alone change). One simulation per throw renders the
+/// open loop's dataset and, forked at each perception method's first set-point, its flights.
 /// Thread safety: run_dodge_eval may be called from any thread; it runs `jobs` throws at once,
 /// each on its own thread with its own state.
 #include <cstdint>
