@@ -151,8 +151,8 @@ class MethodInLoop {
   /// After the scene: the pipeline's last windows, the results written, the flight.
   ClosedLoopFlight finish(const sim::ScenarioConfig& config, sim::Simulator& simulator) {
     perception_->finish();
-    command_pending(
-        simulator);  // decisions on the last window come after the scene: nothing left to fly
+    // Decisions on the last window come after the scene: nothing is left to fly.
+    command_pending(simulator);
     out_.flight = simulator.finish().flight;
     if (dataset_) dataset_->finish(simulator.manifest_yaml());
 
