@@ -193,6 +193,33 @@ TEST(DodgePlan, MinHeightForbidsDown) {
   EXPECT_GE(plan_dodge(r, sinking, o, kR).maneuver.acceleration_W.z(), -1e-9);
 }
 
+// The same ball passing 0.2 m below: the dodge goes up, unless max_height forbids it; a higher
+// ceiling allows the part of the climb it leaves room for.
+TEST(DodgePlan, MaxHeightForbidsUp) {
+  const CollisionRisk r = threat({0, 0, -0.2}, 0.4, 0.15, 0.8);
+  DodgeOptions o;
+  EXPECT_TRUE(plan_dodge(r, hovering(1.0), o, kR)
+                  .maneuver.acceleration_W.isApprox(Eigen::Vector3d(0, 0, 10), 1e-9));
+
+  o.limits.max_height_m = kBody.z();  // the current height: no climb at all
+  const Eigen::Vector3d a = plan_dodge(r, hovering(1.0), o, kR).maneuver.acceleration_W;
+  EXPECT_LE(a.z(), 1e-9) << a.transpose();
+  EXPECT_NEAR(a.norm(), 10.0, 1e-9);
+
+  o.limits.max_height_m = kBody.z() + 0.2;  // 0.2 m of room by the manoeuvre's end
+  const DodgePlan plan = plan_dodge(r, hovering(1.0), o, kR);
+  const double held_s = 0.4 + 0.1 - 0.05;
+  const double z_end = kBody.z() + 0.5 * plan.maneuver.acceleration_W.z() * held_s * held_s;
+  EXPECT_GT(plan.maneuver.acceleration_W.z(), 0.0);
+  EXPECT_LE(z_end, kBody.z() + 0.2 + 1e-9);
+
+  // A vehicle already climbing at 1 m/s towards a ceiling 0.3 m above: no room to go up.
+  VehicleState climbing = hovering(1.0);
+  climbing.odometry.v_W = {0, 0, 1};
+  o.limits.max_height_m = kBody.z() + 0.3;
+  EXPECT_LE(plan_dodge(r, climbing, o, kR).maneuver.acceleration_W.z(), 1e-9);
+}
+
 // A per-axis limit of 3 m/s² on y: the passage is to the left, the dodge still goes right, within
 // 3 m/s² on y and 10 m/s² in norm, and uses z for the rest.
 TEST(DodgePlan, PerAxisLimitRespected) {
@@ -438,6 +465,13 @@ TEST(DodgeOptions, InvalidLimitsNameTheKey) {
   o.limits.min_height_m = std::nan("");
   EXPECT_NE(error_of(o).find("limits.min_height_m"), std::string::npos);
   o = {};
+  o.limits.min_height_m = 2.0;
+  o.limits.max_height_m = 1.5;
+  EXPECT_EQ(error_of(o),
+            "DodgeOptions: limits.max_height_m must be above min_height_m (2) (got 1.5)");
+  o.limits.max_height_m = std::nan("");
+  EXPECT_NE(error_of(o).find("limits.max_height_m"), std::string::npos);
+  o = {};
   o.limits.max_tilt_deg = 0;
   EXPECT_NE(error_of(o).find("limits.max_tilt_deg"), std::string::npos) << error_of(o);
   o.limits.max_tilt_deg = 181;
@@ -451,6 +485,7 @@ TEST(DodgeOptions, InvalidLimitsNameTheKey) {
   o = {};
   o.limits.max_acceleration_per_axis_m_s2.setConstant(std::numeric_limits<double>::infinity());
   o.limits.min_height_m = -std::numeric_limits<double>::infinity();
+  o.limits.max_height_m = std::numeric_limits<double>::infinity();
   EXPECT_EQ(error_of(o), "");
   EXPECT_THROW(DodgePlanner(DodgeOptions{}, std::nan("")), ConfigError);
 }
@@ -469,6 +504,7 @@ TEST(DodgeOptions, YamlRoundTrip) {
   EXPECT_EQ(back.limits.max_acceleration_per_axis_m_s2, o.limits.max_acceleration_per_axis_m_s2);
   EXPECT_EQ(back.act_probability, 0.6);
   EXPECT_EQ(back.limits.min_height_m, o.limits.min_height_m);
+  EXPECT_EQ(back.limits.max_height_m, o.limits.max_height_m);
   EXPECT_NE(options_markdown(DodgeOptions{}).find("| `limits.max_acceleration_m_s2` | 10 |"), std::string::npos);
 }
 

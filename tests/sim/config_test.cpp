@@ -109,6 +109,8 @@ TEST(ScenarioConfig, BadFilesGiveFileKeyAndReason) {
   EXPECT_EQ(error_of("event_camera: {width: 640\n").substr(0, 8), "line 2, ");
   EXPECT_EQ(error_of("depth_camera:\n  min_range_m: 12\n"),
             "key depth_camera.max_range_m | must exceed min_range_m");
+  EXPECT_EQ(error_of("vehicle:\n  response: {min_height_m: 2, max_height_m: 1.5}\n"),
+            "key vehicle.response.max_height_m | must be a number above min_height_m (2), got 1.5");
 }
 
 /// "where | reason" of apply_scenario_yaml_text on `yaml` (named "scenario.yaml").

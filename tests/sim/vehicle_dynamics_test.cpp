@@ -1,7 +1,7 @@
 // The flown vehicle (vehicle_dynamics.h) against what a quadrotor must do: the steady tilt
 // atan(a/g) of a lateral command, in the truth attitude and in the IMU; the first-order lag and
-// the rate limit; the tilt limit, the floor and late commands; and, in the simulator, that a
-// commanded run without commands renders exactly what the path run renders.
+// the rate limit; the tilt limit, the floor, the ceiling and late commands; and, in the simulator,
+// that a commanded run without commands renders exactly what the path run renders.
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -117,6 +117,22 @@ TEST(FlownVehicle, TheFloorStopsADescentAndHoldsItsHeight) {
   EXPECT_LT(lowest, config.response.min_height_m + 0.05);  // it did go down to the floor
   EXPECT_NEAR(flown.at(3.0).v_W.z(), 0.0, 0.01);
   EXPECT_EQ(flown.counters().floor_holds, 1u);
+}
+
+TEST(FlownVehicle, TheCeilingStopsAClimbAndHoldsItsHeight) {
+  const VehicleConfig config = still_hover();  // at 1.5 m; ceiling 4.5 m
+  const VehicleTrajectory path(config, 1, kGravity);
+  FlownVehicle flown(path, config.response, kGravity);
+  flown.command(0, {0, 0, 8.0});
+  flown.advance_to(3.0);
+  double highest = 0;
+  for (double t = 0; t <= 3.0; t += 1e-3) highest = std::max(highest, flown.at(t).p_W.z());
+  // Unbraked, the 3 m climb at 8 m/s² would reach the ceiling at 6.9 m/s.
+  EXPECT_LT(highest, config.response.max_height_m + 0.01);
+  EXPECT_GT(highest, config.response.max_height_m - 0.05);  // it did go up to the ceiling
+  EXPECT_NEAR(flown.at(3.0).v_W.z(), 0.0, 0.01);
+  EXPECT_EQ(flown.counters().ceiling_holds, 1u);
+  EXPECT_EQ(flown.counters().floor_holds, 0u);
 }
 
 TEST(FlownVehicle, ACommandForATimeAlreadyFlownActsFromTheHorizonAndIsCounted) {

@@ -75,17 +75,19 @@ double max_acceleration_by_tilt(const Eigen::Vector3d& u, double max_tilt_deg) {
 }
 
 /// The largest acceleration along unit `u` within the limits: the norm, each axis, the thrust
-/// tilt, and the floor (the height at the manoeuvre's end, `end_s` from now, with the current
-/// vertical velocity).
+/// tilt, and the floor and ceiling (the height at the manoeuvre's end, `end_s` from now, with the
+/// current vertical velocity).
 double max_acceleration_along(const Eigen::Vector3d& u, const VehicleLimits& limits, const OdometrySample& vehicle,
                               double end_s) {
   double a = std::min(limits.max_acceleration_m_s2, max_acceleration_by_tilt(u, limits.max_tilt_deg));
   for (int i = 0; i < 3; ++i)
     if (std::abs(u(i)) > 0) a = std::min(a, limits.max_acceleration_per_axis_m_s2(i) / std::abs(u(i)));
   const double held_s = std::max(0.0, end_s - limits.response_delay_s);
-  if (u.z() < 0 && held_s > 0) {
-    const double room_m = vehicle.p_W_B.z() + vehicle.v_W.z() * end_s - limits.min_height_m;
-    a = std::min(a, std::max(0.0, room_m) / (0.5 * -u.z() * held_s * held_s));
+  if (u.z() != 0 && held_s > 0) {
+    const double drifted_m = vehicle.p_W_B.z() + vehicle.v_W.z() * end_s;
+    const double room_m =
+        u.z() < 0 ? drifted_m - limits.min_height_m : limits.max_height_m - drifted_m;
+    a = std::min(a, std::max(0.0, room_m) / (0.5 * std::abs(u.z()) * held_s * held_s));
   }
   return a;
 }
@@ -161,6 +163,9 @@ std::string VehicleLimits::validate() const {
   if (auto err = bad_duration("response_delay_s", response_delay_s); !err.empty()) return err;
   if (auto err = bad_duration("attitude_lag_s", attitude_lag_s); !err.empty()) return err;
   if (std::isnan(min_height_m)) return "min_height_m must be a number (got nan)";
+  if (!(max_height_m > min_height_m))
+    return fmt::format("max_height_m must be above min_height_m ({}) (got {})", min_height_m,
+                       max_height_m);
   if (!(max_tilt_deg > 0 && max_tilt_deg <= 180))
     return fmt::format("max_tilt_deg must be in (0, 180] (got {})", max_tilt_deg);
   return {};

@@ -51,6 +51,9 @@ struct VehicleLimits {
   /// Forbidden: any downward component that would bring the body below this height in W's z by
   /// the end of the manoeuvre [m]. The default, -1000 m, is no floor (-infinity is accepted too).
   double min_height_m = -1e3;
+  /// Forbidden likewise: any upward component that would bring the body above this height [m].
+  /// The default, 1000 m, is no ceiling (+infinity is accepted too).
+  double max_height_m = 1e3;
   /// Largest tilt of the thrust from the vertical [deg]: a quadrotor accelerates by a = f + g with
   /// its thrust f along its body z axis, so each direction's acceleration is capped where f would
   /// tilt further (W's z axis up, |g| = 9.81 m/s²). 180: no cap, a vehicle that can thrust any way
@@ -68,6 +71,8 @@ void describe(V& v, VehicleLimits& o) {
   v("response_delay_s", o.response_delay_s, "s", "from the decision to the set-point taking effect");
   v("attitude_lag_s", o.attitude_lag_s, "s", "thrust tilt time constant, planned as a further delay of the horizontal part (0 = none)");
   v("min_height_m", o.min_height_m, "m", "no downward manoeuvre below this height in W (-1000 = no floor)");
+  v("max_height_m", o.max_height_m, "m",
+    "no upward manoeuvre above this height in W (1000 = no ceiling)");
   v("max_tilt_deg", o.max_tilt_deg, "deg", "largest thrust tilt from the vertical (180 = none)");
 }
 

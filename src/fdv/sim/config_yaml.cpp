@@ -155,6 +155,7 @@ void describe(V& v, VehicleResponseConfig& c) {
   v("max_body_rate_rad_s", c.max_body_rate_rad_s);
   v("max_tilt_deg", c.max_tilt_deg);
   v("min_height_m", c.min_height_m);
+  v("max_height_m", c.max_height_m);
   v("step_s", c.step_s);
 }
 

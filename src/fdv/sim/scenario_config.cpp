@@ -174,6 +174,11 @@ Problem ScenarioConfig::find_problem() const {
   c.in_range(v.response.max_body_rate_rad_s, 0.1, 100, rk + "max_body_rate_rad_s");
   c.in_range(v.response.max_tilt_deg, 1, 80, rk + "max_tilt_deg");
   c.need(std::isfinite(v.response.min_height_m), rk + "min_height_m", "must be finite");
+  c.need(
+      std::isfinite(v.response.max_height_m) && v.response.max_height_m > v.response.min_height_m,
+      rk + "max_height_m",
+      fmt::format("must be a number above min_height_m ({}), got {}", v.response.min_height_m,
+                  v.response.max_height_m));
   c.in_range(v.response.step_s, 1e-5, 1e-2, rk + "step_s");
 
   const auto& s = scene;

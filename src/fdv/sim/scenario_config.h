@@ -137,6 +137,8 @@ struct VehicleResponseConfig {
   /// [m] the height controller's floor in W z: below it a downward command is dropped and the
   /// descent braked (chosen: above the depth camera's 0.3 m minimum range from the floor).
   double min_height_m = 0.5;
+  /// [m] its ceiling in W z, the same rule for a climb (chosen: 0.5 m below the default room's).
+  double max_height_m = 4.5;
   double step_s = 2.5e-4;  ///< [s] integration step of the flown deviation
 };
 

@@ -9,8 +9,8 @@
 namespace fdv::sim {
 namespace {
 
-/// The floor hold brakes a descent once stopping at the floor needs this fraction of |g|.
-constexpr double kFloorBrakeStart = 0.5;
+/// A height hold brakes once stopping at its limit needs this fraction of |g|.
+constexpr double kBrakeStart = 0.5;
 
 }  // namespace
 
@@ -51,25 +51,38 @@ Eigen::Vector3d FlownVehicle::command_at(std::size_t k) {
   const double t = node_time(k);
   Eigen::Vector3d a_c = Eigen::Vector3d::Zero();
   if (auto it = commands_.upper_bound(from_seconds(t)); it != commands_.begin()) a_c = std::prev(it)->second;
-  // The height controller's floor, in the vertical of gravity: brake a descent once stopping at
-  // the floor needs half of |g| (braking at up to |g| then always stops it there), keep braking
-  // as needed until the descent stops, then hold that height while the command points down.
+  // The height controller's band, in the vertical of gravity: the floor measured upwards, the
+  // ceiling the same rule measured downwards.
   const BodyState path = path_->at(t);
-  const double gap = (path.p_W + nodes_[k].p).dot(up_) - response_.min_height_m;
+  const double height = (path.p_W + nodes_[k].p).dot(up_);
   const double climb = (path.v_W + nodes_[k].v).dot(up_);
-  const double g = gravity_.norm();
-  const double brake = climb >= 0 ? 0.0 : gap > 0 ? climb * climb / (2 * gap) : g;
   const double vertical = a_c.dot(up_);
-  const bool hold = brake >= kFloorBrakeStart * g || (gap <= 0 && vertical < 0) ||
-                    (floor_holding_ && (climb < 0 || vertical < 0));
-  if (hold) {
-    if (!floor_holding_) ++counters_.floor_holds;
-    double held = std::max(vertical, std::min(brake, g));
-    if (gap <= 0 || climb >= 0) held = std::max(held, 0.0);  // stopped: hold the height
-    a_c += (held - vertical) * up_;
-  }
-  floor_holding_ = hold;
+  double held = hold_height(height - response_.min_height_m, climb, vertical, floor_holding_,
+                            counters_.floor_holds);
+  held = -hold_height(response_.max_height_m - height, -climb, -held, ceiling_holding_,
+                      counters_.ceiling_holds);
+  if (floor_holding_ || ceiling_holding_) a_c += (held - vertical) * up_;
   return a_c;
+}
+
+double FlownVehicle::hold_height(double gap, double approach, double vertical, bool& holding,
+                                 std::uint64_t& holds) const {
+  // Brake a motion towards the limit once stopping there needs half of |g| (braking at up to |g|
+  // then always stops it there), keep braking as needed until it stops, then hold the height
+  // reached while the command points towards the limit. `gap` is the distance to the limit,
+  // `approach` the speed away from it and `vertical` the command's acceleration away from it,
+  // all negative towards it.
+  const double g = gravity_.norm();
+  const double brake = approach >= 0 ? 0.0 : gap > 0 ? approach * approach / (2 * gap) : g;
+  const bool hold = brake >= kBrakeStart * g || (gap <= 0 && vertical < 0) ||
+                    (holding && (approach < 0 || vertical < 0));
+  if (hold) {
+    if (!holding) ++holds;
+    vertical = std::max(vertical, std::min(brake, g));
+    if (gap <= 0 || approach >= 0) vertical = std::max(vertical, 0.0);  // stopped: hold the height
+  }
+  holding = hold;
+  return vertical;
 }
 
 Eigen::Vector3d FlownVehicle::thrust_direction(const Eigen::Vector3d& a_c) const {

@@ -16,7 +16,8 @@
 /// acceleration is T n + g: a lateral command is reached as the vehicle tilts, atan(|a_c|/|g|) in
 /// steady state. The tilt R_Δ (n = R_Δ u) rotates the path's own attitude: R_W_B = R_Δ R_W_B,path.
 /// Near min_height_m a descent is braked (at up to |g|, from when half of that is needed to stop
-/// at the floor), and at the floor a downward command is dropped.
+/// at the floor), and at the floor a downward command is dropped; max_height_m is a ceiling with
+/// the same rule upside down (braking a climb at up to |g| is cutting the thrust).
 ///
 /// A command takes effect from its time on and replaces every command scheduled at or after it.
 /// A command earlier than the integrated horizon takes effect at the horizon (counted as late).
@@ -44,6 +45,7 @@ struct FlightCounters {
   std::uint64_t tilt_clipped = 0;  ///< commands whose thrust tilt exceeded max_tilt_deg
   std::uint64_t late = 0;          ///< commands for a time already integrated
   std::uint64_t floor_holds = 0;   ///< times the floor stopped a descent
+  std::uint64_t ceiling_holds = 0;  ///< times the ceiling stopped a climb
 };
 
 class FlownVehicle {
@@ -79,8 +81,12 @@ class FlownVehicle {
     Eigen::Vector3d w_W = Eigen::Vector3d::Zero();
     Eigen::Quaterniond q = Eigen::Quaterniond::Identity();  ///< R_Δ
   };
-  /// The command in force over the step starting at node `k`, with the floor rule applied.
+  /// The command in force over the step starting at node `k`, with the height band applied.
   Eigen::Vector3d command_at(std::size_t k);
+  /// The vertical acceleration left of `vertical` by one side of the band (see command_at).
+  /// `holding` is that side's state, `holds` its counter.
+  double hold_height(double gap, double approach, double vertical, bool& holding,
+                     std::uint64_t& holds) const;
   /// n_c, clipped to the tilt limit.
   Eigen::Vector3d thrust_direction(const Eigen::Vector3d& a_c) const;
   /// T n + g for command `a_c` with the tilt `q`.
@@ -96,7 +102,7 @@ class FlownVehicle {
   double horizon_s_ = 0;  ///< the last advance_to()
   std::vector<Node> nodes_;
   std::map<TimeNs, Eigen::Vector3d> commands_;  ///< by the time each takes effect
-  bool floor_holding_ = false;
+  bool floor_holding_ = false, ceiling_holding_ = false;
   FlightCounters counters_;
 };
 

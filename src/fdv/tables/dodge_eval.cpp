@@ -465,7 +465,8 @@ nlohmann::json to_json(const DodgeEval& e, const DodgeEvalOptions& options) {
       t["flight"] = {{"commands", row.flight.commands},
                      {"tilt_clipped", row.flight.tilt_clipped},
                      {"late", row.flight.late},
-                     {"floor_holds", row.flight.floor_holds}};
+                     {"floor_holds", row.flight.floor_holds},
+                     {"ceiling_holds", row.flight.ceiling_holds}};
     }
     j["throws"].push_back(t);
   }
