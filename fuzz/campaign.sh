@@ -12,6 +12,9 @@
 # malloc_context_size=4: allocation stacks of 4 frames, not 30. Over hours of deeply nested YAML
 # the sanitizer's store of distinct stacks grew until saving one was 25 % of fuzz_options' time;
 # a finding's report then names 4 frames, and its kept input replays in full.
+# FDV_FUZZ_PROCESSES=N runs a target as N libFuzzer processes sharing its corpus folder (each
+# reloads what the others add), each for RUNS/N executions; the row sums their runs and takes the
+# largest cov, ft and RSS. One process per free core: N on a shared core only splits it.
 # A finding stops that target (its input under BUILD_DIR/fuzz/findings/TARGET/) and the script
 # goes on with the next; the exit status is 1 if any target found something.
 set -euo pipefail
@@ -21,7 +24,8 @@ shift
 /usr/bin/python3 fuzz/make_seeds.py "$build" > /dev/null
 export ASAN_OPTIONS=${ASAN_OPTIONS:-malloc_context_size=4}
 
-stat() { grep -E "^stat::$2:" "$1" | awk '{print $2}'; }
+# A process ended by another's finding may not have printed its statistics.
+stat() { { grep -E "^stat::$2:" "$1" || true; } | awk '{print $2}'; }
 status=0
 echo "| target | runs | runs/s (wall) | cov | ft | corpus | peak RSS | findings |"
 echo "|---|---|---|---|---|---|---|---|"
@@ -31,19 +35,35 @@ for spec in "$@"; do
   mkdir -p "$corpus" "$findings"
   start=$(date +%s)
   found=none
-  # A long run's RSS grows with ASan's quarantine and the corpus (FORMATS.md "Fuzzing").
-  if ! "$build/fuzz/$target" -runs="$runs" -timeout="${FDV_FUZZ_TIMEOUT:-10}" -rss_limit_mb=2048 -max_len="${FDV_FUZZ_MAX_LEN:-65536}" \
-      -print_final_stats=1 -artifact_prefix="$findings/" "$corpus" "$build/fuzz/seeds/$target" > "$log" 2>&1; then
-    found="$(grep -m1 -oE 'ERROR: [^ ]+: [a-z-]+|contract broken: .*' "$log" || echo 'stopped: see log')"
+  processes=${FDV_FUZZ_PROCESSES:-1}
+  logs=() pids=()
+  for ((p = 0; p < processes; ++p)); do
+    if ((processes == 1)); then logs+=("$log"); else logs+=("${log%.log}.$p.log"); fi
+    # A long run's RSS grows with ASan's quarantine and the corpus (FORMATS.md "Fuzzing").
+    "$build/fuzz/$target" -runs=$(( runs / processes )) -timeout="${FDV_FUZZ_TIMEOUT:-10}" -rss_limit_mb=2048 \
+      -max_len="${FDV_FUZZ_MAX_LEN:-65536}" -print_final_stats=1 -artifact_prefix="$findings/" \
+      "$corpus" "$build/fuzz/seeds/$target" > "${logs[p]}" 2>&1 &
+    pids+=($!)
+  done
+  failed=0
+  for pid in "${pids[@]}"; do
+    if ! wait "$pid"; then
+      failed=1
+      kill "${pids[@]}" 2> /dev/null || true  # a finding ends the target's other processes
+    fi
+  done
+  if ((failed)); then
+    found="$(cat "${logs[@]}" | grep -m1 -oE 'ERROR: [^ ]+: [a-z-]+|contract broken: .*' || echo 'stopped: see log')"
     status=1
   fi
   seconds=$(( $(date +%s) - start ))
-  done_runs=$(stat "$log" number_of_executed_units)
-  cov=$(grep -oE 'cov: [0-9]+' "$log" | tail -1 | awk '{print $2}')
-  ft=$(grep -oE 'ft: [0-9]+' "$log" | tail -1 | awk '{print $2}')
+  done_runs=$(for l in "${logs[@]}"; do stat "$l" number_of_executed_units; done | awk '{n += $1} END {print n + 0}')
+  rss=$(for l in "${logs[@]}"; do stat "$l" peak_rss_mb; done | sort -n | tail -1)
+  cov=$(cat "${logs[@]}" | { grep -oE 'cov: [0-9]+' || true; } | awk '{print $2}' | sort -n | tail -1)
+  ft=$(cat "${logs[@]}" | { grep -oE 'ft: [0-9]+' || true; } | awk '{print $2}' | sort -n | tail -1)
   files=$(find "$corpus" -type f | wc -l)
   size=$(du -sh "$corpus" | cut -f1)
   echo "| \`$target\` | $done_runs | $(( done_runs / (seconds > 0 ? seconds : 1) )) | $cov | $ft | $files ($size) |" \
-       "$(stat "$log" peak_rss_mb) MB | $found |"
+       "$rss MB | $found |"
 done
 exit $status
