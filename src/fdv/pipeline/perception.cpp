@@ -302,7 +302,10 @@ void Perception::process_window(PendingWindow& w) {
   result.compensation = cw.report;
   result.timings.compensation_ms = ms_since(start);
 
-  detector_priors_from_tracks(w.t_start + (w.t_end - w.t_start) / 2);
+  // The detector searches the compensated grid, the camera at the window's start (the events
+  // were warped there), or the raw image when nothing was warped.
+  const TimeNs t_mid = w.t_start + (w.t_end - w.t_start) / 2;
+  detector_priors_from_tracks(t_mid, cw.report.used == CompensationMethod::kNone ? t_mid : w.t_start);
   const DetectionResult det = detect(cw);
   result.status = det.status;
   result.theta = det.theta;
@@ -319,6 +322,7 @@ void Perception::process_window(PendingWindow& w) {
 
   result.timings.total_ms = ms_since(start);
   result.detector = &detector_;
+  result.priors = priors_;
   counters_.count_window(result);
   if (callbacks_.on_window) callbacks_.on_window(result);
 }
@@ -350,13 +354,13 @@ bool lends_detector_gate(const Track& track, const PerceptionOptions& options) {
 
 // Feedback, tracks -> detector: where the confirmed tracks, and the tentative ones detected in the
 // last window, expect their objects at time t (the window's middle), for the detector's gate
-// sources (docs/DETECTION.md).
-void Perception::detector_priors_from_tracks(TimeNs t) {
+// sources (docs/DETECTION.md), seen by the camera at grid_t.
+void Perception::detector_priors_from_tracks(TimeNs t, TimeNs grid_t) {
   priors_.clear();
   for (const Track& track : tracker_.tracks()) {
     if (!lends_detector_gate(track, options_)) continue;
     const TrackPrediction p = track.predict(t);
-    priors_.push_back({in_camera_at(p.center_px, t), p.box_size_px, track.confirmed()});
+    priors_.push_back({in_camera_at(p.center_px, grid_t), p.box_size_px, track.confirmed()});
   }
 }
 

@@ -216,6 +216,9 @@ struct WindowResult {
   WindowTimings timings;
   /// The detector, for its intermediate images (visualisation); valid during the callback only.
   const Detector* detector = nullptr;
+  /// Where the tracks expected their objects, the detector's gates (raw pixels, in the camera at
+  /// the window's start when the events were warped there); valid during the callback only.
+  std::span<const DetectionPrior> priors;
 };
 
 struct DepthResult {
@@ -350,7 +353,8 @@ class Perception {
   void process_window(PendingWindow& w);
   std::size_t drop_hot_pixels(PendingWindow& w);  ///< the events erased
   const CompensatedWindow& compensate(const PendingWindow& w);
-  void detector_priors_from_tracks(TimeNs t);  ///< fills priors_
+  /// Fills priors_: the tracks at t, seen by the camera at grid_t (the compensated grid's).
+  void detector_priors_from_tracks(TimeNs t, TimeNs grid_t);
   DetectionResult detect(const CompensatedWindow& cw);
   TrackerStep associate(TimeNs t, std::span<const Detection2D> detections);
   void vouch_by_trajectory();  ///< fills vouched_ for tracker_inputs_
