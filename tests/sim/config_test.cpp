@@ -111,6 +111,9 @@ TEST(ScenarioConfig, BadFilesGiveFileKeyAndReason) {
             "key depth_camera.max_range_m | must exceed min_range_m");
   EXPECT_EQ(error_of("vehicle:\n  response: {min_height_m: 2, max_height_m: 1.5}\n"),
             "key vehicle.response.max_height_m | must be a number above min_height_m (2), got 1.5");
+  EXPECT_EQ(error_of("scene:\n  room_max_W_m: [60, 5, 3]\n"),
+            "key vehicle.response.max_height_m | must not be above the room's ceiling "
+            "(scene.room_max_W_m z = 3), got 4.5");
 }
 
 /// "where | reason" of apply_scenario_yaml_text on `yaml` (named "scenario.yaml").

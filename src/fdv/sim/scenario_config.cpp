@@ -179,6 +179,10 @@ Problem ScenarioConfig::find_problem() const {
       rk + "max_height_m",
       fmt::format("must be a number above min_height_m ({}), got {}", v.response.min_height_m,
                   v.response.max_height_m));
+  // Above the room's ceiling the hold would never act, and a climbing dodge would leave the room.
+  c.need(v.response.max_height_m <= scene.room_max_W_m.z(), rk + "max_height_m",
+         fmt::format("must not be above the room's ceiling (scene.room_max_W_m z = {}), got {}",
+                     scene.room_max_W_m.z(), v.response.max_height_m));
   c.in_range(v.response.step_s, 1e-5, 1e-2, rk + "step_s");
 
   const auto& s = scene;
