@@ -45,8 +45,9 @@ void print_table(const DodgeEval& e, OutcomeSet set, const std::string& title) {
 /// same windows without the manoeuvre seen) as the reference.
 void print_maneuver_perception(const DodgeEval& e) {
   std::cout << "\nFrom the first decision to the closest approach (the ball eligible):\n\n"
-               "| method | recall, closed loop | recall, open loop | tracks lost, closed loop | tracks lost, open loop |\n"
-               "|---|---|---|---|---|\n";
+               "| method | recall, closed loop | recall, open loop | tracks lost, closed loop | tracks lost, open loop | "
+               "re-created, closed loop | re-created, open loop |\n"
+               "|---|---|---|---|---|---|---|\n";
   auto recall = [](const DodgeTotals& t) {
     return fmt::format("{}/{} ({})", t.found_after_decision, t.eligible_after_decision,
                        t.eligible_after_decision ? fmt::format("{:.1f} %", 100.0 * static_cast<double>(t.found_after_decision) /
@@ -55,8 +56,9 @@ void print_maneuver_perception(const DodgeEval& e) {
   };
   for (const char* method : {"ours", "point_estimate", "mono", "rotation"}) {
     const DodgeTotals closed = dodge_totals(e.throws, method), open = dodge_totals(e.throws, method, &DodgeThrow::open_loop_outcomes);
-    std::cout << fmt::format("| {} | {} | {} | {}/{} | {}/{} |\n", method, recall(closed), recall(open), closed.tracks_lost,
-                             closed.tracks_checked, open.tracks_lost, open.tracks_checked);
+    std::cout << fmt::format("| {} | {} | {} | {}/{} | {}/{} | {}/{} | {}/{} |\n", method, recall(closed), recall(open),
+                             closed.tracks_lost, closed.tracks_checked, open.tracks_lost, open.tracks_checked,
+                             closed.tracks_recreated, closed.tracks_checked, open.tracks_recreated, open.tracks_checked);
   }
 }
 

@@ -328,6 +328,7 @@ ManeuverPerception maneuver_perception(const DatasetTruth& flown, int ball, cons
   std::size_t most = 0;
   for (const auto& [track, n] : by_track) most = std::max(most, n);
   out.track_survived = static_cast<double>(most) >= 0.9 * static_cast<double>(out.eligible);
+  out.track_recreated = by_track.size() > 1;
   return out;
 }
 

@@ -87,7 +87,11 @@ DatasetTruth fly_decisions(const sim::ScenarioConfig& config, const DatasetTruth
 struct ManeuverPerception {
   std::size_t eligible = 0, found = 0;
   /// The same track held the ball in at least 90 % of the eligible windows; nothing without any.
+  /// Missed windows count against it as much as a second track does.
   std::optional<bool> track_survived;
+  /// The ball's detections in those windows belong to more than one track: its track was lost
+  /// (deleted or split) and a new one took the ball, with no 3D history; nothing without any.
+  std::optional<bool> track_recreated;
 };
 ManeuverPerception maneuver_perception(const DatasetTruth& flown, int ball, const std::vector<WindowDetections>& windows,
                                        TimeNs decision_t);

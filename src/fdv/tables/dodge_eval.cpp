@@ -117,6 +117,7 @@ void add_maneuver_perception(DodgeOutcome& o, const ManeuverPerception& p) {
   o.eligible_after_decision = p.eligible;
   o.found_after_decision = p.found;
   o.track_survived = p.track_survived;
+  o.track_recreated = p.track_recreated;
 }
 
 /// Every perception method flown through the closed loop, in one simulation that also writes the
@@ -318,6 +319,7 @@ DodgeTotals dodge_totals(const std::vector<DodgeThrow>& throws, const std::strin
     if (o.track_survived) {
       ++t.tracks_checked;
       t.tracks_lost += !*o.track_survived;
+      t.tracks_recreated += o.track_recreated.value_or(false);
     }
     if (row.threat) {
       ++t.threats;
@@ -362,6 +364,7 @@ void add_perception_totals(nlohmann::json& j, const DodgeTotals& t) {
                                    : nlohmann::json();
   j["tracks_checked"] = t.tracks_checked;
   j["tracks_lost"] = t.tracks_lost;
+  j["tracks_recreated"] = t.tracks_recreated;
 }
 
 nlohmann::json outcome_json(const DodgeOutcome& o) {
@@ -383,6 +386,7 @@ nlohmann::json outcome_json(const DodgeOutcome& o) {
     j["found_windows_after_decision"] = o.found_after_decision.value_or(0);
   }
   if (o.track_survived) j["track_survived"] = *o.track_survived;
+  if (o.track_recreated) j["track_recreated"] = *o.track_recreated;
   return j;
 }
 

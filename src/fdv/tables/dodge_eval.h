@@ -83,6 +83,7 @@ struct DodgeOutcome {
   /// too, as the reference for what the manoeuvre changes in the closed loop).
   std::optional<std::size_t> eligible_after_decision, found_after_decision;
   std::optional<bool> track_survived;
+  std::optional<bool> track_recreated;  ///< ManeuverPerception::track_recreated
 };
 
 struct DodgeThrow {
@@ -117,9 +118,10 @@ struct DodgeTotals {
   std::vector<double> miss_errors_m;    ///< |predicted − true miss| at each first decision
   int replans = 0;
   /// The eligible windows after the first decision (pooled over the decided throws) and those with
-  /// the ball found; the decided throws whose track was checked, and lost.
+  /// the ball found; the decided throws whose track was checked, lost (ManeuverPerception's
+  /// track_survived false), and re-created (track_recreated).
   std::size_t eligible_after_decision = 0, found_after_decision = 0;
-  int tracks_checked = 0, tracks_lost = 0;
+  int tracks_checked = 0, tracks_lost = 0, tracks_recreated = 0;
 };
 
 struct DodgeEval {
