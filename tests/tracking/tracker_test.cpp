@@ -33,6 +33,9 @@ TEST(Tracker, RejectsInvalidOptions) {
   o = {};
   o.part_noise = -1;
   EXPECT_THROW(Tracker{o}, ConfigError);
+  o = {};
+  o.held_max_gap_ns = -1;
+  EXPECT_THROW(Tracker{o}, ConfigError);
 }
 
 // One object: created tentative, confirmed at the 3rd hit, predicted through two missed windows,
@@ -374,6 +377,58 @@ TEST(Tracker, ExternalGateKeepsTheHardRadiusCap) {
   const TrackerStep step =
       tracker.update(8 * kWindow, std::vector<TrackerDetection>{det(8 * kWindow, 180, 320)}, vouched);
   EXPECT_EQ(step.assignments.at(0).outcome, Outcome::kNewTrack);  // 120 px > 100 px cap
+}
+
+// A confirmed track at 400 px/s misses six windows (150 ms, past max_gap_ns' 100 ms), then its object
+// is seen 150 px from where the filter's coasting prediction puts it. Without a hold the track was
+// deleted and a new one starts; held (TrackerOptions::held_max_gap_ns 250 ms, the outside model
+// naming it each window), it survives, the filter's gate no longer pairs it, and the outside model's
+// pairing updates it beyond the radius cap. Unheld or past the hold it is deleted as before.
+TEST(Tracker, AHeldTrackOutlivesItsGapAndOnlyItsOutsideModelGatesIt) {
+  TrackerOptions options;
+  options.held_max_gap_ns = 250 * kNsPerMs;
+  auto confirmed_track = [&](Tracker& tracker) {
+    for (int k = 0; k < 5; ++k)
+      tracker.update(k * kWindow, std::vector<TrackerDetection>{det(k * kWindow, 100 + 10.0 * k, 200)});
+    EXPECT_TRUE(tracker.tracks().at(0).confirmed());
+    return tracker.tracks()[0].id();
+  };
+  auto coast = [&](Tracker& tracker, std::span<const int> held, int from, int to) {
+    for (int k = from; k <= to; ++k) EXPECT_TRUE(tracker.update(k * kWindow, {}, {}, held).deleted.empty()) << k;
+  };
+  const TimeNs seen = 11 * kWindow;  // 7 windows after the last update; predicted at (210, 200)
+  const std::vector<TrackerDetection> far{det(seen, 210, 350)};
+  {  // not held: deleted at 125 ms without an update
+    Tracker tracker(options);
+    const int id = confirmed_track(tracker);
+    coast(tracker, {}, 5, 8);
+    EXPECT_EQ(tracker.update(9 * kWindow, {}).deleted, std::vector<int>{id});
+  }
+  {  // held, the outside model pairs the far detection
+    Tracker tracker(options);
+    const int id = confirmed_track(tracker);
+    const std::vector<int> held{id};
+    coast(tracker, held, 5, 10);
+    EXPECT_TRUE(tracker.find(id)->held());
+    const std::vector<ExternalGate> vouched{{id, 0, 3.0}};
+    const TrackerStep step = tracker.update(seen, far, vouched, held);
+    EXPECT_EQ(step.assignments.at(0).outcome, Outcome::kUpdated);
+    EXPECT_EQ(step.assignments[0].track_id, id);
+    EXPECT_TRUE(step.assignments[0].by_external_gate);
+  }
+  {  // held, but past the filter's gap a detection on its coasting prediction is not the filter's
+    Tracker tracker(options);
+    const int id = confirmed_track(tracker);
+    const std::vector<int> held{id};
+    coast(tracker, held, 5, 10);
+    const TrackerStep step = tracker.update(seen, std::vector<TrackerDetection>{det(seen, 210, 200)}, {}, held);
+    EXPECT_EQ(step.assignments.at(0).outcome, Outcome::kNewTrack);
+    // ... and the hold ends 250 ms after the last update (t = 100 ms)
+    tracker.update(14 * kWindow, {}, {}, held);
+    EXPECT_NE(tracker.find(id), nullptr);
+    tracker.update(15 * kWindow, {}, {}, held);
+    EXPECT_EQ(tracker.find(id), nullptr);
+  }
 }
 
 // The camera turns between two windows and the image shifts 150 px right: beyond the 100 px cap,

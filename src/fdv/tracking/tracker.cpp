@@ -29,6 +29,7 @@ std::string TrackerOptions::validate() const {
   if (!(gate_max_distance_px > 0)) return "gate_max_distance_px must be > 0";
   if (max_gap_ns <= 0) return "max_gap_ns must be > 0";
   if (tentative_max_gap_ns <= 0) return "tentative_max_gap_ns must be > 0";
+  if (held_max_gap_ns < 0) return "held_max_gap_ns must be >= 0";
   if (confirm_hits < 1) return "confirm_hits must be >= 1";
   if (!(box_smoothing > 0 && box_smoothing <= 1)) return "box_smoothing must be in (0, 1]";
   if (max_tracks < 1) return "max_tracks must be >= 1";
@@ -37,8 +38,13 @@ std::string TrackerOptions::validate() const {
   return {};
 }
 
-TimeNs Track::gap_limit(const TrackerOptions& o) const {
+TimeNs Track::filter_gap_limit(const TrackerOptions& o) const {
   return (confirmed() ? o.max_gap_ns : o.tentative_max_gap_ns) + crossing_ns_;
+}
+
+TimeNs Track::gap_limit(const TrackerOptions& o) const {
+  const TimeNs limit = filter_gap_limit(o);
+  return held_ && confirmed() ? std::max(limit, o.held_max_gap_ns) : limit;
 }
 
 Eigen::Vector2d Track::part_variance_px2(const TrackerDetection& d, const TrackerOptions& o) const {
@@ -83,7 +89,7 @@ void Tracker::change_coordinates(const std::function<Eigen::Vector2d(const Eigen
 }
 
 TrackerStep Tracker::update(TimeNs t, std::span<const TrackerDetection> detections,
-                            std::span<const ExternalGate> external) {
+                            std::span<const ExternalGate> external, std::span<const int> held) {
   TrackerStep step;
   step.assignments.resize(detections.size());
   for (std::size_t i = 0; i < detections.size(); ++i) step.assignments[i].detection = i;
@@ -96,6 +102,7 @@ TrackerStep Tracker::update(TimeNs t, std::span<const TrackerDetection> detectio
   const TimeNs now_before = started_ ? now_ : t;
   started_ = true;
   now_ = t;
+  for (Track& tr : tracks_) tr.held_ = std::find(held.begin(), held.end(), tr.id()) != held.end();
 
   // Valid detections only; the rest are rejected with a reason.
   std::vector<bool> usable(detections.size(), false);
@@ -157,11 +164,13 @@ TrackerStep Tracker::update(TimeNs t, std::span<const TrackerDetection> detectio
       if (!usable[i] || merged[i]) continue;
       const TrackerDetection& d = detections[i];
       if (d.t < tr.last_update_time() || d.t - tr.last_update_time() > gap_limit) continue;
+      // Held past the filter's own gap: its prediction has drifted, only the outside model gates.
+      const bool stale = d.t - tr.last_update_time() > tr.filter_gap_limit(options_);
       const ImagePrediction p = tr.filter().predict(d.t, tr.part_variance_px2(d, options_));
-      if ((d.center_px - p.position()).norm() > options_.gate_max_distance_px) continue;
+      if (!stale && (d.center_px - p.position()).norm() > options_.gate_max_distance_px) continue;
       const double d2 = p.mahalanobis2(d.center_px);
       const double log_det_s = std::log(p.innovation_covariance().determinant());
-      if (d2 <= options_.gate_chi2) {
+      if (!stale && d2 <= options_.gate_chi2) {
         candidates.push_back({d2 + log_det_s, d2, k, i});
         continue;
       }

@@ -76,6 +76,13 @@ struct TrackerOptions {
   /// centre may lie anywhere within the difference: the pair's measurement noise gains, per axis,
   /// this times the variance of a uniform spread over |track box - detection box|, Δ²/12. 0 = off.
   double part_noise = 1;
+  /// A confirmed track that an outside model still expects in view (update's `held`: in the
+  /// pipeline, its usable 3D trajectory projected into the image) is deleted only after this long
+  /// without an update [ns], when longer than max_gap_ns: a dodge's manoeuvre floods a few windows
+  /// in a row, and the track would otherwise be deleted and its object re-found as a new track
+  /// with no 3D history. Past max_gap_ns the image-plane filter has coasted too long to gate: only
+  /// the outside model's pairings (ExternalGate) may update it, without the radius cap. 0 = off.
+  TimeNs held_max_gap_ns = 0;
 
   std::string validate() const;
 };
@@ -93,6 +100,8 @@ void describe(V& v, TrackerOptions& o) {
   v("max_tracks", o.max_tracks, "-", "most tracks held at once");
   v("crossing_scale", o.crossing_scale, "-",
     "reach, in mean box sizes, of a detection taken as the merged image of two crossing tracks (0 = off)");
+  v.ms("held_max_gap_ms", o.held_max_gap_ns,
+       "a confirmed track its outside model (the 3D estimate) still expects in view is deleted after this long (0 = off)");
   v("part_noise", o.part_noise, "-",
     "weight of the centre noise a detection whose box differs from its track's gains, (track box - box)²/12 per axis (0 = off)");
 }
@@ -124,8 +133,13 @@ class Track {
   /// State at any time (through missed detections, or before the last update for late depth).
   TrackPrediction predict(TimeNs t) const;
   /// Longest time without an update before deletion: the status's, plus the time spent crossing
-  /// another track (TrackerOptions::crossing_scale), which no detection could update.
+  /// another track (TrackerOptions::crossing_scale), which no detection could update; for a track
+  /// held by an outside model, at least TrackerOptions::held_max_gap_ns.
   TimeNs gap_limit(const TrackerOptions& o) const;
+  /// The same without the hold: beyond it only the outside model's pairings update the track.
+  TimeNs filter_gap_limit(const TrackerOptions& o) const;
+  /// Whether the last update's `held` named this track.
+  bool held() const { return held_; }
   /// Extra measurement variance [px²] per axis of a detection of part of this track's object, or
   /// of more than it (TrackerOptions::part_noise).
   Eigen::Vector2d part_variance_px2(const TrackerDetection& d, const TrackerOptions& o) const;
@@ -140,6 +154,7 @@ class Track {
   int hits_ = 1;
   int misses_ = 0;
   TimeNs crossing_ns_ = 0;  ///< time spent crossing another track since the last update
+  bool held_ = false;       ///< named in the last update's `held`
   ImageKalmanFilter filter_;
   Eigen::Vector2d box_size_px_;
 };
@@ -182,9 +197,10 @@ class Tracker {
   /// detections too, so that missed windows are counted. A call with t older than the previous
   /// call's rejects all its detections (reason "out of order") and changes nothing.
   /// `external` adds pairings vouched for from outside the filter (see ExternalGate); they compete
-  /// with the filter-gated pairs by their own statistic.
+  /// with the filter-gated pairs by their own statistic. `held`: ids of confirmed tracks that the
+  /// outside model still expects in view (TrackerOptions::held_max_gap_ns).
   TrackerStep update(TimeNs t, std::span<const TrackerDetection> detections,
-                     std::span<const ExternalGate> external = {});
+                     std::span<const ExternalGate> external = {}, std::span<const int> held = {});
 
   /// The camera turned: re-expresses every track in the new image coordinates. `turn` maps a raw
   /// pixel before the turn to where the same direction is seen after it (a pure rotation); each
