@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <functional>
 #include <limits>
 #include <map>
@@ -194,6 +195,51 @@ TEST(Perception, TrackGatesLieOnTheCompensatedGridDuringATilt) {
   }
   EXPECT_GE(turning, 5);
   EXPECT_EQ(on_grid, turning);
+}
+
+// The ball unseen for six windows during the tilt (its events removed from 0.375 to 0.525 s, past
+// the tracker's 100 ms gap): by default its track is deleted and the ball, seen again, starts a new
+// one with no 3D history. With the track held by its usable 3D estimate (tracking.held_max_gap_ms)
+// and its gate placed where that estimate projects (trajectory_gates), the ball seen again
+// continues its track, paired by the 3D estimate.
+TEST(Perception, AHeldTrackGetsItsBallBackAfterAGapInTheTilt) {
+#ifdef FDV_TEST_SANITIZED
+  GTEST_SKIP() << "10 s of 640x480 simulation: 10-20x slower instrumented; the Release build runs it";
+#endif
+  SimulatedThrow gap = tilted_throw();
+  const TimeNs from = from_seconds(0.375), to = from_seconds(0.525);
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < gap.data.events.size(); ++i)
+    if (gap.data.labels[i] != 1 || gap.data.events[i].t < from || gap.data.events[i].t >= to) {
+      gap.data.events[kept] = gap.data.events[i];
+      gap.data.labels[kept++] = gap.data.labels[i];
+    }
+  ASSERT_LT(kept, gap.data.events.size());
+  gap.data.events.resize(kept);
+  gap.data.labels.resize(kept);
+  // The ball's track ids before the gap and after it.
+  auto tracks = [&](const PerceptionOptions& options) {
+    const Collected c = run(0, gap, options);
+    std::set<int> before, after;
+    for (const WindowResult& w : c.results) {
+      const GroundTruthBox box = ground_truth_box(gap.data.objects, 1, gap.radius_m, gap.data.body, gap.calib, w.t_start, w.t_end - 1);
+      for (const auto& [d, track_id] : w.detections)
+        if (box.contains(d.center_raw.x(), d.center_raw.y(), 2.0)) (w.t_end <= from ? before : after).insert(track_id);
+    }
+    return std::pair{before, after};
+  };
+  PerceptionOptions plain;
+  plain.dodge_from = DodgeSource::kNone;
+  PerceptionOptions held = plain;
+  held.trajectory_gates = true;
+  held.tracking.held_max_gap_ns = 250 * kNsPerMs;
+  const auto [plain_before, plain_after] = tracks(plain);
+  ASSERT_EQ(plain_before.size(), 1u);
+  ASSERT_FALSE(plain_after.empty());
+  EXPECT_FALSE(plain_after.contains(*plain_before.begin()));  // deleted in the gap, re-created after
+  const auto [held_before, held_after] = tracks(held);
+  ASSERT_EQ(held_before, plain_before);
+  EXPECT_EQ(held_after, held_before);
 }
 
 // The front end's threads (compensation, time images, segmentation, pre-processing on the shared

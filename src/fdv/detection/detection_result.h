@@ -161,6 +161,9 @@ struct DetectionPrior {
   /// time-plane test is the strictest of the gate sources, and by the count-contrast source's sparse
   /// search with a still camera only (docs/DETECTION.md).
   bool confirmed = true;
+  /// Placed where the track's 3D estimate projects (PerceptionOptions::trajectory_gates) rather than
+  /// by its image-plane filter; the detector searches both alike.
+  bool from_trajectory = false;
 };
 
 }  // namespace fdv

@@ -354,14 +354,33 @@ bool lends_detector_gate(const Track& track, const PerceptionOptions& options) {
 
 // Feedback, tracks -> detector: where the confirmed tracks, and the tentative ones detected in the
 // last window, expect their objects at time t (the window's middle), for the detector's gate
-// sources (docs/DETECTION.md), seen by the camera at grid_t.
+// sources (docs/DETECTION.md), seen by the camera at grid_t; with trajectory_gates, a coasting track
+// also where its 3D estimate expects it.
 void Perception::detector_priors_from_tracks(TimeNs t, TimeNs grid_t) {
   priors_.clear();
   for (const Track& track : tracker_.tracks()) {
     if (!lends_detector_gate(track, options_)) continue;
     const TrackPrediction p = track.predict(t);
+    if (options_.trajectory_gates && track.confirmed() && track.misses() > 0)
+      if (const auto projected = trajectory_pixel(track.id(), t, grid_t))
+        priors_.push_back({*projected, p.box_size_px, true, true});
     priors_.push_back({in_camera_at(p.center_px, grid_t), p.box_size_px, track.confirmed()});
   }
+}
+
+std::optional<Eigen::Vector2d> Perception::trajectory_pixel(int track_id, TimeNs t, TimeNs camera_t) const {
+  const auto it = estimators_.find(track_id);
+  if (it == estimators_.end()) return std::nullopt;
+  const TrajectoryEstimate& est = it->second.fusion.latest();
+  if (!est.converged || !est.usable || est.method != EstimateMethod::kFusion) return std::nullopt;
+  const auto T_W_E = camera_pose(camera_t);
+  if (!T_W_E) return std::nullopt;
+  const Eigen::Vector3d p_E = T_W_E->inverse() * est.trajectory.position(t);
+  if (!(p_E.z() > options_.estimation.min_depth_in_front_m)) return std::nullopt;
+  const PinholeCamera& camera = calibration_.event_camera;
+  const Eigen::Vector2d px = camera.project(p_E);
+  if (!px.allFinite() || !camera.in_image(px)) return std::nullopt;
+  return px;
 }
 
 // Detection (paper §IV-B). Feedback, detector -> compensator: the detector reports its centre
@@ -385,7 +404,11 @@ TrackerStep Perception::associate(TimeNs t, std::span<const Detection2D> detecti
                                Eigen::Vector2d(d.box_raw.width(), d.box_raw.height()), d.events});
   }
   vouch_by_trajectory();
-  return tracker_.update(t, tracker_inputs_, vouched_);
+  held_.clear();
+  if (options_.tracking.held_max_gap_ns > 0)
+    for (const Track& track : tracker_.tracks())
+      if (track.confirmed() && trajectory_pixel(track.id(), t, t)) held_.push_back(track.id());
+  return tracker_.update(t, tracker_inputs_, vouched_, held_);
 }
 
 // Feedback, estimator -> association gate: the 3D trajectory of a confirmed track vouches for the

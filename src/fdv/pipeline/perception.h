@@ -95,6 +95,12 @@ struct PerceptionOptions {
   /// covariance propagated) even when the image-plane filter's gate rejects it, so that the track
   /// and its 3D history go on instead of a new track starting from nothing (Tracker, ExternalGate).
   bool estimate_aided_association = true;
+  /// A confirmed track that missed the last window, and whose fusion estimate is usable, also lends
+  /// the detector a gate (its box size) where that 3D trajectory, seen from the camera's pose
+  /// (odometry), puts the object, searched before the filter's: the image-plane filter knows nothing
+  /// of the vehicle's own translation, and in a dodge's manoeuvre its coasting prediction drifts off
+  /// the ball (docs/ESTIMATION.md §1, "Tracks held by their 3D estimate").
+  bool trajectory_gates = false;
   /// The image-plane tracker works in the camera's coordinates at each window's end: at each
   /// window its tracks are moved by the image motion the gyro-measured rotation since the last
   /// window causes, and each detection by the rotation from its time to the window's end, so that
@@ -157,6 +163,8 @@ void describe(V& v, PerceptionOptions& o) {
   v("monocular_baseline", o.monocular_baseline, "-", "run Su & Shen's events-only estimator beside the fusion");
   v("estimate_aided_association", o.estimate_aided_association, "-",
     "a usable fusion estimate keeps a detection it predicts that the image gate rejects");
+  v("trajectory_gates", o.trajectory_gates, "-",
+    "a confirmed track that missed a window also lends the detector a gate where its usable 3D estimate projects");
   v("derotate_tracking", o.derotate_tracking, "-",
     "the tracker's coordinates follow the camera's gyro-measured turn (tracks and detections moved to the window's end)");
   v("tentative_track_priors", o.tentative_track_priors, "-",
@@ -392,6 +400,10 @@ class Perception {
   /// covariance of the predicted position ⊕ the event noise); nothing when `est` is not a usable
   /// fusion estimate, the pose is unknown or the prediction is behind the camera.
   std::optional<double> trajectory_mahalanobis2(const TrajectoryEstimate& est, const TrackerDetection& d) const;
+  /// The raw pixel at which the track's usable fusion estimate puts the object at time t, seen by
+  /// the camera at time camera_t; nothing without such an estimate, a pose, or with the object
+  /// behind the camera or outside the image.
+  std::optional<Eigen::Vector2d> trajectory_pixel(int track_id, TimeNs t, TimeNs camera_t) const;
   void warn_once(const std::string& key, const std::string& message);
   /// Counts `n` pushed samples dropped as invalid (input_report_), the first the stream's
   /// `index`-th push, at time t.
@@ -416,6 +428,7 @@ class Perception {
   std::vector<std::vector<Event>> free_buffers_;
   std::vector<DetectionPrior> priors_;  ///< per window, reused
   std::vector<TrackerDetection> tracker_inputs_;  ///< per window, reused: the tracker's input
+  std::vector<int> held_;                ///< per window, reused (tracking.held_max_gap_ns)
   std::vector<ExternalGate> vouched_;   ///< per window, reused (estimate_aided_association)
   std::map<int, TrackEstimators> estimators_;
   std::optional<DodgePlanner> planner_;  ///< none when dodge_from is none
