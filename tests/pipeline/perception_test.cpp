@@ -309,6 +309,37 @@ TEST(PerceptionThreads, TwoPipelinesOnTwoThreadsGiveTheResultsOfOneAlone) {
   expect_same_run(second, alone);
 }
 
+// A track whose object another track, detected in the last window, already follows is a duplicate
+// and is not held: two confirmed tracks of 20 px boxes, A missing since window 4 and B detected
+// at (300, 100) in every window. A's trajectory projected 5 px from B's prediction is B's object,
+// 30 px away it is not (beyond the 20 px boxes); with B missing too, nothing follows A's object.
+TEST(Perception, ATrackIsNotHeldWhereAnotherTrackFollowsItsObject) {
+  Tracker tracker;
+  auto det = [](TimeNs t, double u) {
+    TrackerDetection d;
+    d.t = t;
+    d.center_px = {u, 100};
+    d.box_size_px = {20, 20};
+    return d;
+  };
+  const TimeNs window = 25 * kNsPerMs;
+  for (int k = 0; k < 6; ++k) {
+    std::vector<TrackerDetection> dets{det(k * window, 300)};
+    if (k < 4) dets.push_back(det(k * window, 100));
+    tracker.update(k * window, dets);
+  }
+  ASSERT_EQ(tracker.tracks().size(), 2u);
+  const Track& a = *tracker.find(2);  // created second in window 0, B being first
+  EXPECT_GT(a.misses(), 0);
+  const TimeNs t = 6 * window;
+  EXPECT_TRUE(followed_by_another(a, {305, 100}, tracker.tracks(), t, 10));
+  EXPECT_FALSE(followed_by_another(a, {330, 100}, tracker.tracks(), t, 10));
+  ASSERT_EQ(tracker.tracks()[1].id(), a.id());
+  EXPECT_FALSE(followed_by_another(a, {305, 100}, std::span(tracker.tracks()).subspan(1), t, 10));  // A alone
+  tracker.update(t, {});  // B misses too
+  EXPECT_FALSE(followed_by_another(*tracker.find(2), {305, 100}, tracker.tracks(), t, 10));
+}
+
 // A ball cut by the border is observed at its whole centre where the detector estimated
 // one, and weighs less the less of it is in view (its centre's noise σ / visible fraction).
 TEST(Perception, AnObjectCutByTheBorderIsObservedAtItsWholeCenterWithItsNoiseGrown) {

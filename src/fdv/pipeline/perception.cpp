@@ -404,11 +404,33 @@ TrackerStep Perception::associate(TimeNs t, std::span<const Detection2D> detecti
                                Eigen::Vector2d(d.box_raw.width(), d.box_raw.height()), d.events});
   }
   vouch_by_trajectory();
-  held_.clear();
-  if (options_.tracking.held_max_gap_ns > 0)
-    for (const Track& track : tracker_.tracks())
-      if (track.confirmed() && trajectory_pixel(track.id(), t, t)) held_.push_back(track.id());
+  hold_by_trajectory(t);
   return tracker_.update(t, tracker_inputs_, vouched_, held_);
+}
+
+// Feedback, estimator -> track lifetime: a confirmed track whose 3D trajectory still projects into
+// the image is held past the tracker's gap (TrackerOptions::held_max_gap_ns), unless another track,
+// detected in the last window, already follows its object there: that one is the object's track,
+// and a held duplicate would only lend the detector gates beside it.
+void Perception::hold_by_trajectory(TimeNs t) {
+  held_.clear();
+  if (options_.tracking.held_max_gap_ns <= 0) return;
+  for (const Track& track : tracker_.tracks()) {
+    if (!track.confirmed()) continue;
+    const auto projected = trajectory_pixel(track.id(), t, t);
+    if (!projected) continue;
+    if (!followed_by_another(track, *projected, tracker_.tracks(), t, options_.detection.prior_min_gate_px))
+      held_.push_back(track.id());
+  }
+}
+
+bool followed_by_another(const Track& held, const Eigen::Vector2d& projected_px, std::span<const Track> tracks, TimeNs t,
+                         double min_reach_px) {
+  return std::any_of(tracks.begin(), tracks.end(), [&](const Track& other) {
+    if (other.id() == held.id() || other.misses() > 0) return false;
+    const double reach = std::max({held.box_size_px().maxCoeff(), other.box_size_px().maxCoeff(), min_reach_px});
+    return (other.predict(t).center_px - projected_px).norm() < reach;
+  });
 }
 
 // Feedback, estimator -> association gate: the 3D trajectory of a confirmed track vouches for the

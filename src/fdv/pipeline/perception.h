@@ -142,6 +142,13 @@ struct PerceptionOptions {
 /// last window (DetectionPrior::confirmed false: the dense-motion source and the sparse search only).
 bool lends_detector_gate(const Track& track, const PerceptionOptions& options);
 
+/// Whether a track other than `held`, detected in the last window, follows the object that
+/// `held`'s 3D trajectory puts at `projected_px` (raw pixels, time t): its prediction within the
+/// larger of the two tracks' box sizes and `min_reach_px`. Such a `held` is a duplicate and is not
+/// held (TrackerOptions::held_max_gap_ns).
+bool followed_by_another(const Track& held, const Eigen::Vector2d& projected_px, std::span<const Track> tracks, TimeNs t,
+                         double min_reach_px);
+
 /// An object cut by the frame's border (`found.partial`; docs/DETECTION.md, "Objects cut by the
 /// border") as its track's event observation: the whole object's centre where the detector
 /// estimated one (`center_full_raw`, mapped through `camera`), else the visible part's already in
@@ -366,6 +373,7 @@ class Perception {
   DetectionResult detect(const CompensatedWindow& cw);
   TrackerStep associate(TimeNs t, std::span<const Detection2D> detections);
   void vouch_by_trajectory();  ///< fills vouched_ for tracker_inputs_
+  void hold_by_trajectory(TimeNs t);  ///< fills held_: the tracks held at window end t
   std::vector<int> add_event_observations(const TrackerStep& step, std::span<const Detection2D> detections);
   void segment_depth_since_first_detection(std::span<const int> confirmed);
   /// Every depth segmentation of the pending frames starts here: the frames up to `up_to`, for
