@@ -201,7 +201,8 @@ TEST(Perception, TrackGatesLieOnTheCompensatedGridDuringATilt) {
 // the tracker's 100 ms gap): by default its track is deleted and the ball, seen again, starts a new
 // one with no 3D history. With the track held by its usable 3D estimate (tracking.held_max_gap_ms)
 // and its gate placed where that estimate projects (trajectory_gates), the ball seen again
-// continues its track, paired by the 3D estimate.
+// continues its track, paired by the 3D estimate, and every gate lent while it coasts holds the
+// unseen ball.
 TEST(Perception, AHeldTrackGetsItsBallBackAfterAGapInTheTilt) {
 #ifdef FDV_TEST_SANITIZED
   GTEST_SKIP() << "10 s of 640x480 simulation: 10-20x slower instrumented; the Release build runs it";
@@ -217,29 +218,52 @@ TEST(Perception, AHeldTrackGetsItsBallBackAfterAGapInTheTilt) {
   ASSERT_LT(kept, gap.data.events.size());
   gap.data.events.resize(kept);
   gap.data.labels.resize(kept);
-  // The ball's track ids before the gap and after it.
+  // The ball's track ids before the gap and after it, and where the ball's true centre on the
+  // compensated grid (the camera at the window's start, the ball at its middle) lies in each gate
+  // placed by a 3D estimate.
+  struct BallTracks {
+    std::set<int> before, after;
+    std::vector<double> trajectory_gate_offset;  ///< the ball's offset from each, in the gate's half-sides
+  };
   auto tracks = [&](const PerceptionOptions& options) {
     const Collected c = run(0, gap, options);
-    std::set<int> before, after;
-    for (const WindowResult& w : c.results) {
+    BallTracks seen;
+    for (std::size_t i = 0; i < c.results.size(); ++i) {
+      const WindowResult& w = c.results[i];
       const GroundTruthBox box = ground_truth_box(gap.data.objects, 1, gap.radius_m, gap.data.body, gap.calib, w.t_start, w.t_end - 1);
       for (const auto& [d, track_id] : w.detections)
-        if (box.contains(d.center_raw.x(), d.center_raw.y(), 2.0)) (w.t_end <= from ? before : after).insert(track_id);
+        if (box.contains(d.center_raw.x(), d.center_raw.y(), 2.0)) (w.t_end <= from ? seen.before : seen.after).insert(track_id);
+      GroundTruthBoxOptions at_start;
+      at_start.rotation_time = w.t_start;
+      const auto grid = visible_silhouette(gap.data.objects, 1, gap.radius_m, gap.data.body, gap.calib,
+                                           w.t_start + (w.t_end - w.t_start) / 2, at_start);
+      // As the detector sizes a gate (Detector::prior_gate): the ball's offset in half-sides.
+      for (const DetectionPrior& prior : c.priors[i])
+        if (prior.from_trajectory && grid.projected_center_px) {
+          const Eigen::Vector2d half = (0.5 * options.detection.prior_gate_scale * prior.box_size_px)
+                                           .cwiseMax(options.detection.prior_min_gate_px);
+          seen.trajectory_gate_offset.push_back(
+              (prior.center_raw - *grid.projected_center_px).cwiseAbs().cwiseQuotient(half).maxCoeff());
+        }
     }
-    return std::pair{before, after};
+    return seen;
   };
   PerceptionOptions plain;
   plain.dodge_from = DodgeSource::kNone;
   PerceptionOptions held = plain;
   held.trajectory_gates = true;
   held.tracking.held_max_gap_ns = 250 * kNsPerMs;
-  const auto [plain_before, plain_after] = tracks(plain);
-  ASSERT_EQ(plain_before.size(), 1u);
-  ASSERT_FALSE(plain_after.empty());
-  EXPECT_FALSE(plain_after.contains(*plain_before.begin()));  // deleted in the gap, re-created after
-  const auto [held_before, held_after] = tracks(held);
-  ASSERT_EQ(held_before, plain_before);
-  EXPECT_EQ(held_after, held_before);
+  const BallTracks by_default = tracks(plain);
+  ASSERT_EQ(by_default.before.size(), 1u);
+  ASSERT_FALSE(by_default.after.empty());
+  EXPECT_FALSE(by_default.after.contains(*by_default.before.begin()));  // deleted in the gap, re-created after
+  EXPECT_TRUE(by_default.trajectory_gate_offset.empty());
+  const BallTracks by_trajectory = tracks(held);
+  ASSERT_EQ(by_trajectory.before, by_default.before);
+  EXPECT_EQ(by_trajectory.after, by_trajectory.before);
+  // Every gate the coasting track lends holds the unseen ball.
+  ASSERT_GE(by_trajectory.trajectory_gate_offset.size(), 4u);
+  for (const double offset : by_trajectory.trajectory_gate_offset) EXPECT_LT(offset, 1.0);
 }
 
 // The front end's threads (compensation, time images, segmentation, pre-processing on the shared
