@@ -10,6 +10,7 @@
 
 #include "common.h"
 #include "fdv/core/error.h"
+#include "fdv/detection/detector.h"
 #include "fdv/io/recording.h"
 #include "fdv/pipeline/options_yaml.h"
 #include "fdv/pipeline/perception.h"
@@ -22,20 +23,72 @@ namespace {
 enum class RowKind { kWindow, kDepth, kTrajectory, kPrediction, kDodge, kWarning };
 constexpr const char* kListNames[] = {"windows", "depth", "trajectories", "predictions", "dodge", "warnings"};
 
+/// A window's detector images and gates (Detector's accessors), copied while the window is current.
+struct WindowImages {
+  cv::Mat count, normalized, segmentation, preprocessed;
+  std::vector<DetectionPrior> priors;
+};
+
+struct Row {
+  RowKind kind;
+  nlohmann::json json;
+  std::unique_ptr<WindowImages> images;  ///< windows only, when asked for
+};
+
 /// Rows in the order the pipeline produced them, kept until the GIL is held again.
 struct RowQueue {
-  std::vector<std::pair<RowKind, nlohmann::json>> rows;
+  bool images = false;  ///< copy each window's detector images (WindowImages) with its row
+  std::vector<Row> rows;
   PerceptionCallbacks callbacks() {
     PerceptionCallbacks c;
-    c.on_window = [this](const WindowResult& w) { rows.emplace_back(RowKind::kWindow, window_row(w)); };
-    c.on_depth = [this](const DepthResult& d) { rows.emplace_back(RowKind::kDepth, depth_row(d)); };
-    c.on_estimate = [this](const EstimateResult& e) { rows.emplace_back(RowKind::kTrajectory, trajectory_row(e)); };
-    c.on_prediction = [this](const PredictionResult& p) { rows.emplace_back(RowKind::kPrediction, prediction_row(p)); };
-    c.on_dodge = [this](const DodgeDecision& d) { rows.emplace_back(RowKind::kDodge, dodge_row(d)); };
-    c.on_warning = [this](const std::string& w) { rows.emplace_back(RowKind::kWarning, w); };
+    c.on_window = [this](const WindowResult& w) {
+      std::unique_ptr<WindowImages> copy;
+      if (images && w.detector) {
+        const Detector& d = *w.detector;
+        copy = std::make_unique<WindowImages>(WindowImages{d.time_images().count.clone(), d.time_images().normalized.clone(),
+                                                           d.segmentation().clone(), d.preprocessed().clone(),
+                                                           {w.priors.begin(), w.priors.end()}});
+      }
+      rows.push_back({RowKind::kWindow, window_row(w), std::move(copy)});
+    };
+    c.on_depth = [this](const DepthResult& d) { rows.push_back({RowKind::kDepth, depth_row(d), nullptr}); };
+    c.on_estimate = [this](const EstimateResult& e) { rows.push_back({RowKind::kTrajectory, trajectory_row(e), nullptr}); };
+    c.on_prediction = [this](const PredictionResult& p) { rows.push_back({RowKind::kPrediction, prediction_row(p), nullptr}); };
+    c.on_dodge = [this](const DodgeDecision& d) { rows.push_back({RowKind::kDodge, dodge_row(d), nullptr}); };
+    c.on_warning = [this](const std::string& w) { rows.push_back({RowKind::kWarning, w, nullptr}); };
     return c;
   }
 };
+
+/// A single-channel image as a (height, width) numpy array of its element type (a copy).
+template <class T>
+py::array_t<T> image_array(const cv::Mat& m) {
+  py::array_t<T> a({m.rows, m.cols});
+  if (m.empty()) return a;
+  for (int r = 0; r < m.rows; ++r) std::memcpy(a.mutable_data(r, 0), m.ptr<T>(r), sizeof(T) * static_cast<std::size_t>(m.cols));
+  return a;
+}
+
+/// {"count", "normalized", "segmentation", "preprocessed", "gates"}: the window's detector images
+/// (docs/DETECTION.md: I, N, S, P on the compensated grid) and the gates the tracks lent it.
+py::dict images_dict(const WindowImages& im) {
+  py::dict d;
+  d["count"] = image_array<std::int32_t>(im.count);
+  d["normalized"] = image_array<float>(im.normalized);
+  d["segmentation"] = image_array<float>(im.segmentation);
+  d["preprocessed"] = image_array<float>(im.preprocessed);
+  py::list gates;
+  for (const DetectionPrior& p : im.priors) {
+    py::dict g;
+    g["center_raw"] = py::make_tuple(p.center_raw.x(), p.center_raw.y());
+    g["box_size"] = py::make_tuple(p.box_size_px.x(), p.box_size_px.y());
+    g["confirmed"] = p.confirmed;
+    g["from_trajectory"] = p.from_trajectory;
+    gates.append(g);
+  }
+  d["gates"] = gates;
+  return d;
+}
 
 /// Where the fields of an event record are: fdv.EVENT_DTYPE (aligned, 16 bytes) or the packed
 /// 14-byte layout numpy's promotion gives it (np.concatenate of event arrays returns that).
@@ -81,10 +134,11 @@ class PyPerception {
  public:
   PyPerception(const Calibration& calibration, const PerceptionOptions& options, const std::string& time_unit,
                py::object on_window, py::object on_depth, py::object on_estimate, py::object on_prediction,
-               py::object on_dodge, py::object on_warning)
+               py::object on_dodge, py::object on_warning, bool images)
       : unit_(parse_time_unit(time_unit)),
         handlers_{std::move(on_window), std::move(on_depth), std::move(on_estimate), std::move(on_prediction),
                   std::move(on_dodge), std::move(on_warning)} {
+    queue_.images = images;
     perception_ = std::make_unique<Perception>(calibration, options, queue_.callbacks());
   }
 
@@ -214,7 +268,7 @@ class PyPerception {
   /// produced to the Python callbacks or lists (with the GIL, outside the lock).
   template <class Work>
   void locked(const char* what, Work&& work) {
-    std::vector<std::pair<RowKind, nlohmann::json>> rows;
+    std::vector<Row> rows;
     {
       py::gil_scoped_release release;
       std::lock_guard lock(mutex_);
@@ -222,9 +276,10 @@ class PyPerception {
       work();
       rows.swap(queue_.rows);
     }
-    for (const auto& [kind, j] : rows) {
-      const auto k = static_cast<std::size_t>(kind);
-      py::object row = to_python(j);
+    for (const Row& r : rows) {
+      const auto k = static_cast<std::size_t>(r.kind);
+      py::object row = to_python(r.json);
+      if (r.images) row["images"] = images_dict(*r.images);
       if (handlers_[k].is_none())
         lists_[k].append(row);
       else
@@ -270,8 +325,8 @@ py::dict run(const std::string& path, std::optional<Calibration> calibration, co
   }
   py::dict d;
   for (const char* name : kListNames) d[name] = py::list();
-  for (const auto& [kind, j] : queue.rows)
-    if (kind != RowKind::kWarning) d[kListNames[static_cast<std::size_t>(kind)]].cast<py::list>().append(to_python(j));
+  for (const Row& r : queue.rows)
+    if (r.kind != RowKind::kWarning) d[kListNames[static_cast<std::size_t>(r.kind)]].cast<py::list>().append(to_python(r.json));
   d["warnings"] = outcome.warnings;
   d["counts"] = to_python(counts_json(outcome.counts));
   d["reader_report"] = to_python(outcome.reader_report.to_json());
@@ -288,11 +343,11 @@ void register_perception(py::module_& m) {
                            "on_* callbacks at the end of the push that produced them, else kept in the "
                            "lists windows, depth, trajectories, predictions, dodge, warnings.")
       .def(py::init<const Calibration&, const PerceptionOptions&, const std::string&, py::object, py::object,
-                    py::object, py::object, py::object, py::object>(),
+                    py::object, py::object, py::object, py::object, bool>(),
            py::arg("calibration"), py::arg("options") = PerceptionOptions{}, py::kw_only(),
            py::arg("time_unit") = "us", py::arg("on_window") = py::none(), py::arg("on_depth") = py::none(),
            py::arg("on_estimate") = py::none(), py::arg("on_prediction") = py::none(),
-           py::arg("on_dodge") = py::none(), py::arg("on_warning") = py::none())
+           py::arg("on_dodge") = py::none(), py::arg("on_warning") = py::none(), py::arg("images") = false)
       .def("push_events", &PyPerception::push_events, py::arg("events"), "a 1-D contiguous fdv.EVENT_DTYPE array")
       .def("push_imu", &PyPerception::push_imu, py::arg("imu"), "fdv.IMU_DTYPE samples")
       .def("push_odometry", &PyPerception::push_odometry, py::arg("odometry"), "fdv.ODOMETRY_DTYPE samples")

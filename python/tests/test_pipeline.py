@@ -133,3 +133,56 @@ def test_calibration(dataset):
     assert px[0] == pytest.approx([K[0, 2], K[1, 2]])
     assert np.isnan(px[2]).all()
     assert calib.T_B_E.shape == (4, 4)
+
+
+CALIBRATION_64x48 = """
+event_camera:
+  width: 64
+  height: 48
+  intrinsics: [60, 60, 32, 24]
+  distortion: [0, 0, 0, 0, 0]
+"""
+
+
+def test_window_images_are_the_time_images_of_its_events():
+    # No distortion and no compensation: the compensated grid is the sensor's, so I is the count of
+    # each window's events per pixel and N their mean time per pixel, normalised over the window's
+    # pixels with events (docs/DETECTION.md), computed here from the events alone.
+    calib = fdv.Calibration.from_text(CALIBRATION_64x48)
+    options = fdv.PerceptionOptions.from_dict(
+        {"compensation": {"method": "none"}, "estimate_trajectories": False, "detector": {"hot_pixels": False}})
+    rng = np.random.default_rng(7)
+    n = 6000
+    events = np.zeros(n, dtype=fdv.EVENT_DTYPE)
+    events["t"] = np.sort(rng.integers(0, 75_000_000, n))  # three 25 ms windows [ns]
+    events["x"] = rng.integers(0, 64, n)
+    events["y"] = rng.integers(0, 48, n)
+    events["p"] = 1
+    p = fdv.Perception(calib, options, time_unit="ns", images=True)
+    p.push_events(events)
+    windows = p.finish()["windows"]
+    assert len(windows) == 3
+    for w in windows:
+        t0, t1 = round(w["t_start"] * 1e9), round(w["t_end"] * 1e9)
+        e = events[(events["t"] >= t0) & (events["t"] < t1)]
+        count = np.zeros((48, 64), np.int64)
+        np.add.at(count, (e["y"], e["x"]), 1)
+        time_sum = np.zeros((48, 64))
+        np.add.at(time_sum, (e["y"], e["x"]), (e["t"] - t0) * 1e-9)
+        fired = count > 0
+        mean_time = time_sum[fired] / count[fired]
+        normalized = (mean_time - mean_time.min()) / (mean_time.max() - mean_time.min())
+        images = w["images"]
+        assert images["count"].dtype == np.int32 and images["count"].shape == (48, 64)
+        np.testing.assert_array_equal(images["count"], count)
+        np.testing.assert_allclose(images["normalized"][fired], normalized, atol=1e-5)
+        assert not images["normalized"][~fired].any()
+        assert images["segmentation"].shape == images["preprocessed"].shape == (48, 64)
+        assert images["gates"] == []  # no track: nothing expected anywhere
+
+
+def test_window_images_are_off_by_default(dataset):
+    rec = fdv.open(str(dataset), time_unit="ns")
+    p = fdv.Perception(rec.calibration, time_unit="ns")
+    push_merged(p, rec)
+    assert not any("images" in w for w in p.finish()["windows"])
