@@ -8,7 +8,8 @@
 //
 // SEEDS_FILE lists random_throw seeds (whitespace-separated); each throw is simulated into
 // WORK_DIR/SEED, scored under every CONFIG, and removed. One line per throw and configuration, then
-// the totals: threats, and the threats escaped open loop and closed loop by each oracle.
+// the totals: threats, and the threats escaped open loop and closed loop by each oracle. A token of
+// SEEDS_FILE that is not a non-negative integer stops it with the file, the position and the token.
 #include <cstdio>
 #include <exception>
 #include <filesystem>
@@ -49,8 +50,22 @@ int main(int argc, char** argv) try {
   std::vector<fdv::PerceptionOptions> configs;
   for (int a = 3; a < argc; ++a)
     configs.push_back(std::string(argv[a]) == "-" ? fdv::PerceptionOptions{} : fdv::load_perception_options_file(argv[a]));
+  std::vector<std::uint64_t> seeds;
+  for (std::string token; seeds_file >> token;) {
+    std::size_t used = 0;
+    std::uint64_t seed = 0;
+    try {
+      seed = std::stoull(token, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used != token.size() || token[0] == '-')  // stoull takes "-3" as 2^64 - 3
+      throw std::runtime_error(std::string(argv[1]) + ": seed " + std::to_string(seeds.size() + 1) + " \"" + token +
+                               "\" is not a non-negative integer");
+    seeds.push_back(seed);
+  }
   std::vector<Tally> tally(configs.size());
-  for (std::uint64_t seed; seeds_file >> seed;) {
+  for (const std::uint64_t seed : seeds) {
     fdv::sim::ScenarioConfig scenario = fdv::sim::random_throw_config(fdv::sim::sample_random_throw(seed));
     scenario.threads = 1;  // as dodge-eval simulates it
     const std::string dataset = work_dir + "/" + std::to_string(seed);

@@ -144,23 +144,29 @@ event_camera:
 """
 
 
-def test_window_images_are_the_time_images_of_its_events():
-    # No distortion and no compensation: the compensated grid is the sensor's, so I is the count of
-    # each window's events per pixel and N their mean time per pixel, normalised over the window's
-    # pixels with events (docs/DETECTION.md), computed here from the events alone.
+def windows_of_scattered_events(**perception_args):
+    """Three 25 ms windows of events scattered over a 64x48 sensor without distortion, run without
+    compensation (so the compensated grid is the sensor's), `perception_args` given to fdv.Perception:
+    the events and the window rows."""
     calib = fdv.Calibration.from_text(CALIBRATION_64x48)
     options = fdv.PerceptionOptions.from_dict(
         {"compensation": {"method": "none"}, "estimate_trajectories": False, "detector": {"hot_pixels": False}})
     rng = np.random.default_rng(7)
     n = 6000
     events = np.zeros(n, dtype=fdv.EVENT_DTYPE)
-    events["t"] = np.sort(rng.integers(0, 75_000_000, n))  # three 25 ms windows [ns]
+    events["t"] = np.sort(rng.integers(0, 75_000_000, n))  # [ns]
     events["x"] = rng.integers(0, 64, n)
     events["y"] = rng.integers(0, 48, n)
     events["p"] = 1
-    p = fdv.Perception(calib, options, time_unit="ns", images=True)
+    p = fdv.Perception(calib, options, time_unit="ns", **perception_args)
     p.push_events(events)
-    windows = p.finish()["windows"]
+    return events, p.finish()["windows"]
+
+
+def test_window_images_are_the_time_images_of_its_events():
+    # I is the count of each window's events per pixel and N their mean time per pixel, normalised
+    # over the window's pixels with events (docs/DETECTION.md), computed here from the events alone.
+    events, windows = windows_of_scattered_events(images=True)
     assert len(windows) == 3
     for w in windows:
         t0, t1 = round(w["t_start"] * 1e9), round(w["t_end"] * 1e9)
@@ -181,8 +187,6 @@ def test_window_images_are_the_time_images_of_its_events():
         assert images["gates"] == []  # no track: nothing expected anywhere
 
 
-def test_window_images_are_off_by_default(dataset):
-    rec = fdv.open(str(dataset), time_unit="ns")
-    p = fdv.Perception(rec.calibration, time_unit="ns")
-    push_merged(p, rec)
-    assert not any("images" in w for w in p.finish()["windows"])
+def test_window_images_are_off_by_default():
+    _, windows = windows_of_scattered_events()
+    assert len(windows) == 3 and not any("images" in w for w in windows)
