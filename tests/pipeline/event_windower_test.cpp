@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 #include <string>
 #include <vector>
@@ -183,9 +184,99 @@ TEST(EventWindower, AConsumerMayTakeTheEventsInsteadOfCopyingThem) {
   }
 }
 
+TEST(EventWindower, OverlappingWindowsHoldEveryEventOfTheirSpan) {
+  // 25 ms windows every 5 ms over an in-order stream with gaps, in slices of any length: window k
+  // holds exactly the events in [t0 + 5k ms, t0 + 5k ms + 25 ms) (counted directly), each event
+  // lies in five windows, and the last, partial window is the first one still open at the end.
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<TimeNs> gap(0, 60 * kNsPerUs);
+  std::bernoulli_distribution pause(0.003);
+  std::vector<Event> events;
+  TimeNs t = 2 * kNsPerMs;
+  for (int i = 0; i < 8000; ++i) {
+    t += gap(rng) + (pause(rng) ? 40 * kNsPerMs : 0);
+    events.push_back({t, static_cast<std::uint16_t>(i % 320), static_cast<std::uint16_t>(i % 240), i % 3 == 0});
+  }
+  const TimeNs window = 25 * kNsPerMs, step = 5 * kNsPerMs, t0 = events.front().t;
+  const auto in = [&](TimeNs start) {
+    return std::count_if(events.begin(), events.end(), [&](const Event& e) { return e.t >= start && e.t < start + window; });
+  };
+  for (const std::size_t slice : {std::size_t{1}, std::size_t{97}, events.size()}) {
+    SCOPED_TRACE("slices of " + std::to_string(slice));
+    EventWindower w({.window_ns = window, .step_ns = step});
+    const auto seen = run(w, events, slice);
+    const auto full = static_cast<std::size_t>((events.back().t - t0 - window) / step + 1);  // windows ending by the last event
+    ASSERT_EQ(seen.size(), full + 1);
+    for (std::size_t k = 0; k < seen.size(); ++k) {
+      EXPECT_EQ(seen[k].index, k);
+      EXPECT_EQ(seen[k].t_start, t0 + static_cast<TimeNs>(k) * step);
+      EXPECT_EQ(seen[k].t_end, seen[k].t_start + window);
+      EXPECT_EQ(static_cast<std::ptrdiff_t>(seen[k].n), in(seen[k].t_start)) << "window " << k;
+    }
+  }
+}
+
+TEST(EventWindower, OverlappingWindowsSkipALongGapToTheFirstWindowThatHoldsTheNextEvent) {
+  // Events at 0 and 1 s, 25 ms windows every 5 ms, 3 empty windows allowed: [0, 25) holds the first
+  // event, [5, 30) [10, 35) [15, 40) are empty, and the windows that end by 1 s, those starting
+  // from 20 to 975 ms (192), are skipped: [980, 1005) holds the second event, index 196.
+  const std::vector<Event> events{{0, 1, 1, true}, {kNsPerS, 1, 1, true}};
+  EventWindower w({.window_ns = 25 * kNsPerMs, .step_ns = 5 * kNsPerMs, .max_empty_windows = 3});
+  const auto seen = run(w, events, 1);
+  ASSERT_EQ(seen.size(), 5u);
+  EXPECT_EQ(seen[0].n, 1u);
+  for (int i : {1, 2, 3}) EXPECT_EQ(seen[static_cast<std::size_t>(i)].n, 0u);
+  EXPECT_EQ(seen[4].t_start, 980 * kNsPerMs);
+  EXPECT_EQ(seen[4].index, 196u);
+  EXPECT_EQ(seen[4].n, 1u);
+  EXPECT_EQ(w.windows_skipped(), 192u);
+}
+
+TEST(EventWindower, AConsumerMayTakeTheEventsOfOverlappingWindows) {
+  // The windower keeps the events later windows need: a consumer that takes each window's storage
+  // (as Perception does) gets the same windows as one that copies them, decimated ones included.
+  std::vector<Event> events;
+  for (int i = 0; i < 3000; ++i) events.push_back({i * 20 * kNsPerUs, static_cast<std::uint16_t>(i % 640), 7, true});
+  for (int i = 0; i < 2000; ++i) events.push_back({61 * kNsPerMs + i, 3, static_cast<std::uint16_t>(i % 480), false});
+  const EventWindowerOptions options{.window_ns = 25 * kNsPerMs, .step_ns = 5 * kNsPerMs, .max_events_per_window = 1500};
+  auto windows = [&](bool take) {
+    EventWindower w(options);
+    std::vector<std::vector<Event>> seen;
+    std::vector<Event> spare;
+    const EventWindower::Callback cb = [&](const EventWindow& win) {
+      if (take) {
+        ASSERT_NE(win.storage, nullptr);
+        spare.clear();
+        spare.swap(*win.storage);
+        seen.push_back(std::move(spare));
+        spare = {};
+      } else {
+        seen.emplace_back(win.events.begin(), win.events.end());
+      }
+    };
+    for (std::size_t i = 0; i < events.size(); i += 700)
+      w.push(std::span(events).subspan(i, std::min<std::size_t>(700, events.size() - i)), cb);
+    w.flush(cb);
+    return seen;
+  };
+  const auto copied = windows(false), taken = windows(true);
+  ASSERT_EQ(copied.size(), 9u);  // starts 0, 5, ..., 35 ms end by 61 ms; [40, 65) is the last
+  EXPECT_EQ(copied[0].size(), 1250u);  // [0, 25) ms at one event per 20 µs
+  EXPECT_EQ(copied[8].size(), 1500u);  // [40, 65) ms holds 1000 + 2000 events: every 2nd kept
+  ASSERT_EQ(taken.size(), copied.size());
+  for (std::size_t k = 0; k < copied.size(); ++k) {
+    ASSERT_EQ(taken[k].size(), copied[k].size()) << k;
+    for (std::size_t i = 0; i < copied[k].size(); ++i) ASSERT_EQ(taken[k][i].t, copied[k][i].t) << k << ":" << i;
+  }
+}
+
 TEST(EventWindower, OptionsAreValidated) {
   EXPECT_NE(EventWindowerOptions{.window_ns = 0}.validate(), "");
   EXPECT_EQ(EventWindowerOptions{}.validate(), "");
+  EXPECT_EQ((EventWindowerOptions{.window_ns = 25 * kNsPerMs, .step_ns = 5 * kNsPerMs}.validate()), "");
+  EXPECT_NE((EventWindowerOptions{.window_ns = 25 * kNsPerMs, .step_ns = 30 * kNsPerMs}.validate()), "");
+  EXPECT_NE((EventWindowerOptions{.window_ns = 25 * kNsPerMs, .step_ns = 10 * kNsPerMs}.validate()), "");
+  EXPECT_NE((EventWindowerOptions{.window_ns = 25 * kNsPerMs, .step_ns = -1}.validate()), "");
 }
 
 }  // namespace
