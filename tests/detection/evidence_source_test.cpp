@@ -239,6 +239,35 @@ TEST(EvidenceSource, ADimDriftingBlobIsFoundInMoreWindowsAndNoiseIsNot) {
   EXPECT_EQ(noise_detections, 0);
 }
 
+TEST(EvidenceSource, AWindowWithoutNewEvidenceIsSkipped) {
+  // Overlapping windows: between each two windows, one whose events were counted already
+  // (new_evidence false). The evidence source finds nothing in those, and in the others exactly
+  // what it finds without them.
+  DetectorOptions o;
+  o.evidence.enabled = true;
+  const auto evidence_centres = [](const DetectionResult& r) {
+    std::vector<Eigen::Vector2d> c;
+    for (const Detection2D& d : r.detections)
+      if (d.source == DetectionSource::kEvidence) c.push_back(d.center_undistorted);
+    return c;
+  };
+  Detector alone(o, small_camera()), interleaved(o, small_camera());
+  NoisyWindows windows, same_windows, between;
+  int found = 0;
+  for (int k = 0; k < 50; ++k) {
+    Eigen::Vector2d blob_at;
+    const auto expected = evidence_centres(alone.detect(windows.make(k, true, blob_at)));
+    const auto seen = evidence_centres(interleaved.detect(same_windows.make(k, true, blob_at)));
+    ASSERT_EQ(seen.size(), expected.size()) << "window " << k;
+    for (std::size_t i = 0; i < seen.size(); ++i) EXPECT_EQ(seen[i], expected[i]);
+    found += static_cast<int>(seen.size());
+    CompensatedEventsView repeat = between.make(k, true, blob_at);
+    repeat.new_evidence = false;
+    EXPECT_TRUE(evidence_centres(interleaved.detect(repeat)).empty()) << "window " << k;
+  }
+  EXPECT_GT(found, 0);
+}
+
 TEST(EvidenceSource, AMovingEdgeRunsThroughTheSurroundAndIsNoCandidate) {
   // The same motion as the blob's: without the surround test the edge's path gathers evidence
   // like the blob's; with κ = 0.5 (the edge puts about as many pixels in the ring 2-3 cells away

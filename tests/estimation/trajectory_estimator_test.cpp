@@ -141,6 +141,40 @@ TEST(TrajectoryEstimator, WaitsForMinimumObservations) {
   expect_truth(e, s.truth, 1e-6);
 }
 
+// A provisional observation stands until the next event observation: a wrong one (off by 0.1 in
+// x) is replaced, and the fit is the exact fit of the others; a final one is kept.
+TEST(TrajectoryEstimator, AProvisionalObservationIsReplacedByTheNext) {
+  const Scene s = test::forward_scene();
+  std::mt19937 rng(1);
+  const Observations obs = test::observe(s, rng, 0.0, false);
+  TrajectoryEstimator est(options_for(s));
+  std::size_t depth = 0;  // depths in time order among the events, within the lateness bound
+  const auto add_depths_until = [&](TimeNs t) {
+    while (depth < obs.depths.size() && obs.depths[depth].t <= t) est.add(obs.depths[depth++]);
+  };
+  for (std::size_t i = 0; i + 1 < obs.events.size(); ++i) {
+    add_depths_until(obs.events[i].t);
+    est.add(obs.events[i]);
+    EventObservation wrong = obs.events[i];
+    wrong.xn.x() += 0.1;
+    wrong.provisional = true;
+    if (i + 2 < obs.events.size()) {
+      EXPECT_EQ(est.add(wrong), AddResult::kAccepted);
+    }
+  }
+  EXPECT_EQ(est.event_count(), static_cast<int>(obs.events.size()) - 1);  // every wrong copy replaced
+  EventObservation kept = obs.events.back();
+  kept.provisional = true;
+  add_depths_until(kept.t);
+  est.add(kept);
+  add_depths_until(std::numeric_limits<TimeNs>::max());
+  EXPECT_EQ(est.event_count(), static_cast<int>(obs.events.size()));
+  const TrajectoryEstimate e = est.solve();
+  ASSERT_TRUE(e.usable) << e.brief_report();
+  EXPECT_EQ(e.outliers, 0);
+  expect_truth(e, s.truth, 1e-6);
+}
+
 // Observations arrive shuffled (within the lateness bound): same answer, t0 = earliest time.
 TEST(TrajectoryEstimator, OutOfOrderObservationsGiveTheSameFit) {
   const Scene s = test::forward_scene();

@@ -561,6 +561,48 @@ int ball_track(const SimulatedThrow& s, const Collected& c) {
 // tracks then. With the option they are segmented for the new track at its confirmation: depth
 // observations of the ball from before the confirmation window, each at the true depth of the
 // ball's centre in the event camera at the frame's time (ground truth, within the D435-like noise).
+TEST(Perception, OverlappingWindowsGiveAResultEveryStepAndCountEachEventOnce) {
+  // 25 ms windows every 5 ms: a window (and a fresh estimate) every 5 ms, yet the estimator holds
+  // about one detection per 25 ms of its observed span (each event counted once, plus the newest
+  // window's provisional one), and the ball's trajectory is as good as with consecutive windows.
+  const SimulatedThrow& s = simulated_throw();
+  PerceptionOptions options;
+  options.windows.step_ns = 5 * kNsPerMs;
+  const Collected c = run(0, s, options);
+  ASSERT_GT(c.results.size(), 100u);  // the 1 s throw: ~196 windows
+  for (std::size_t k = 1; k < c.results.size(); ++k)
+    ASSERT_EQ(c.results[k].t_start - c.results[k - 1].t_start, 5 * kNsPerMs) << "window " << k;
+  const int track = ball_track(s, c);
+  ASSERT_GE(track, 0);
+  const TrajectoryEstimate* last = nullptr;
+  std::vector<TimeNs> estimate_times;
+  for (std::size_t i = 0; i < c.fusion.size(); ++i)
+    if (c.fusion[i].usable && c.fusion_track[i] == track) last = &c.fusion[i], estimate_times.push_back(c.fusion_t[i]);
+  ASSERT_NE(last, nullptr);
+  const double span_windows = to_seconds(last->t_last - last->t_first) / 0.025;
+  EXPECT_LE(last->event_observations, span_windows + 2.5) << "events counted more than once";
+  EXPECT_GE(last->event_observations, span_windows - 2.5);
+  int five_ms_apart = 0;
+  for (std::size_t i = 1; i < estimate_times.size(); ++i) five_ms_apart += estimate_times[i] - estimate_times[i - 1] == 5 * kNsPerMs;
+  EXPECT_GT(five_ms_apart, static_cast<int>(estimate_times.size()) / 2);
+  const Summary ape = absolute_position_error([&](TimeNs t) { return last->trajectory.position(t); },
+                                              s.data.objects, 1, last->t_first, last->t_last);
+  EXPECT_LT(ape.rmse, 0.15);  // the bound of the consecutive windows' test above
+}
+
+TEST(Perception, OverlappingWindowsWeighAndConfirmByTheSameEvents) {
+  // Hand-checked: N = 25 / 5 = 5 windows share each event.
+  PerceptionOptions o;
+  o.windows.step_ns = 5 * kNsPerMs;
+  const PerceptionOptions scaled = overlapping_window_options(o);
+  EXPECT_DOUBLE_EQ(scaled.tracking.filter.measurement_sigma_px, 1.5 * std::sqrt(5.0));
+  EXPECT_EQ(scaled.tracking.confirm_hits, 11);  // 3 windows: 0, 25, 50 ms; 11 steps: 0, 5, ..., 50 ms
+  EXPECT_EQ(scaled.looming.fit_detections, 40);
+  EXPECT_EQ(scaled.looming.min_detections, 11);
+  EXPECT_DOUBLE_EQ(scaled.detection.hot_pixels.memory_windows, 25.0);
+  EXPECT_EQ(overlapping_window_options(PerceptionOptions{}).tracking.confirm_hits, 3);  // no overlap: unchanged
+}
+
 TEST(Perception, DepthFramesFromBeforeATracksConfirmationAreUsed) {
   const SimulatedThrow& s = simulated_throw();
   PerceptionOptions with, without;

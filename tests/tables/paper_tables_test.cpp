@@ -11,7 +11,7 @@ namespace {
 TEST(Table1Markdown, RowsAndNotesFollowTheTable) {
   Table1 t;
   t.seeds = {7, 8};
-  t.window_ns = 20'000'000;
+  t.step_ns = 20'000'000;
   t.denoise_mean_filter_px = 5;
   t.denoise_opening_px = 3;
   CompensationRow r;
@@ -36,7 +36,7 @@ TEST(Table1Markdown, RowsAndNotesFollowTheTable) {
 TEST(Table1Markdown, AnySizeRowsPerBinAndPerBall) {
   Table1 t;
   t.seeds = {7};
-  t.window_ns = 20'000'000;
+  t.step_ns = 20'000'000;
   AnySizeRow close;
   close.scene = {"close_pass", 1280, 720, ""};
   close.balls = 1;
@@ -113,7 +113,7 @@ TEST(Table1Markdown, SeedToSeedSpreadOfEachDetectionRow) {
 
   Table1 t;
   t.seeds = {1, 2, 3};
-  t.window_ns = 25'000'000;
+  t.step_ns = 25'000'000;
   CompensationRow r;
   r.scene = "hover_headon";
   r.method = "rotation_translation";

@@ -164,6 +164,7 @@ void EvidenceSource::allocate(int width, int height) {
 
 bool EvidenceSource::begin_window(const SourceWindow& in) {
   const CompensatedEventsView& v = in.events;
+  if (!v.new_evidence) return false;
   if (v.width != width_ || v.height != height_) allocate(v.width, v.height);
   // A window that did not reach the sources (too few events, flooded) breaks every path; the
   // background is kept, without the ego-motion of the windows missed.
@@ -238,6 +239,7 @@ bool EvidenceSource::isolated(int x, int y) const {
 }
 
 std::optional<Candidate> EvidenceSource::find(SourceWindow& in, DetectionResult& res) {
+  if (!in.events.new_evidence) return std::nullopt;
   if (!updated_ || in.events.t_start != last_start_ || in.events.t_end != last_end_) begin_window(in);
   const EvidenceSourceOptions& o = options_.evidence;
   const cv::Mat& L = grid_.evidence();

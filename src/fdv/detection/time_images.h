@@ -47,6 +47,10 @@ struct CompensatedEventsView {
   /// t_s is non-decreasing (the compensators keep the input's time order and report it): lets the
   /// detector binary-search time slices. False is always safe.
   bool time_sorted = false;
+  /// False: the window's events were already summed by the sources that sum evidence over
+  /// consecutive windows (the evidence source), which skip it: an overlapping window between two
+  /// that do not overlap (PerceptionOptions' windows.step_ms).
+  bool new_evidence = true;
   /// Threads (run_parts in fdv/core/thread_pool.h, at most 8) for build_time_images (pixel
   /// ranges), the segmentation and the pre-processing (bands of rows). Results are identical for
   /// any count.

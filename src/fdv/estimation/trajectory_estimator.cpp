@@ -246,6 +246,7 @@ AddResult TrajectoryEstimator::add(const EventObservation& o) {
     return AddResult::kInvalid;
   }
   if (!admit(o.t)) return AddResult::kTooLate;
+  if (!events_.empty() && events_.back().provisional) events_.pop_back();
   events_.push_back(o);
   drop_oldest_beyond_limit();
   return AddResult::kAccepted;

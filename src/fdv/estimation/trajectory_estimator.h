@@ -40,6 +40,10 @@ struct EventObservation {
   Eigen::Isometry3d T_W_E = Eigen::Isometry3d::Identity();  ///< event camera pose at t
   double sigma_n =
       0;  ///< noise std [normalised units]; 0 = options' event_sigma_px / event_focal_px
+  /// Held only until the next event observation, which replaces it: the pipeline's detection from
+  /// a window that shares its events with the next one kept (overlapping windows), so that the
+  /// estimate is fresh without counting the same events twice.
+  bool provisional = false;
 };
 
 /// One depth of the object's centre, z along the optical axis of camera C at time t.

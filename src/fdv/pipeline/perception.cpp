@@ -67,6 +67,21 @@ std::string PerceptionOptions::validate() const {
   return {};
 }
 
+PerceptionOptions overlapping_window_options(PerceptionOptions o) {
+  const int n = o.windows.overlap();
+  if (n <= 1) return o;
+  const double sqrt_n = std::sqrt(static_cast<double>(n));
+  const auto span = [n](int k) { return 1 + (k - 1) * n; };  // k windows' time span, in steps
+  o.tracking.filter.measurement_sigma_px *= sqrt_n;
+  o.tracking.confirm_hits = span(o.tracking.confirm_hits);
+  o.looming.size_sigma_px *= sqrt_n;
+  o.looming.size_sigma_fraction *= sqrt_n;
+  o.looming.fit_detections *= n;
+  o.looming.min_detections = span(o.looming.min_detections);
+  o.detection.hot_pixels.memory_windows *= n;
+  return o;
+}
+
 void PerceptionCounters::count_window(const WindowResult& w) {
   ++windows;
   windows_skipped += w.skipped_before;
@@ -104,7 +119,7 @@ Perception::Perception(const Calibration& calibration, PerceptionOptions options
         if (const auto why = options.validate(); !why.empty()) throw ConfigError(why);
         if (const auto why = options.estimation.validate(); !why.empty())
           throw ConfigError("estimation: " + why);
-        return options;
+        return overlapping_window_options(std::move(options));
       }()),
       callbacks_(std::move(callbacks)),
       windower_(options_.windows),
@@ -306,7 +321,7 @@ void Perception::process_window(PendingWindow& w) {
   // were warped there), or the raw image when nothing was warped.
   const TimeNs t_mid = w.t_start + (w.t_end - w.t_start) / 2;
   detector_priors_from_tracks(t_mid, cw.report.used == CompensationMethod::kNone ? t_mid : w.t_start);
-  const DetectionResult det = detect(cw);
+  const DetectionResult det = detect(cw, w.index);
   result.status = det.status;
   result.theta = det.theta;
   result.timings.detection = det.timings;
@@ -316,7 +331,7 @@ void Perception::process_window(PendingWindow& w) {
   result.timings.tracking_ms = ms_since(tracking_start);
   for (int id : step.deleted) estimators_.erase(id);
   for (const TrackAssignment& a : step.assignments) result.detections.push_back({det.detections[a.detection], a.track_id});
-  const std::vector<int> to_solve = add_event_observations(step, det.detections);
+  const std::vector<int> to_solve = add_event_observations(step, det.detections, w.index);
   segment_depth_since_first_detection(step.confirmed);
   for (int id : to_solve) estimate(id, w.t_end);
 
@@ -386,8 +401,10 @@ std::optional<Eigen::Vector2d> Perception::trajectory_pixel(int track_id, TimeNs
 // Detection (paper §IV-B). Feedback, detector -> compensator: the detector reports its centre
 // through the compensator's inverse warp, in the camera at the detection's time, because
 // add_event_observations pairs it with the camera's pose at that time.
-DetectionResult Perception::detect(const CompensatedWindow& cw) {
-  return detector_.detect(detector_input(cw, *compensator_, options_.threads), priors_);
+DetectionResult Perception::detect(const CompensatedWindow& cw, std::uint64_t window_index) {
+  CompensatedEventsView view = detector_input(cw, *compensator_, options_.threads);
+  view.new_evidence = is_anchor_window(window_index);
+  return detector_.detect(view, priors_);
 }
 
 // Association and Kalman filter on the image plane (paper §IV-C.1), with the 3D estimates' say.
@@ -451,9 +468,13 @@ void Perception::vouch_by_trajectory() {
 // The assigned detections as event observations of their tracks' estimators (paper §IV-C.3).
 // Returns the tracks to solve: those confirmed in this step, and the confirmed ones that got a
 // detection.
-std::vector<int> Perception::add_event_observations(const TrackerStep& step, std::span<const Detection2D> detections) {
+std::vector<int> Perception::add_event_observations(const TrackerStep& step, std::span<const Detection2D> detections,
+                                                    std::uint64_t window_index) {
   std::vector<int> to_solve = step.confirmed;
   if (!options_.estimate_trajectories) return to_solve;
+  // Overlapping windows: one detection per Δt is kept, the others stand only until the next one
+  // (overlapping_window_options).
+  const bool provisional = !is_anchor_window(window_index);
   for (const TrackAssignment& a : step.assignments) {
     if (a.track_id < 0) continue;
     const TrackerDetection& d = tracker_inputs_[a.detection];
@@ -467,6 +488,7 @@ std::vector<int> Perception::add_event_observations(const TrackerStep& step, std
     obs.t = d.t;
     obs.xn = d.center_normalized;
     obs.T_W_E = *T_W_E;
+    obs.provisional = provisional;
     if (const Detection2D& found = detections[a.detection]; found.partial)
       observe_cut_object(found, calibration_.event_camera,
                          options_.estimation.event_sigma_px / options_.estimation.event_focal_px, obs);

@@ -137,6 +137,21 @@ struct PerceptionOptions {
   std::string validate() const;
 };
 
+/// The options a Perception runs with when its windows overlap (windows.step_ns < window_ns):
+/// each event then lies in N = Δt / Δs windows, and N consecutive detections of an object share
+/// their evidence. So that the same events weigh and confirm as much as with consecutive windows:
+/// - the tracker's and the looming fit's measurement σ grow by √N (N correlated measurements
+///   carry the information of one), confirm_hits k becomes 1 + (k − 1)·N and the looming fit's
+///   counts scale likewise (the same time span of windows);
+/// - the hot-pixel memory is N times as many windows;
+/// - the estimators (not scaled here) keep one detection per Δt, from the anchor windows (those
+///   whose index is a multiple of N, which do not overlap), plus the newest window's as a
+///   provisional observation (EventObservation::provisional): a fresh estimate every Δs, each
+///   event counted once; the evidence source sums over the anchor windows only
+///   (CompensatedEventsView::new_evidence).
+/// Unchanged when the windows do not overlap.
+PerceptionOptions overlapping_window_options(PerceptionOptions options);
+
 /// Whether `track` lends the detector its gate (a DetectionPrior) in the next window: when
 /// confirmed, or, with PerceptionOptions::tentative_track_priors, when tentative and detected in the
 /// last window (DetectionPrior::confirmed false: the dense-motion source and the sparse search only).
@@ -161,6 +176,8 @@ void observe_cut_object(const Detection2D& found, const PinholeCamera& camera, d
 template <class V>
 void describe(V& v, PerceptionOptions& o) {
   v.ms("window_ms", o.windows.window_ns, "Δt: length of an event window (paper §III-A), at most 1000");
+  v.ms("step_ms", o.windows.step_ns,
+       "Δs: a window every Δs (0 = Δt); shorter: overlapping windows, a result every Δs (docs/ESTIMATION.md §1, \"Overlapping windows\")");
   v("max_events_per_window", o.windows.max_events_per_window, "events",
     "overload guard: a fuller window is decimated uniformly in time order (counted)");
   v("max_empty_windows", o.windows.max_empty_windows, "-",
@@ -370,11 +387,17 @@ class Perception {
   const CompensatedWindow& compensate(const PendingWindow& w);
   /// Fills priors_: the tracks at t, seen by the camera at grid_t (the compensated grid's).
   void detector_priors_from_tracks(TimeNs t, TimeNs grid_t);
-  DetectionResult detect(const CompensatedWindow& cw);
+  DetectionResult detect(const CompensatedWindow& cw, std::uint64_t window_index);
+  /// Overlapping windows: every N-th window (index a multiple of N = Δt / Δs) is an anchor; the
+  /// anchors do not overlap, and the sums over windows see only them (overlapping_window_options).
+  bool is_anchor_window(std::uint64_t index) const {
+    return index % static_cast<std::uint64_t>(options_.windows.overlap()) == 0;
+  }
   TrackerStep associate(TimeNs t, std::span<const Detection2D> detections);
   void vouch_by_trajectory();  ///< fills vouched_ for tracker_inputs_
   void hold_by_trajectory(TimeNs t);  ///< fills held_: the tracks held at window end t
-  std::vector<int> add_event_observations(const TrackerStep& step, std::span<const Detection2D> detections);
+  std::vector<int> add_event_observations(const TrackerStep& step, std::span<const Detection2D> detections,
+                                          std::uint64_t window_index);
   void segment_depth_since_first_detection(std::span<const int> confirmed);
   /// Every depth segmentation of the pending frames starts here: the frames up to `up_to`, for
   /// every confirmed track, each accepted observation then solved.

@@ -238,7 +238,7 @@ Table1 compute_table1(const PaperTableOptions& options) {
   if (const std::string why = options.validate(); !why.empty()) throw ConfigError("table1: " + why);
   Table1 table;
   table.seeds = options.seeds;
-  table.window_ns = options.perception.windows.window_ns;
+  table.step_ns = options.perception.windows.step();
   table.denoise_mean_filter_px = options.perception.detection.mean_filter_px;
   table.denoise_opening_px = options.perception.detection.opening_px;
   for (const std::string& scene : table1_detection_scenes())
@@ -412,7 +412,7 @@ std::string any_size_markdown(const Table1& table) {
 }  // namespace
 
 std::string to_markdown(const Table1& table, const Provenance& provenance) {
-  const double dt_ms = 1e3 * to_seconds(table.window_ns);
+  const double dt_ms = 1e3 * to_seconds(table.step_ns);
   std::string out =
       header("Table I: ego-motion compensation (paper §V-B)", provenance, table.seeds);
   out += fmt::format(

@@ -97,7 +97,7 @@ SeedSpread seed_spread(const std::vector<DetectionMetrics>& per_seed);
 
 struct Table1 {
   std::vector<std::uint64_t> seeds;
-  TimeNs window_ns = 0;               ///< Δt, the real-time bound
+  TimeNs step_ns = 0;                 ///< Δs, a window every Δs: the real-time bound
   int denoise_mean_filter_px = 0;     ///< η's shared denoising: the detector's mean filter side
   int denoise_opening_px = 0;         ///< and its opening's side
   std::vector<CompensationRow> rows;  ///< scenes × methods, in display order
