@@ -144,15 +144,10 @@ TEST(EventWindower, SlicesOfAnyLengthGiveTheEventByEventWindows) {
   }
 }
 
-TEST(EventWindower, AConsumerMayTakeTheEventsInsteadOfCopyingThem) {
-  // A consumer swaps each window's storage with an empty vector of its own (as Perception does):
-  // it gets the window's events, and the windower goes on with the vector it was given; also
-  // through a decimated window (its own storage).
-  std::vector<Event> events;
-  for (int i = 0; i < 3000; ++i) events.push_back({i * 20 * kNsPerUs, static_cast<std::uint16_t>(i % 640), 7, true});
-  for (int i = 0; i < 2000; ++i) events.push_back({61 * kNsPerMs + i, 3, static_cast<std::uint16_t>(i % 480), false});
-  for (int i = 0; i < 500; ++i) events.push_back({80 * kNsPerMs + i * 50 * kNsPerUs, 5, 5, true});
-  const EventWindowerOptions options{.window_ns = 25 * kNsPerMs, .max_events_per_window = 1500};
+/// Each window's events, once copied by the consumer and once taken (the consumer swaps each
+/// window's storage with an empty vector of its own, as Perception does), in runs of 700 events.
+std::pair<std::vector<std::vector<Event>>, std::vector<std::vector<Event>>> copied_and_taken(
+    const EventWindowerOptions& options, const std::vector<Event>& events) {
   auto windows = [&](bool take) {
     EventWindower w(options);
     std::vector<std::vector<Event>> seen;
@@ -174,14 +169,34 @@ TEST(EventWindower, AConsumerMayTakeTheEventsInsteadOfCopyingThem) {
     w.flush(cb);
     return seen;
   };
-  const auto copied = windows(false), taken = windows(true);
-  ASSERT_EQ(copied.size(), 5u);  // [0, 25) [25, 50) [50, 75) (decimated: 2000 events) [75, 100)
-  ASSERT_EQ(taken.size(), copied.size());
-  EXPECT_LT(copied[2].size(), 2000u);
-  for (std::size_t k = 0; k < copied.size(); ++k) {
-    ASSERT_EQ(taken[k].size(), copied[k].size()) << k;
-    for (std::size_t i = 0; i < copied[k].size(); ++i) ASSERT_EQ(taken[k][i].t, copied[k][i].t) << k << ":" << i;
+  return {windows(false), windows(true)};
+}
+
+void expect_same_windows(const std::vector<std::vector<Event>>& a, const std::vector<std::vector<Event>>& b) {
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    ASSERT_EQ(a[k].size(), b[k].size()) << k;
+    for (std::size_t i = 0; i < a[k].size(); ++i) ASSERT_EQ(a[k][i].t, b[k][i].t) << k << ":" << i;
   }
+}
+
+/// 3000 events over 60 ms, a burst of 2000 at 61 ms, 500 more from 80 ms.
+std::vector<Event> events_with_a_burst() {
+  std::vector<Event> events;
+  for (int i = 0; i < 3000; ++i) events.push_back({i * 20 * kNsPerUs, static_cast<std::uint16_t>(i % 640), 7, true});
+  for (int i = 0; i < 2000; ++i) events.push_back({61 * kNsPerMs + i, 3, static_cast<std::uint16_t>(i % 480), false});
+  for (int i = 0; i < 500; ++i) events.push_back({80 * kNsPerMs + i * 50 * kNsPerUs, 5, 5, true});
+  return events;
+}
+
+TEST(EventWindower, AConsumerMayTakeTheEventsInsteadOfCopyingThem) {
+  // The consumer gets the window's events, and the windower goes on with the vector it was given;
+  // also through a decimated window (its own storage).
+  const auto [copied, taken] =
+      copied_and_taken({.window_ns = 25 * kNsPerMs, .max_events_per_window = 1500}, events_with_a_burst());
+  ASSERT_EQ(copied.size(), 5u);  // [0, 25) [25, 50) [50, 75) (decimated: 2000 events) [75, 100)
+  EXPECT_LT(copied[2].size(), 2000u);
+  expect_same_windows(copied, taken);
 }
 
 TEST(EventWindower, OverlappingWindowsHoldEveryEventOfTheirSpan) {
@@ -233,41 +248,14 @@ TEST(EventWindower, OverlappingWindowsSkipALongGapToTheFirstWindowThatHoldsTheNe
 }
 
 TEST(EventWindower, AConsumerMayTakeTheEventsOfOverlappingWindows) {
-  // The windower keeps the events later windows need: a consumer that takes each window's storage
-  // (as Perception does) gets the same windows as one that copies them, decimated ones included.
-  std::vector<Event> events;
-  for (int i = 0; i < 3000; ++i) events.push_back({i * 20 * kNsPerUs, static_cast<std::uint16_t>(i % 640), 7, true});
-  for (int i = 0; i < 2000; ++i) events.push_back({61 * kNsPerMs + i, 3, static_cast<std::uint16_t>(i % 480), false});
-  const EventWindowerOptions options{.window_ns = 25 * kNsPerMs, .step_ns = 5 * kNsPerMs, .max_events_per_window = 1500};
-  auto windows = [&](bool take) {
-    EventWindower w(options);
-    std::vector<std::vector<Event>> seen;
-    std::vector<Event> spare;
-    const EventWindower::Callback cb = [&](const EventWindow& win) {
-      if (take) {
-        ASSERT_NE(win.storage, nullptr);
-        spare.clear();
-        spare.swap(*win.storage);
-        seen.push_back(std::move(spare));
-        spare = {};
-      } else {
-        seen.emplace_back(win.events.begin(), win.events.end());
-      }
-    };
-    for (std::size_t i = 0; i < events.size(); i += 700)
-      w.push(std::span(events).subspan(i, std::min<std::size_t>(700, events.size() - i)), cb);
-    w.flush(cb);
-    return seen;
-  };
-  const auto copied = windows(false), taken = windows(true);
-  ASSERT_EQ(copied.size(), 9u);  // starts 0, 5, ..., 35 ms end by 61 ms; [40, 65) is the last
+  // The windower keeps the events later windows need: taking each window's storage gives the same
+  // windows as copying them, decimated ones included.
+  const auto [copied, taken] = copied_and_taken(
+      {.window_ns = 25 * kNsPerMs, .step_ns = 5 * kNsPerMs, .max_events_per_window = 1500}, events_with_a_burst());
+  ASSERT_EQ(copied.size(), 17u);  // starts 0, 5, ..., 75 ms end by the last event (104.95 ms); [80, 105) is flushed
   EXPECT_EQ(copied[0].size(), 1250u);  // [0, 25) ms at one event per 20 µs
   EXPECT_EQ(copied[8].size(), 1500u);  // [40, 65) ms holds 1000 + 2000 events: every 2nd kept
-  ASSERT_EQ(taken.size(), copied.size());
-  for (std::size_t k = 0; k < copied.size(); ++k) {
-    ASSERT_EQ(taken[k].size(), copied[k].size()) << k;
-    for (std::size_t i = 0; i < copied[k].size(); ++i) ASSERT_EQ(taken[k][i].t, copied[k][i].t) << k << ":" << i;
-  }
+  expect_same_windows(copied, taken);
 }
 
 TEST(EventWindower, OptionsAreValidated) {
