@@ -144,13 +144,14 @@ event_camera:
 """
 
 
-def windows_of_scattered_events(**perception_args):
-    """Three 25 ms windows of events scattered over a 64x48 sensor without distortion, run without
-    compensation (so the compensated grid is the sensor's), `perception_args` given to fdv.Perception:
-    the events and the window rows."""
+def windows_of_scattered_events(more_options=None, **perception_args):
+    """75 ms of events scattered over a 64x48 sensor without distortion (three 25 ms windows unless
+    `more_options` says otherwise), run without compensation (so the compensated grid is the
+    sensor's), `perception_args` given to fdv.Perception: the events and the window rows."""
     calib = fdv.Calibration.from_text(CALIBRATION_64x48)
     options = fdv.PerceptionOptions.from_dict(
-        {"compensation": {"method": "none"}, "estimate_trajectories": False, "detector": {"hot_pixels": False}})
+        {"compensation": {"method": "none"}, "estimate_trajectories": False, "detector": {"hot_pixels": False},
+         **(more_options or {})})
     rng = np.random.default_rng(7)
     n = 6000
     events = np.zeros(n, dtype=fdv.EVENT_DTYPE)
@@ -190,3 +191,20 @@ def test_window_images_are_the_time_images_of_its_events():
 def test_window_images_are_off_by_default():
     _, windows = windows_of_scattered_events()
     assert len(windows) == 3 and not any("images" in w for w in windows)
+
+
+def test_overlapping_windows_each_hold_their_25_ms_of_events():
+    # step_ms 5: a 25 ms window every 5 ms from the first event; each window's count image is the
+    # count of the events in its own [t_start, t_end), computed here from the events alone.
+    events, windows = windows_of_scattered_events({"step_ms": 5}, images=True)
+    starts = [round(w["t_start"] * 1e9) for w in windows]
+    first = int(events["t"][0])
+    assert starts == [first + k * 5_000_000 for k in range(len(windows))]
+    assert len(windows) == (int(events["t"][-1]) - first - 25_000_000) // 5_000_000 + 2  # + the flushed one
+    for w in windows:
+        t0, t1 = round(w["t_start"] * 1e9), round(w["t_end"] * 1e9)
+        assert t1 - t0 == 25_000_000
+        e = events[(events["t"] >= t0) & (events["t"] < t1)]
+        count = np.zeros((48, 64), np.int64)
+        np.add.at(count, (e["y"], e["x"]), 1)
+        np.testing.assert_array_equal(w["images"]["count"], count)
