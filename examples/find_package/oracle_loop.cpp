@@ -10,10 +10,13 @@
 // WORK_DIR/SEED, scored under every CONFIG, and removed. One line per throw and configuration, then
 // the totals: threats, and the threats escaped open loop and closed loop by each oracle. A token of
 // SEEDS_FILE that is not a non-negative integer stops it with the file, the position and the token.
+#include <cstdint>
 #include <cstdio>
 #include <exception>
 #include <filesystem>
 #include <fstream>
+#include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 

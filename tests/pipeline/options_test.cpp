@@ -549,6 +549,10 @@ TEST(Options, InvalidValuesNameTheSectionAndTheYamlKey) {
   // 1e8 ms once allocated 3.7 GB, 1e9 ms threw std::bad_alloc.
   EXPECT_EQ(error_of("window_ms: 1000.5"), " | window_ms must be at most 1000 (a window's buffers grow with its length)");
   EXPECT_EQ(error_of("window_ms: 1e9"), " | window_ms must be at most 1000 (a window's buffers grow with its length)");
+  EXPECT_EQ(error_of("step_ms: 30"), " | step_ms must be in [0, window_ms] (0 = window_ms)");
+  EXPECT_EQ(error_of("step_ms: 10"), " | window_ms must be a multiple of step_ms");
+  EXPECT_EQ(error_of("step_ms: 0.5"), " | step_ms must be at least window_ms / 25 (each window is computed anew)");
+  EXPECT_EQ(error_of("step_ms: 1"), "no error");  // 25 windows per event: the most
   EXPECT_EQ(error_of("max_events_per_window: 0"), " | max_events_per_window must be positive");
   EXPECT_EQ(error_of("threads: 0"), " | threads must be in [1, 64], got 0");
   EXPECT_EQ(error_of("max_lateness_ms: -1"), " | max_lateness_ms must not be negative");

@@ -11,6 +11,8 @@ std::string EventWindowerOptions::validate() const {
            " (a window's buffers grow with its length)";
   if (step_ns < 0 || step_ns > window_ns) return "step_ms must be in [0, window_ms] (0 = window_ms)";
   if (window_ns % step() != 0) return "window_ms must be a multiple of step_ms";
+  if (overlap() > kMaxWindowOverlap)
+    return "step_ms must be at least window_ms / " + std::to_string(kMaxWindowOverlap) + " (each window is computed anew)";
   if (max_events_per_window == 0) return "max_events_per_window must be positive";
   return {};
 }

@@ -33,6 +33,9 @@ namespace fdv {
 /// The longest window [ns]: a second holds a thrown ball's whole flight, and the compensation's
 /// per-window tables grow with the length (a window of 1e8 ms allocated 3.7 GB).
 inline constexpr TimeNs kMaxWindowNs = 1000 * kNsPerMs;
+/// The most windows an event may lie in (Δt / Δs): every window is computed from scratch, so a
+/// step of nanoseconds would process each event millions of times. 25 = a 1 ms step at 25 ms.
+inline constexpr int kMaxWindowOverlap = 25;
 
 struct EventWindowerOptions {
   TimeNs window_ns = 25 * kNsPerMs;  ///< Δt, paper §III-A

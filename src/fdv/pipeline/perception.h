@@ -177,7 +177,7 @@ template <class V>
 void describe(V& v, PerceptionOptions& o) {
   v.ms("window_ms", o.windows.window_ns, "Δt: length of an event window (paper §III-A), at most 1000");
   v.ms("step_ms", o.windows.step_ns,
-       "Δs: a window every Δs (0 = Δt); shorter: overlapping windows, a result every Δs (docs/ESTIMATION.md §1, \"Overlapping windows\")");
+       "Δs: a window every Δs (0 = Δt), at least Δt / 25; shorter: overlapping windows, a result every Δs (docs/ESTIMATION.md §1, \"Overlapping windows\")");
   v("max_events_per_window", o.windows.max_events_per_window, "events",
     "overload guard: a fuller window is decimated uniformly in time order (counted)");
   v("max_empty_windows", o.windows.max_empty_windows, "-",
