@@ -596,6 +596,7 @@ TEST(Perception, OverlappingWindowsWeighAndConfirmByTheSameEvents) {
   o.windows.step_ns = 5 * kNsPerMs;
   const PerceptionOptions scaled = overlapping_window_options(o);
   EXPECT_DOUBLE_EQ(scaled.tracking.filter.measurement_sigma_px, 1.5 * std::sqrt(5.0));
+  EXPECT_DOUBLE_EQ(scaled.tracking.size_noise, 0.1 * std::sqrt(5.0));
   EXPECT_EQ(scaled.tracking.confirm_hits, 11);  // 3 windows: 0, 25, 50 ms; 11 steps: 0, 5, ..., 50 ms
   EXPECT_EQ(scaled.looming.fit_detections, 40);
   EXPECT_EQ(scaled.looming.min_detections, 11);

@@ -34,6 +34,9 @@ TEST(Tracker, RejectsInvalidOptions) {
   o.part_noise = -1;
   EXPECT_THROW(Tracker{o}, ConfigError);
   o = {};
+  o.size_noise = std::nan("");
+  EXPECT_THROW(Tracker{o}, ConfigError);
+  o = {};
   o.held_max_gap_ns = -1;
   EXPECT_THROW(Tracker{o}, ConfigError);
 }
@@ -260,7 +263,9 @@ TEST(Tracker, ExternalGateContinuesATrackTheFilterGateRejects) {
 // track: a smaller d² for the new track (2.1) than for its own (4.2, S ≈ 12 px² per axis), but
 // far less likely under it (ln|S| 14.5 against 5.0). The ball keeps its track.
 TEST(Tracker, ASharpTrackKeepsItsDetectionFromAVagueNewOne) {
-  Tracker tracker;
+  TrackerOptions o;
+  o.size_noise = 0;  // the figures above are for the fixed 1.5 px alone
+  Tracker tracker(o);
   auto ball = [](int k) { return Eigen::Vector2d(100 + 20.0 * k, 200); };
   int ball_id = -1;
   for (int k = 0; k <= 5; ++k) {
@@ -302,6 +307,7 @@ TEST(Tracker, ADetectionOfPartOfTheObjectContinuesItsTrack) {
   auto run = [](double part_noise, Eigen::Vector2d offset, double size = 12) {
     TrackerOptions o;
     o.part_noise = part_noise;
+    o.size_noise = 0;  // the part's own noise alone
     Tracker tracker(o);
     for (int k = 0; k < 8; ++k)
       tracker.update(k * kWindow, std::vector<TrackerDetection>{det(k * kWindow, 100 + 10.0 * k, 200, 32)});
@@ -336,6 +342,60 @@ TEST(Tracker, ADetectionOfPartOfTheObjectContinuesItsTrack) {
   EXPECT_NEAR(merged.d2, part.d2, 1e-9);
   EXPECT_NEAR(merged.pulled_px, part.pulled_px, 1e-9);
   EXPECT_FALSE(run(0.0, inside, 52).taken);
+}
+
+// A near ball's detection centre scatters by about a tenth of its size (TrackerOptions::size_noise).
+// A 60 px ball moving at constant velocity, its detections scattered by σ² = 1.5² + (0.1 · 60)² per
+// axis: with the size term the filter's normalised innovations d² average at most χ²₂'s mean of 2
+// (below it, as the filter's jerk noise is more than this motion has) and one track holds the ball;
+// with the fixed 1.5 px alone the gate breaks the track, and even the pairs it lets through (a
+// truncated sample) average above 2.
+TEST(Tracker, ANearBallsScatteredCentreKeepsItsTrack) {
+  struct Run {
+    int tracks_created = 0;
+    double mean_d2 = 0;
+  };
+  auto run = [](double size_noise) {
+    TrackerOptions o;
+    o.size_noise = size_noise;
+    Tracker tracker(o);
+    std::mt19937 rng(7);
+    const double size = 60, sigma = std::hypot(1.5, 0.1 * size);
+    std::normal_distribution<double> noise(0.0, sigma);
+    Run r;
+    int updates = 0;
+    for (int k = 0; k < 200; ++k) {
+      const TimeNs t = k * kWindow;
+      const TrackerDetection d = det(t, 100 + 4.0 * k + noise(rng), 300 - 2.0 * k + noise(rng), size);
+      const TrackAssignment a = tracker.update(t, std::vector<TrackerDetection>{d}).assignments.at(0);
+      if (a.outcome == Outcome::kNewTrack) ++r.tracks_created;
+      if (a.outcome == Outcome::kUpdated && k >= 10) {  // past the new track's wide prior
+        r.mean_d2 += a.mahalanobis2;
+        ++updates;
+      }
+    }
+    r.mean_d2 /= std::max(updates, 1);
+    return r;
+  };
+  const Run sized = run(0.1);
+  EXPECT_EQ(sized.tracks_created, 1);
+  EXPECT_GT(sized.mean_d2, 1.0);
+  EXPECT_LT(sized.mean_d2, 2.3);  // 2 plus 2 standard errors of 190 χ²₂ draws (σ 2/√190 = 0.15)
+  const Run fixed = run(0.0);
+  EXPECT_GT(fixed.tracks_created, 1);
+  EXPECT_GT(fixed.mean_d2, 2.5);
+}
+
+// The size term is the detection's: (size_noise · its box's larger side)² per axis, added to R.
+TEST(Tracker, TheSizeTermIsTheDetectionsLargerSide) {
+  TrackerOptions o;
+  o.part_noise = 0;
+  Tracker tracker(o);
+  tracker.update(0, std::vector<TrackerDetection>{det(0, 100, 100, 30)});
+  TrackerDetection wide = det(kWindow, 110, 100);
+  wide.box_size_px = {40, 10};
+  EXPECT_DOUBLE_EQ(tracker.tracks().at(0).extra_variance_px2(wide, o).x(), 16.0);  // (0.1 · 40)²
+  EXPECT_DOUBLE_EQ(tracker.tracks().at(0).extra_variance_px2(wide, o).y(), 16.0);
 }
 
 // A ball entering through one border and leaving through the other is seen as its

@@ -73,6 +73,7 @@ PerceptionOptions overlapping_window_options(PerceptionOptions o) {
   const double sqrt_n = std::sqrt(static_cast<double>(n));
   const auto span = [n](int k) { return 1 + (k - 1) * n; };  // k windows' time span, in steps
   o.tracking.filter.measurement_sigma_px *= sqrt_n;
+  o.tracking.size_noise *= sqrt_n;
   o.tracking.confirm_hits = span(o.tracking.confirm_hits);
   o.looming.size_sigma_px *= sqrt_n;
   o.looming.size_sigma_fraction *= sqrt_n;

@@ -140,7 +140,7 @@ struct PerceptionOptions {
 /// The options a Perception runs with when its windows overlap (windows.step_ns < window_ns):
 /// each event then lies in N = Δt / Δs windows, and N consecutive detections of an object share
 /// their evidence. So that the same events weigh and confirm as much as with consecutive windows:
-/// - the tracker's and the looming fit's measurement σ grow by √N (N correlated measurements
+/// - the tracker's and the looming fit's measurement σ (and their size terms) grow by √N (N correlated measurements
 ///   carry the information of one), confirm_hits k becomes 1 + (k − 1)·N and the looming fit's
 ///   counts scale likewise (the same time span of windows);
 /// - the hot-pixel memory is N times as many windows;

@@ -35,6 +35,7 @@ std::string TrackerOptions::validate() const {
   if (max_tracks < 1) return "max_tracks must be >= 1";
   if (!(crossing_scale >= 0 && std::isfinite(crossing_scale))) return "crossing_scale must be >= 0";
   if (!(part_noise >= 0 && std::isfinite(part_noise))) return "part_noise must be >= 0";
+  if (!(size_noise >= 0 && std::isfinite(size_noise))) return "size_noise must be >= 0";
   return {};
 }
 
@@ -47,9 +48,10 @@ TimeNs Track::gap_limit(const TrackerOptions& o) const {
   return held_ && confirmed() ? std::max(limit, o.held_max_gap_ns) : limit;
 }
 
-Eigen::Vector2d Track::part_variance_px2(const TrackerDetection& d, const TrackerOptions& o) const {
+Eigen::Vector2d Track::extra_variance_px2(const TrackerDetection& d, const TrackerOptions& o) const {
   const Eigen::Vector2d mismatch = box_size_px_ - d.box_size_px;
-  return o.part_noise * mismatch.cwiseAbs2() / 12.0;
+  const double size_sigma = o.size_noise * d.box_size_px.maxCoeff();
+  return o.part_noise * mismatch.cwiseAbs2() / 12.0 + Eigen::Vector2d::Constant(size_sigma * size_sigma);
 }
 
 TrackPrediction Track::predict(TimeNs t) const {
@@ -166,7 +168,7 @@ TrackerStep Tracker::update(TimeNs t, std::span<const TrackerDetection> detectio
       if (d.t < tr.last_update_time() || d.t - tr.last_update_time() > gap_limit) continue;
       // Held past the filter's own gap: its prediction has drifted, only the outside model gates.
       const bool stale = d.t - tr.last_update_time() > tr.filter_gap_limit(options_);
-      const ImagePrediction p = tr.filter().predict(d.t, tr.part_variance_px2(d, options_));
+      const ImagePrediction p = tr.filter().predict(d.t, tr.extra_variance_px2(d, options_));
       if (!stale && (d.center_px - p.position()).norm() > options_.gate_max_distance_px) continue;
       const double d2 = p.mahalanobis2(d.center_px);
       const double log_det_s = std::log(p.innovation_covariance().determinant());
@@ -195,7 +197,7 @@ TrackerStep Tracker::update(TimeNs t, std::span<const TrackerDetection> detectio
     track_taken[c.track] = detection_taken[c.detection] = true;
     Track& tr = tracks_[c.track];
     const TrackerDetection& d = detections[c.detection];
-    tr.filter_.update(d.t, d.center_px, tr.part_variance_px2(d, options_));
+    tr.filter_.update(d.t, d.center_px, tr.extra_variance_px2(d, options_));
     const double a = options_.box_smoothing;
     tr.box_size_px_ = a * d.box_size_px + (1 - a) * tr.box_size_px_;
     ++tr.hits_;

@@ -14,9 +14,9 @@
 /// Association: every (track, detection) pair must pass (1) the time gate: the detection is not
 /// older than the track's last update and at most `max_gap_ns` newer; (2) the Mahalanobis gate
 /// d² = y^T S^-1 y <= gate_chi2 with S the filter's innovation covariance at the detection's time;
-/// (3) a hard radius cap |y| <= gate_max_distance_px. A detection smaller or larger than the
-/// track's box holds part of its object or more than it, and S holds that centre's larger noise
-/// (TrackerOptions::part_noise). A pair that fails (2) may still pass on an ExternalGate given by
+/// (3) a hard radius cap |y| <= gate_max_distance_px. A detection's centre error grows with its
+/// size (TrackerOptions::size_noise), and a detection smaller or larger than the track's box holds
+/// part of its object or more than it (TrackerOptions::part_noise): S holds both. A pair that fails (2) may still pass on an ExternalGate given by
 /// the caller (fdv::Perception: the track's 3D estimate). Gated pairs are assigned greedily in
 /// order of increasing d² + ln|S|, the pair's negative log-likelihood (global nearest neighbour,
 /// one detection per track and per window), so a vague new track does not win a detection from a
@@ -76,6 +76,12 @@ struct TrackerOptions {
   /// centre may lie anywhere within the difference: the pair's measurement noise gains, per axis,
   /// this times the variance of a uniform spread over |track box - detection box|, Δ²/12. 0 = off.
   double part_noise = 1;
+  /// The detector's centre error grows with the object's apparent size (a near ball is found by
+  /// its densest part, or as the crescent its motion leaves): the pair's measurement noise gains,
+  /// per axis, (size_noise · size)², size the larger side of the detection's box. 0.1: the
+  /// maximum-likelihood fit of σ² = measurement_sigma_px² + (κ size)² to the centre errors of 501
+  /// detections on training seeds 1-24 gave κ = 0.095 (docs/ESTIMATION.md §1). 0 = off.
+  double size_noise = 0.1;
   /// A confirmed track that an outside model still expects in view (update's `held`: in the
   /// pipeline, its usable 3D trajectory projected into the image) is deleted only after this long
   /// without an update [ns], when longer than max_gap_ns: a dodge's manoeuvre floods a few windows
@@ -104,6 +110,8 @@ void describe(V& v, TrackerOptions& o) {
        "a confirmed track its outside model (the 3D estimate) still expects in view is deleted after this long (0 = off)");
   v("part_noise", o.part_noise, "-",
     "weight of the centre noise a detection whose box differs from its track's gains, (track box - box)²/12 per axis (0 = off)");
+  v("size_noise", o.size_noise, "-",
+    "a detection's centre noise per axis gains (size_noise × its box's larger side)² (0 = off)");
 }
 
 enum class TrackStatus { kTentative, kConfirmed };
@@ -140,9 +148,10 @@ class Track {
   TimeNs filter_gap_limit(const TrackerOptions& o) const;
   /// Whether the last update's `held` named this track.
   bool held() const { return held_; }
-  /// Extra measurement variance [px²] per axis of a detection of part of this track's object, or
-  /// of more than it (TrackerOptions::part_noise).
-  Eigen::Vector2d part_variance_px2(const TrackerDetection& d, const TrackerOptions& o) const;
+  /// Measurement variance [px²] per axis that a detection adds to the filter's
+  /// measurement_sigma_px²: its size's (TrackerOptions::size_noise), and that of a detection of
+  /// part of this track's object, or of more than it (TrackerOptions::part_noise).
+  Eigen::Vector2d extra_variance_px2(const TrackerDetection& d, const TrackerOptions& o) const;
 
  private:
   friend class Tracker;
