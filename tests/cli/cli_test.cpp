@@ -130,10 +130,16 @@ TEST_F(Cli, RunWritesEveryOutputWithItsDocumentedFieldsAndEvalScoresItAgainstThe
     fusion += e.at("method") == "fusion";
   }
   EXPECT_GT(fusion, 0);
+  int with_sigma = 0;
   for (const json& p : read_lines(out / "predictions.jsonl")) {
     EXPECT_GE(p.at("miss_distance").get<double>(), 0);
     EXPECT_EQ(p.at("passage_B").size(), 3u);
+    // Absent where a depth frame's estimate holds events newer than the frame (no risk then).
+    if (!p.contains("miss_distance_sigma")) continue;
+    EXPECT_GT(p.at("miss_distance_sigma").get<double>(), 0) << p;
+    ++with_sigma;
   }
+  EXPECT_GT(with_sigma, 0);
   EXPECT_FALSE(read_lines(out / "depth.jsonl").empty());
   // TUM: `t x y z qx qy qz qw`, time increasing.
   std::ifstream tum(out / "track_1_fusion.tum");

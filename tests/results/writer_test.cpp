@@ -102,6 +102,7 @@ PredictionRow sample_prediction(bool contact) {
   p.passage_B = {0.0625, -0.125, 0.03125};
   p.receding = !contact;
   if (contact) p.time_to_contact_s = 0.6;
+  if (contact) p.miss_distance_sigma_m = 0.0625;
   return p;
 }
 
@@ -226,6 +227,8 @@ TEST(ResultsWriter, EveryFieldOfEveryRowSurvivesAWriteAndARead) {
   EXPECT_EQ(predictions[0].time_to_contact_s, p.time_to_contact_s);
   EXPECT_FALSE(predictions[1].time_to_contact_s);
   EXPECT_TRUE(predictions[1].receding);
+  EXPECT_EQ(predictions[0].miss_distance_sigma_m, p.miss_distance_sigma_m);
+  EXPECT_FALSE(predictions[1].miss_distance_sigma_m);
 }
 
 TEST(ResultsWriter, SummaryCountsAndTimingsSurviveAWriteAndARead) {

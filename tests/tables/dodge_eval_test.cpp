@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "eval/handmade_truth.h"
 #include "fdv/sim/dataset_cache.h"
@@ -147,6 +148,34 @@ TEST(FirstWindowInView, HalfOfTheDiscMustBeInTheImage) {
   // Never in view: the same ball flying away behind the camera.
   const DatasetTruth behind = test::straight_flight({0, 0, -1}, {0, 0, -10}, 0.25, 400);
   EXPECT_FALSE(first_window_in_view(behind, 1, window_ends_every_25ms(16)));
+}
+
+
+// Hand-checked: the true miss is 0.30 m, the ball's track 3, its true closest approach at 0.8 s,
+// the horizon 1 s. Three predictions of track 3 count, with σ 0.1 m: errors 0.05 (within 1σ),
+// 0.15 (within 2σ), 0.40 m (neither). Left out: another track's, one without σ, one made at the
+// true closest approach, a receding one, and one whose approach is cut by the horizon.
+TEST(MissCalibration, CountsTheBallsUsablePredictionsAgainstTheTrueMiss) {
+  auto prediction = [](int track, double miss, std::optional<double> sigma, TimeNs t = 500 * kNsPerMs) {
+    PredictionResult p;
+    p.t = t;
+    p.track_id = track;
+    p.prediction.closest.miss_distance_m = miss;
+    p.prediction.closest.time_from_now_s = 0.3;
+    p.miss_distance_sigma_m = sigma;
+    return p;
+  };
+  std::vector<PredictionResult> predictions = {prediction(3, 0.25, 0.1), prediction(3, 0.45, 0.1),
+                                               prediction(3, 0.70, 0.1), prediction(7, 0.30, 0.1),
+                                               prediction(3, 0.30, std::nullopt), prediction(3, 0.30, 0.1, 800 * kNsPerMs),
+                                               prediction(3, 0.30, 0.1), prediction(3, 0.30, 0.1)};
+  predictions[6].prediction.closest.receding = true;
+  predictions[7].prediction.closest.time_from_now_s = 1.0;
+  const std::vector<int> ball_tracks = {3};
+  const MissCalibration c = miss_calibration(predictions, ball_tracks, 0.30, 800 * kNsPerMs, 1.0);
+  EXPECT_EQ(c.predictions, 3);
+  EXPECT_EQ(c.within_1_sigma, 1);
+  EXPECT_EQ(c.within_2_sigma, 2);
 }
 
 }  // namespace

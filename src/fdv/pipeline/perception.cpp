@@ -651,8 +651,14 @@ void Perception::estimate(int track_id, TimeNs t) {
     warn_once("no depth", "no depth frames: 3D estimates are event-only, their range observable only through "
                           "gravity (docs/ESTIMATION.md)");
   if (!fused || !fused->usable || !callbacks_.on_prediction) return;
-  if (const auto vehicle = vehicle_state(t))
-    callbacks_.on_prediction({t, track_id, predict_collision(fused->trajectory, *vehicle, options_.prediction)});
+  const auto vehicle = vehicle_state(t);
+  if (!vehicle) return;
+  const RiskAssessment assessed =
+      assess_collision_risk(*fused, {*vehicle, vehicle_state_covariance(options_.prediction)}, options_.prediction);
+  if (assessed.risk)  // its nominal is predict_collision's
+    callbacks_.on_prediction({t, track_id, assessed.risk->nominal, assessed.risk->miss_distance_sigma_m});
+  else
+    callbacks_.on_prediction({t, track_id, predict_collision(fused->trajectory, *vehicle, options_.prediction), {}});
 }
 
 // The dodge (docs/AVOIDANCE.md): the risk of the new estimate against the vehicle's state at the

@@ -277,6 +277,10 @@ struct PredictionResult {
   TimeNs t = 0;  ///< vehicle state time the prediction starts from
   int track_id = -1;
   CollisionPrediction prediction;
+  /// σ of the miss distance (CollisionRisk::miss_distance_sigma_m, the planner's), when the risk
+  /// could be assessed at t (not for a depth frame's estimate holding events newer than the
+  /// frame): what dodge-eval checks the true miss against.
+  std::optional<double> miss_distance_sigma_m;
 };
 
 struct PerceptionCallbacks {

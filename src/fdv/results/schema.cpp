@@ -313,6 +313,7 @@ void to_json(json& j, const PredictionRow& r) {
        {"passage_B", vec_json(r.passage_B)},
        {"receding", r.receding}};
   if (r.time_to_contact_s) j["time_to_contact"] = *r.time_to_contact_s;
+  if (r.miss_distance_sigma_m) j["miss_distance_sigma"] = *r.miss_distance_sigma_m;
 }
 
 void from_json(const json& j, PredictionRow& r) {
@@ -325,6 +326,7 @@ void from_json(const json& j, PredictionRow& r) {
   if (const auto it = j.find("passage_B"); it != j.end()) r.passage_B = vec3_of(*it);
   optional_key(j, "receding", r.receding);
   if (const auto it = j.find("time_to_contact"); it != j.end()) r.time_to_contact_s = it->get<double>();
+  if (const auto it = j.find("miss_distance_sigma"); it != j.end()) r.miss_distance_sigma_m = it->get<double>();
 }
 
 void to_json(json& j, const DodgeRow& r) {
@@ -481,6 +483,7 @@ PredictionRow prediction_row(const PredictionResult& p) {
   r.passage_B = c.closest.offset_B;
   r.receding = c.closest.receding;
   if (c.contact) r.time_to_contact_s = c.time_to_contact_s;
+  r.miss_distance_sigma_m = p.miss_distance_sigma_m;
   return r;
 }
 

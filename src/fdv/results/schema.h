@@ -141,6 +141,8 @@ struct PredictionRow {
   double closest_t_s = 0;     ///< "closest_t": time of closest approach [s]
   double closest_in_s = 0;    ///< "closest_in_s": closest_t − t [s]
   double miss_distance_m = 0;  ///< "miss_distance": |object − body origin| then [m]
+  /// "miss_distance_sigma" [m]: its σ (the planner's linearised one), when the risk was assessed.
+  std::optional<double> miss_distance_sigma_m;
   Eigen::Vector3d object_W = Eigen::Vector3d::Zero();   ///< "object_W": object then, world [m]
   Eigen::Vector3d passage_B = Eigen::Vector3d::Zero();  ///< "passage_B": object − vehicle, body [m]
   bool receding = false;                                ///< "receding"

@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -39,6 +40,8 @@ struct MethodRun {
   std::vector<TimeNs> window_ends;
   std::optional<TimeNs> first_ball_detection;
   std::optional<TimeNs> first_usable_estimate;
+  std::vector<PredictionResult> predictions;
+  std::vector<int> ball_tracks;  ///< tracks_following the ball
 };
 
 /// One variant's run over the dataset, through the same run as `fdv run` (into `results_dir`
@@ -60,12 +63,14 @@ MethodRun run_method(const DatasetTruth& truth, int ball, const PerceptionOption
     first_usable_by_track.try_emplace(e.track_id, exists_at);
   };
   also.on_dodge = [&](const DodgeDecision& d) { run.decisions.push_back(d); };
+  also.on_prediction = [&](const PredictionResult& p) { run.predictions.push_back(p); };
   RunRequest request;
   request.input = truth.dir;
   request.options = options;
   RecordingRun(std::move(request)).into(results_dir, also);
   if (const auto first = first_ball_detection(truth, windows, ball)) run.first_ball_detection = first->window_end;
-  for (int track : tracks_following(truth, windows, ball))
+  run.ball_tracks = tracks_following(truth, windows, ball);
+  for (int track : run.ball_tracks)
     if (const auto it = first_usable_by_track.find(track); it != first_usable_by_track.end())
       if (!run.first_usable_estimate || it->second < *run.first_usable_estimate)
         run.first_usable_estimate = it->second;
@@ -178,6 +183,29 @@ void score_closed_loop(DodgeThrow& row, const sim::ScenarioConfig& config,
 
 }  // namespace
 
+MissCalibration& MissCalibration::operator+=(const MissCalibration& o) {
+  predictions += o.predictions;
+  within_1_sigma += o.within_1_sigma;
+  within_2_sigma += o.within_2_sigma;
+  return *this;
+}
+
+MissCalibration miss_calibration(std::span<const PredictionResult> predictions, std::span<const int> ball_tracks,
+                                 double true_miss_m, TimeNs true_closest_t, double horizon_s) {
+  MissCalibration out;
+  for (const PredictionResult& p : predictions) {
+    const ClosestApproach& c = p.prediction.closest;
+    if (!p.miss_distance_sigma_m || p.t >= true_closest_t || c.receding || c.time_from_now_s >= horizon_s ||
+        std::find(ball_tracks.begin(), ball_tracks.end(), p.track_id) == ball_tracks.end())
+      continue;
+    const double error = std::abs(c.miss_distance_m - true_miss_m);
+    ++out.predictions;
+    out.within_1_sigma += error <= *p.miss_distance_sigma_m;
+    out.within_2_sigma += error <= 2 * *p.miss_distance_sigma_m;
+  }
+  return out;
+}
+
 std::optional<TimeNs> first_window_in_view(const DatasetTruth& truth, int ball, std::span<const TimeNs> window_ends) {
   const double radius = truth.radius_m.at(ball);
   for (TimeNs t : window_ends) {
@@ -270,6 +298,9 @@ DodgeThrow score_dodge_dataset(const std::string& dataset, const DodgeEvalOption
       row.first_in_view_t_s = seconds_of(in_view);
       row.first_detection_t_s = seconds_of(first_detection);
       row.first_usable_estimate_t_s = seconds_of(run.first_usable_estimate);
+      if (const auto closest = true_closest_approach(truth, ball))
+        row.miss_calibration = miss_calibration(run.predictions, run.ball_tracks, row.true_miss_m, closest->t,
+                                                perception.prediction.horizon_s);
     }
   }
   for (const std::string& method : kDodgeMethods) {
@@ -367,6 +398,15 @@ void add_perception_totals(nlohmann::json& j, const DodgeTotals& t) {
   j["tracks_recreated"] = t.tracks_recreated;
 }
 
+nlohmann::json miss_calibration_json(const MissCalibration& c) {
+  auto share = [&](int n) { return c.predictions > 0 ? nlohmann::json(static_cast<double>(n) / c.predictions) : nlohmann::json(); };
+  return {{"predictions", c.predictions},
+          {"within_1_sigma", c.within_1_sigma},
+          {"within_2_sigma", c.within_2_sigma},
+          {"within_1_sigma_share", share(c.within_1_sigma)},
+          {"within_2_sigma_share", share(c.within_2_sigma)}};
+}
+
 nlohmann::json outcome_json(const DodgeOutcome& o) {
   nlohmann::json j = {{"maneuvered", o.maneuvered},
                       {"decisions", o.decisions},
@@ -431,6 +471,7 @@ nlohmann::json outcome_set_json(const DodgeEval& e, OutcomeSet set) {
   }
   j["oracle_visible_escaped"] = visible_escaped;
   j["escaped_where_oracle_visible_escaped"] = ours_too_visible;
+
   j["baselines"] = nlohmann::json::object();
   for (const std::string& method : kDodgeMethods)
     if (method != "ours") j["baselines"][method] = totals(method);
@@ -441,9 +482,13 @@ nlohmann::json outcome_set_json(const DodgeEval& e, OutcomeSet set) {
 
 nlohmann::json to_json(const DodgeEval& e, const DodgeEvalOptions& options) {
   nlohmann::json j = outcome_set_json(e, &DodgeThrow::outcomes);
+  MissCalibration calibration;  // ours' open-loop run's
+  for (const DodgeThrow& row : e.throws) calibration += row.miss_calibration;
+  if (!options.closed_loop) j["miss_calibration"] = miss_calibration_json(calibration);
   if (options.closed_loop) {
     j["closed_loop"] = true;
     j["open_loop"] = outcome_set_json(e, &DodgeThrow::open_loop_outcomes);
+    j["open_loop"]["miss_calibration"] = miss_calibration_json(calibration);
     j["dynamics_only"] = outcome_set_json(e, &DodgeThrow::dynamics_outcomes);
     std::vector<double> window_ms;
     for (const DodgeThrow& row : e.throws) window_ms.insert(window_ms.end(), row.window_total_ms.begin(), row.window_total_ms.end());
@@ -460,6 +505,7 @@ nlohmann::json to_json(const DodgeEval& e, const DodgeEvalOptions& options) {
     if (row.first_in_view_t_s) t["first_in_view_t_s"] = *row.first_in_view_t_s;
     if (row.first_detection_t_s) t["first_detection_t_s"] = *row.first_detection_t_s;
     if (row.first_usable_estimate_t_s) t["first_usable_estimate_t_s"] = *row.first_usable_estimate_t_s;
+    if (row.error.empty()) (options.closed_loop ? t["open_loop"] : t)["miss_calibration"] = miss_calibration_json(row.miss_calibration);
     if (!row.error.empty()) t["error"] = row.error;
     for (const auto& [method, o] : row.outcomes) t["outcomes"][method] = outcome_json(o);
     if (options.closed_loop && row.error.empty()) {

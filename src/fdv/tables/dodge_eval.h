@@ -66,6 +66,17 @@ struct DodgeEvalOptions {
   PerceptionOptions perception;
 };
 
+/// Whether ours' predicted miss distance and its σ (PredictionResult) describe the true miss
+/// (issue #45: within 1σ in 60-76 % of usable estimates, within 2σ in 90-98 %). Counted: the
+/// predictions that carry a σ, of the tracks following the ball, made before its true closest
+/// approach, that predict an approach (not receding) within the horizon.
+struct MissCalibration {
+  int predictions = 0, within_1_sigma = 0, within_2_sigma = 0;
+  MissCalibration& operator+=(const MissCalibration& o);
+};
+MissCalibration miss_calibration(std::span<const PredictionResult> predictions, std::span<const int> ball_tracks,
+                                 double true_miss_m, TimeNs true_closest_t, double horizon_s);
+
 /// One method on one throw.
 struct DodgeOutcome {
   bool maneuvered = false;               ///< a manoeuvre was commanded
@@ -95,6 +106,7 @@ struct DodgeThrow {
   /// (first_window_in_view), of the first with a detection on it, and when the first usable
   /// fusion estimate of a track following it existed [s].
   std::optional<double> first_in_view_t_s, first_detection_t_s, first_usable_estimate_t_s;
+  MissCalibration miss_calibration;  ///< ours', open loop
   bool threat = false, non_threat = false, near_miss = false;
   std::map<std::string, DodgeOutcome> outcomes;  ///< by kDodgeMethods
   /// With closed_loop: the kinematic replay's outcomes, and the open-loop decisions flown by the
