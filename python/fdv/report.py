@@ -251,9 +251,15 @@ def plot_prediction_error(windows, trajectories, predictions, truth, out):
         for k, track in enumerate(sorted({p["track"] for p in predictions})):
             rows = sorted((p for p in predictions if p["track"] == track), key=lambda p: p["t"])
             t0 = first_seen.get(track, rows[0]["t"])
-            ax.plot([p["t"] - t0 for p in rows], [p["miss_distance"] for p in rows], "o-", ms=4,
-                    color=TRACK_COLORS[k % len(TRACK_COLORS)], label=f"track {track}")
-        ax.set_ylabel("predicted miss distance [m]")
+            color = TRACK_COLORS[k % len(TRACK_COLORS)]
+            since = np.array([p["t"] - t0 for p in rows])
+            miss = np.array([p["miss_distance"] for p in rows])
+            ax.plot(since, miss, "o-", ms=4, color=color, label=f"track {track}")
+            # ±1σ where the risk was assessed (predictions.jsonl's miss_distance_sigma)
+            sigma = np.array([p.get("miss_distance_sigma", np.nan) for p in rows], dtype=float)
+            if np.isfinite(sigma).any():
+                ax.fill_between(since, miss - sigma, miss + sigma, where=np.isfinite(sigma), color=color, alpha=0.2)
+        ax.set_ylabel("predicted miss distance [m] (band: ±1σ)")
         ax.set_title("Predicted miss distance (no --truth: the error needs the true path)")
     ax.set_xlabel("time since the track's first detection [s]")
     ax.grid(alpha=0.3)
