@@ -594,6 +594,7 @@ TEST(Perception, OverlappingWindowsWeighAndConfirmByTheSameEvents) {
   // Hand-checked: N = 25 / 5 = 5 windows share each event.
   PerceptionOptions o;
   o.windows.step_ns = 5 * kNsPerMs;
+  o.tracking.size_noise = 0.1;
   const PerceptionOptions scaled = overlapping_window_options(o);
   EXPECT_DOUBLE_EQ(scaled.tracking.filter.measurement_sigma_px, 1.5 * std::sqrt(5.0));
   EXPECT_DOUBLE_EQ(scaled.tracking.size_noise, 0.1 * std::sqrt(5.0));

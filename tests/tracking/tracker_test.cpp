@@ -263,9 +263,7 @@ TEST(Tracker, ExternalGateContinuesATrackTheFilterGateRejects) {
 // track: a smaller d² for the new track (2.1) than for its own (4.2, S ≈ 12 px² per axis), but
 // far less likely under it (ln|S| 14.5 against 5.0). The ball keeps its track.
 TEST(Tracker, ASharpTrackKeepsItsDetectionFromAVagueNewOne) {
-  TrackerOptions o;
-  o.size_noise = 0;  // the figures above are for the fixed 1.5 px alone
-  Tracker tracker(o);
+  Tracker tracker;
   auto ball = [](int k) { return Eigen::Vector2d(100 + 20.0 * k, 200); };
   int ball_id = -1;
   for (int k = 0; k <= 5; ++k) {
@@ -307,7 +305,6 @@ TEST(Tracker, ADetectionOfPartOfTheObjectContinuesItsTrack) {
   auto run = [](double part_noise, Eigen::Vector2d offset, double size = 12) {
     TrackerOptions o;
     o.part_noise = part_noise;
-    o.size_noise = 0;  // the part's own noise alone
     Tracker tracker(o);
     for (int k = 0; k < 8; ++k)
       tracker.update(k * kWindow, std::vector<TrackerDetection>{det(k * kWindow, 100 + 10.0 * k, 200, 32)});
@@ -390,6 +387,7 @@ TEST(Tracker, ANearBallsScatteredCentreKeepsItsTrack) {
 TEST(Tracker, TheSizeTermIsTheDetectionsLargerSide) {
   TrackerOptions o;
   o.part_noise = 0;
+  o.size_noise = 0.1;
   Tracker tracker(o);
   tracker.update(0, std::vector<TrackerDetection>{det(0, 100, 100, 30)});
   TrackerDetection wide = det(kWindow, 110, 100);

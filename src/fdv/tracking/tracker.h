@@ -78,10 +78,13 @@ struct TrackerOptions {
   double part_noise = 1;
   /// The detector's centre error grows with the object's apparent size (a near ball is found by
   /// its densest part, or as the crescent its motion leaves): the pair's measurement noise gains,
-  /// per axis, (size_noise · size)², size the larger side of the detection's box. 0.1: the
+  /// per axis, (size_noise · size)², size the larger side of the detection's box. The
   /// maximum-likelihood fit of σ² = measurement_sigma_px² + (κ size)² to the centre errors of 501
-  /// detections on training seeds 1-24 gave κ = 0.095 (docs/ESTIMATION.md §1). 0 = off.
-  double size_noise = 0.1;
+  /// detections on training seeds 1-24 gave κ = 0.095, so 0.1 describes the detector; it stays off
+  /// (0) by default: it widens the gates lent to the detector, which then reported the streak of
+  /// the real DAVIS346 ball after it left the view, and it changed no escape in dodge-eval
+  /// (docs/ESTIMATION.md §1, "The object's size").
+  double size_noise = 0;
   /// A confirmed track that an outside model still expects in view (update's `held`: in the
   /// pipeline, its usable 3D trajectory projected into the image) is deleted only after this long
   /// without an update [ns], when longer than max_gap_ns: a dodge's manoeuvre floods a few windows
