@@ -645,18 +645,21 @@ void Perception::estimate(int track_id, TimeNs t) {
   };
   const TrajectoryEstimate* fused = solve_and_emit(e.fusion, EstimatorMode::kFusion, e.fusion_new);
   const TrajectoryEstimate* mono = e.mono ? solve_and_emit(*e.mono, EstimatorMode::kMonocular, e.mono_new) : nullptr;
+  // The prediction's risk against the vehicle at t, assessed once: the planner takes it when it
+  // decides on the fusion estimate at t.
+  const auto vehicle = fused && fused->usable && callbacks_.on_prediction ? vehicle_state(t) : std::nullopt;
+  std::optional<RiskAssessment> fused_risk;
+  if (vehicle)
+    fused_risk = assess_collision_risk(*fused, {*vehicle, vehicle_state_covariance(options_.prediction)}, options_.prediction);
   const TrajectoryEstimate* dodge_on = options_.dodge_from == DodgeSource::kMonocular ? mono : fused;
-  if (dodge_on && dodge_on->usable) decide_dodge(track_id, *dodge_on, t);
+  if (dodge_on && dodge_on->usable)
+    decide_dodge(track_id, *dodge_on, t, dodge_on == fused && fused_risk ? &*fused_risk : nullptr);
   if (fused && fused->method == EstimateMethod::kEventOnly && counters_.depth_frames == 0)
     warn_once("no depth", "no depth frames: 3D estimates are event-only, their range observable only through "
                           "gravity (docs/ESTIMATION.md)");
-  if (!fused || !fused->usable || !callbacks_.on_prediction) return;
-  const auto vehicle = vehicle_state(t);
   if (!vehicle) return;
-  const RiskAssessment assessed =
-      assess_collision_risk(*fused, {*vehicle, vehicle_state_covariance(options_.prediction)}, options_.prediction);
-  if (assessed.risk)  // its nominal is predict_collision's
-    callbacks_.on_prediction({t, track_id, assessed.risk->nominal, assessed.risk->miss_distance_sigma_m});
+  if (fused_risk->risk)  // its nominal is predict_collision's
+    callbacks_.on_prediction({t, track_id, fused_risk->risk->nominal, fused_risk->risk->miss_distance_sigma_m});
   else
     callbacks_.on_prediction({t, track_id, predict_collision(fused->trajectory, *vehicle, options_.prediction), {}});
 }
@@ -664,7 +667,8 @@ void Perception::estimate(int track_id, TimeNs t) {
 // The dodge (docs/AVOIDANCE.md): the risk of the new estimate against the vehicle's state at the
 // time the result exists (a window's estimate exists at the window's end; a depth frame's once the
 // windows up to it are processed), then the planner. A refusal is reported once per track and reason.
-void Perception::decide_dodge(int track_id, const TrajectoryEstimate& estimate, TimeNs t) {
+void Perception::decide_dodge(int track_id, const TrajectoryEstimate& estimate, TimeNs t,
+                              const RiskAssessment* assessed_at_t) {
   if (!planner_) return;
   const TimeNs now = std::max(t, processed_until_);
   const auto odometry = vehicle_state(now);
@@ -676,6 +680,8 @@ void Perception::decide_dodge(int track_id, const TrajectoryEstimate& estimate, 
     mean_only.covariance = Eigen::Matrix<double, 6, 6>::Zero();
     vehicle.covariance.setZero();
     assessed = assess_collision_risk(mean_only, vehicle, options_.prediction);
+  } else if (assessed_at_t && now == t) {
+    assessed = *assessed_at_t;
   } else {
     assessed = assess_collision_risk(estimate, vehicle, options_.prediction);
   }

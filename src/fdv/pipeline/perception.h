@@ -416,8 +416,11 @@ class Perception {
   /// nothing unless estimate_trajectories.
   void estimate(int track_id, TimeNs t);
   /// The dodge decision on one track's new estimate (dodge_from's kind), made at stream time
-  /// max(t, the last processed window's end): when the result exists.
-  void decide_dodge(int track_id, const TrajectoryEstimate& estimate, TimeNs t);
+  /// max(t, the last processed window's end): when the result exists. `assessed_at_t`: the
+  /// estimate's risk against the vehicle at t with its covariance, already computed, used when
+  /// the decision is made at t.
+  void decide_dodge(int track_id, const TrajectoryEstimate& estimate, TimeNs t,
+                    const RiskAssessment* assessed_at_t);
   std::optional<Eigen::Isometry3d> camera_pose(TimeNs t) const;
   std::optional<OdometrySample> vehicle_state(TimeNs t) const;
   /// How the event camera turned from `from` to `to` as the gyro says: d_E(to) = R d_E(from) for

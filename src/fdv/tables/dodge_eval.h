@@ -66,8 +66,9 @@ struct DodgeEvalOptions {
   PerceptionOptions perception;
 };
 
-/// Whether ours' predicted miss distance and its σ (PredictionResult) describe the true miss
-/// (issue #45: within 1σ in 60-76 % of usable estimates, within 2σ in 90-98 %). Counted: the
+/// Whether ours' predicted miss distance and its σ (PredictionResult) describe the true miss: a
+/// calibrated σ holds it within 1σ in about 68 % of usable estimates and within 2σ in about 95 %
+/// (docs/AVOIDANCE.md, "Is the predicted miss's σ believable?"). Counted: the
 /// predictions that carry a σ, of the tracks following the ball, made before its true closest
 /// approach, that predict an approach (not receding) within the horizon.
 struct MissCalibration {
