@@ -179,6 +179,8 @@ fdv_msgs::CollisionPrediction prediction_message(const json& r, const std::strin
   m.closest_t = stamp(r.at("closest_t"));
   m.closest_in = r.at("closest_in_s");
   m.miss_distance = r.at("miss_distance");
+  m.miss_distance_sigma = r.contains("miss_distance_sigma") ? r.at("miss_distance_sigma").get<double>()
+                                                            : std::numeric_limits<double>::quiet_NaN();
   m.object = point(r.at("object_W"));
   m.passage = vector3(r.at("passage_B"));
   m.receding = r.at("receding");

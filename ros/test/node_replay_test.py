@@ -113,12 +113,14 @@ def stamp(t):
 
 def compare(out_bag, reference):
     """The node's windows and estimates against `fdv run`'s files; returns counts."""
-    windows, estimates = [], []
+    windows, estimates, predictions = [], [], []
+    topics = {"/fdv/detections": windows, "/fdv/estimates": estimates, "/fdv/collision": predictions}
     with rosbag.Bag(out_bag) as bag:
-        for topic, m, _ in bag.read_messages(topics=["/fdv/detections", "/fdv/estimates"]):
-            (windows if topic == "/fdv/detections" else estimates).append(m)
+        for topic, m, _ in bag.read_messages(topics=list(topics)):
+            topics[topic].append(m)
     ref_windows = jsonl(os.path.join(reference, "detections.jsonl"))
     ref_estimates = jsonl(os.path.join(reference, "trajectories.jsonl"))
+    ref_predictions = jsonl(os.path.join(reference, "predictions.jsonl"))
     assert len(windows) == len(ref_windows), f"{len(windows)} windows published, fdv run has {len(ref_windows)}"
     t_tol = 1e-6  # the rows' seconds as ROS time: exact to the ns rounding
     for i, (m, r) in enumerate(zip(windows, ref_windows)):
@@ -139,7 +141,17 @@ def compare(out_bag, reference):
         close(stamp(m.header.stamp), r["t"], t_tol, what + " t")
         close([m.p0.x, m.p0.y, m.p0.z], r["p0"], 1e-9, what + " p0")
         close([m.v0.x, m.v0.y, m.v0.z], r["v0"], 1e-9, what + " v0")
-    return len(windows), sum(len(m.detections) for m in windows), len(estimates)
+    assert len(predictions) == len(ref_predictions), \
+        f"{len(predictions)} predictions published, fdv run has {len(ref_predictions)}"
+    for i, (m, r) in enumerate(zip(predictions, ref_predictions)):
+        what = f"prediction {i} (track {r['track']})"
+        close(stamp(m.header.stamp), r["t"], t_tol, what + " t")
+        close(m.miss_distance, r["miss_distance"], 1e-9, what + " miss_distance")
+        if "miss_distance_sigma" in r:
+            close(m.miss_distance_sigma, r["miss_distance_sigma"], 1e-9, what + " miss_distance_sigma")
+        else:
+            assert math.isnan(m.miss_distance_sigma), what + ": a sigma where fdv run has none"
+    return len(windows), sum(len(m.detections) for m in windows), len(estimates), len(predictions)
 
 
 def last_diagnostics(out_bag):
@@ -233,8 +245,9 @@ def main():
         print("received every message:", counts)
         print("latency ms:", {k: v for k, v in diag.items() if k.startswith("latency_ms")})
         if a.rate < 1:
-            windows, detections, estimates = compare(out_bag, reference)
-            print(f"equal to fdv run: {windows} windows, {detections} detections, {estimates} estimates")
+            windows, detections, estimates, predictions = compare(out_bag, reference)
+            print(f"equal to fdv run: {windows} windows, {detections} detections, {estimates} estimates, "
+                  f"{predictions} predictions")
     except Exception:
         for name, _ in procs.started:
             print(f"--- {name} log (tail)\n" + procs.log(name)[-3000:], file=sys.stderr)
