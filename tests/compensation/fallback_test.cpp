@@ -146,6 +146,7 @@ TEST(Fallback, PixelsWithoutDepthUseTheMedianAndAreCounted) {
   CompensationOptions opt;
   opt.method = CompensationMethod::kRotationTranslation;
   opt.hole_fill_radius_px = 1;
+  opt.missing_depth = MissingDepthPolicy::kMedianDepth;
   auto comp = make_compensator(c, opt);
   const CompensatedWindow& out = comp->compensate({ev, t0, t1, imu, odo, &d});
   ASSERT_EQ(out.size(), 4u) << out.report.brief();
@@ -169,6 +170,15 @@ TEST(Fallback, PixelsWithoutDepthUseTheMedianAndAreCounted) {
   EXPECT_EQ(out2.report.depth_fallback_events, 2u);
   EXPECT_NEAR(out2.x()[3], 202.0, 1e-3);
   EXPECT_NEAR(out2.x()[2], expected_u(10, 2.0, 0.003), 1e-3);
+
+  // Policy "beyond range": twice the frame's reach (its 99th percentile depth, 5 m), so 10 m.
+  opt.missing_depth = MissingDepthPolicy::kBeyondRange;
+  auto comp3 = make_compensator(c, opt);
+  const CompensatedWindow& out3 = comp3->compensate({ev, t0, t1, imu, odo, &d});
+  EXPECT_EQ(out3.report.depth_fallback_events, 2u);
+  EXPECT_FLOAT_EQ(out3.report.fallback_depth_m, 10.0f);
+  EXPECT_NEAR(out3.x()[3], expected_u(202, 10.0, 0.020), 1e-3);
+  EXPECT_NEAR(out3.x()[1], expected_u(250, 5.0, 0.002), 1e-3);
 }
 
 // Preparing the depth frame on its arrival (Perception does, off the window path) gives the same

@@ -179,10 +179,12 @@ INSTANTIATE_TEST_SUITE_P(Methods, ReferenceEquivalence,
                          ::testing::Values(Case{"none", MissingDepthPolicy::kMedianDepth},
                                            Case{"rotation", MissingDepthPolicy::kMedianDepth},
                                            Case{"rotation_translation", MissingDepthPolicy::kMedianDepth},
-                                           Case{"rotation_translation", MissingDepthPolicy::kRotationOnly}),
+                                           Case{"rotation_translation", MissingDepthPolicy::kRotationOnly},
+                                           Case{"rotation_translation", MissingDepthPolicy::kBeyondRange}),
                          [](const auto& param_info) {
                            std::string name = param_info.param.method;
                            if (param_info.param.policy == MissingDepthPolicy::kRotationOnly) name += "_rotation_only_holes";
+                           if (param_info.param.policy == MissingDepthPolicy::kBeyondRange) name += "_beyond_range_holes";
                            return name;
                          });
 

@@ -515,7 +515,7 @@ TEST(Options, WrongTypesNameTheKey) {
   EXPECT_EQ(error_of("compensation: {method: betterflow}"),
             "key compensation.method | 'betterflow' is not one of none, rotation, rotation_translation, contrast_max");
   EXPECT_EQ(error_of("compensation: {missing_depth: zero}"),
-            "key compensation.missing_depth | 'zero' is not one of median_depth, rotation_only");
+            "key compensation.missing_depth | 'zero' is not one of median_depth, rotation_only, beyond_range");
   EXPECT_EQ(error_of("max_empty_windows: -1"), "key max_empty_windows | '-1' is not a non-negative integer");
   EXPECT_EQ(error_of("estimation: {gravity: [0, -9.81]}"), "key estimation.gravity | expected a list of 3 numbers");
   EXPECT_EQ(error_of("estimation: {gravity: -9.81}"), "key estimation.gravity | expected a list of 3 numbers");

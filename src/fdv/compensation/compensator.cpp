@@ -27,7 +27,12 @@ std::optional<CompensationMethod> parse_compensation_method(std::string_view nam
 }
 
 std::string_view to_string(MissingDepthPolicy p) {
-  return p == MissingDepthPolicy::kMedianDepth ? "median_depth" : "rotation_only";
+  switch (p) {
+    case MissingDepthPolicy::kMedianDepth: return "median_depth";
+    case MissingDepthPolicy::kRotationOnly: return "rotation_only";
+    case MissingDepthPolicy::kBeyondRange: return "beyond_range";
+  }
+  return "?";
 }
 
 std::optional<MissingDepthPolicy> parse_missing_depth_policy(std::string_view name) {

@@ -58,13 +58,16 @@ constexpr std::array<CompensationMethod, 4> all_values(CompensationMethod) {
 
 /// What to do with an event whose pixel has no registered depth (rotation_translation).
 enum class MissingDepthPolicy {
-  kMedianDepth,   ///< use the median depth of the registered frame (the default, see DETECTION.md)
+  kMedianDepth,   ///< use the median depth of the registered frame
   kRotationOnly,  ///< ρ = 0 for that event: rotation compensated, translation not
+  /// The default: beyond the depth camera's reach, at twice the frame's farthest valid depth (ρ
+  /// half way between 0 and the reach's: the least worst-case error for any farther surface).
+  kBeyondRange,
 };
 std::string_view to_string(MissingDepthPolicy p);
 std::optional<MissingDepthPolicy> parse_missing_depth_policy(std::string_view name);
-constexpr std::array<MissingDepthPolicy, 2> all_values(MissingDepthPolicy) {
-  return {MissingDepthPolicy::kMedianDepth, MissingDepthPolicy::kRotationOnly};
+constexpr std::array<MissingDepthPolicy, 3> all_values(MissingDepthPolicy) {
+  return {MissingDepthPolicy::kMedianDepth, MissingDepthPolicy::kRotationOnly, MissingDepthPolicy::kBeyondRange};
 }
 
 /// Contrast-maximisation baseline (Gallego et al. 2018 objective, Mitrokhin et al. 2018 model).
@@ -96,7 +99,7 @@ struct CompensationOptions {
   /// Registered depth older (or newer) than this relative to the window's middle is not used
   /// (rotation only for the window). 100 ms = 3 periods of a 30 Hz depth camera.
   TimeNs max_depth_age_ns = 100 * kNsPerMs;
-  MissingDepthPolicy missing_depth = MissingDepthPolicy::kMedianDepth;
+  MissingDepthPolicy missing_depth = MissingDepthPolicy::kBeyondRange;  ///< DETECTION.md
   /// Holes in the registered depth up to this radius [px] take the nearest surface among their
   /// neighbours (registration leaves pinholes when the depth camera is coarser or offset).
   int hole_fill_radius_px = 1;
@@ -130,7 +133,7 @@ void describe(V& v, CompensationOptions& o) {
     "each slot's rotation from the gyro integrated since the window's start, not the mean rate (paper §IV-A)");
   v.ms("max_imu_gap_ms", o.max_imu_gap_ns, "IMU spacing flagged as a gap; no sample this close: IMU missing");
   v.ms("max_depth_age_ms", o.max_depth_age_ns, "registered depth farther than this from the window's middle is not used");
-  v("missing_depth", o.missing_depth, "-", "an event pixel without depth: median_depth or rotation_only");
+  v("missing_depth", o.missing_depth, "-", "an event pixel without depth: median_depth, rotation_only or beyond_range");
   v("hole_fill_radius_px", o.hole_fill_radius_px, "px", "depth holes up to this radius take the nearest surface");
   v.section("contrast_max", o.contrast_max, "the contrast-maximisation baseline");
   v.removed("threads", "moved to the top-level key threads (used by the compensation and the detector)");
@@ -182,7 +185,7 @@ struct CompensationReport {
   /// This call prepared the depth frame (inverse depth, hole filling: ~0.9 ms at 640x480); false
   /// when it was prepared before, by an earlier window or by prepare_depth_frame on arrival.
   bool depth_prepared_here = false;
-  float fallback_depth_m = 0;  ///< the median depth used by kMedianDepth (0 when not used)
+  float fallback_depth_m = 0;  ///< the depth given to pixels without depth (0: none, rotation_only)
   // contrast_max only.
   std::array<double, 4> warp_params{};  ///< h_x, h_y [px/s], h_z [1/s], θ [rad/s]
   int solver_iterations = 0;

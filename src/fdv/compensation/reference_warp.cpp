@@ -25,7 +25,7 @@ std::pair<double, bool> inverse_depth(const RegisteredDepth& depth, int x, int y
       if (valid_depth(zz)) best = std::max(best, 1.0 / static_cast<double>(zz));
     }
   if (best > 0) return {best, false};
-  return {m.missing_depth == MissingDepthPolicy::kMedianDepth ? 1.0 / m.fallback_depth_m : 0.0, true};
+  return {m.missing_depth == MissingDepthPolicy::kRotationOnly ? 0.0 : 1.0 / m.fallback_depth_m, true};
 }
 
 }  // namespace

@@ -9,8 +9,8 @@
 ///   ReferenceWarpResult ref = reference_warp(calib.event_camera, reference_motion(fast.report, opt), in);
 ///
 /// What is not per-event work is taken from the optimised compensator's report, and is tested on
-/// its own elsewhere: the strategy actually used (fallbacks), ω̄ and v in E, and the median depth
-/// used by MissingDepthPolicy::kMedianDepth.
+/// its own elsewhere: the strategy actually used (fallbacks), ω̄ and v in E, and the depth that
+/// the missing-depth policy gives pixels without depth.
 ///
 /// Model (compensator.h): event (x, y, t) -> normalised ray r = undistort(x, y); refresh slot
 /// s = ⌊(t − t0) / rotation_refresh⌋ (the last slot ends at t_end); R_s = exp([ω̄]× t_s) at the
@@ -32,8 +32,8 @@ struct ReferenceMotion {
   Eigen::Vector3d v_E = Eigen::Vector3d::Zero();         ///< camera velocity in E [m/s]
   TimeNs rotation_refresh_ns = 1 * kNsPerMs;
   int hole_fill_radius_px = 1;
-  MissingDepthPolicy missing_depth = MissingDepthPolicy::kMedianDepth;
-  double fallback_depth_m = 0;  ///< the median depth used by kMedianDepth
+  MissingDepthPolicy missing_depth = MissingDepthPolicy::kBeyondRange;
+  double fallback_depth_m = 0;  ///< the depth of pixels without depth (not for kRotationOnly)
 };
 
 /// The optimised compensator's per-window decisions, as the reference's input.

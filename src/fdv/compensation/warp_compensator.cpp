@@ -352,18 +352,25 @@ bool WarpCompensator::prepare_depth(const RegisteredDepth& depth) {
   const int w = depth.width, h = depth.height;
   const std::size_t n = static_cast<std::size_t>(w) * h;
   const float* z = depth.depth_m.data();
-  // Median of the valid depths (strided so that at most ~50 k values are sorted).
-  median_scratch_.clear();
+  // The missing-depth policy's depth from the valid depths (strided: at most ~50 k are sorted).
+  depth_sample_.clear();
   const std::size_t stride = std::max<std::size_t>(1, n / 50'000);
   for (std::size_t i = 0; i < n; i += stride)
-    if (z[i] > 0 && std::isfinite(z[i])) median_scratch_.push_back(z[i]);
-  if (median_scratch_.empty()) {
+    if (z[i] > 0 && std::isfinite(z[i])) depth_sample_.push_back(z[i]);
+  if (depth_sample_.empty()) {
     depth_usable_ = false;
     return false;
   }
-  auto mid = median_scratch_.begin() + static_cast<std::ptrdiff_t>(median_scratch_.size() / 2);
-  std::nth_element(median_scratch_.begin(), mid, median_scratch_.end());
-  fallback_depth_m_ = *mid;
+  if (options_.missing_depth == MissingDepthPolicy::kBeyondRange) {
+    // The reach: the 99th percentile, so that a few outliers do not set it.
+    auto far = depth_sample_.begin() + static_cast<std::ptrdiff_t>(depth_sample_.size() * 99 / 100);
+    std::nth_element(depth_sample_.begin(), far, depth_sample_.end());
+    fallback_depth_m_ = 2 * *far;
+  } else {
+    auto mid = depth_sample_.begin() + static_cast<std::ptrdiff_t>(depth_sample_.size() / 2);
+    std::nth_element(depth_sample_.begin(), mid, depth_sample_.end());
+    fallback_depth_m_ = *mid;
+  }
   // ρ = 1/z where valid, 0 in holes. Four pixels at a time (`z <= FLT_MAX` is false for NaN and
   // inf); the tail of a row-major image is done one by one.
   raw_rho_.resize(n);
@@ -385,7 +392,7 @@ bool WarpCompensator::prepare_depth(const RegisteredDepth& depth) {
   // the view is beyond the depth camera's range (a long hall: tens of per cent of the pixels).
   const int r = options_.hole_fill_radius_px;
   const float fallback_rho =
-      options_.missing_depth == MissingDepthPolicy::kMedianDepth ? 1.0f / fallback_depth_m_ : 0.0f;
+      options_.missing_depth == MissingDepthPolicy::kRotationOnly ? 0.0f : 1.0f / fallback_depth_m_;
   const std::size_t row_len = static_cast<std::size_t>(w);
   // out[x] = max(out[x], in[x + shift]) over the x where x + shift is in the row.
   auto max_into = [row_len](float* out, const float* in, std::ptrdiff_t shift) {
@@ -431,7 +438,7 @@ double WarpCompensator::warp_inverse_depth_at(const Eigen::Vector2d& x) const {
   const double u = std::round(raw.x()), v = std::round(raw.y());
   if (u >= 0 && v >= 0 && u < map_->width() && v < map_->height())
     return std::fabs(inv_depth_[static_cast<std::size_t>(v) * map_->width() + static_cast<std::size_t>(u)]);
-  return options_.missing_depth == MissingDepthPolicy::kMedianDepth ? 1.0 / fallback_depth_m_ : 0.0;
+  return options_.missing_depth == MissingDepthPolicy::kRotationOnly ? 0.0 : 1.0 / fallback_depth_m_;
 }
 
 Eigen::Vector2d WarpCompensator::observed_position(const Eigen::Vector2d& px, double t_s) const {
@@ -574,7 +581,7 @@ const CompensatedWindow& WarpCompensator::compensate(const CompensationInput& in
   rep.events_out_of_order = c.out_of_order;
   if (used == CompensationMethod::kRotationTranslation) {
     rep.depth_fallback_events = c.fallback;
-    if (options_.missing_depth == MissingDepthPolicy::kMedianDepth) rep.fallback_depth_m = fallback_depth_m_;
+    if (options_.missing_depth != MissingDepthPolicy::kRotationOnly) rep.fallback_depth_m = fallback_depth_m_;
   }
   return out_;
 }

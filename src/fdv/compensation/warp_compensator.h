@@ -50,7 +50,7 @@ class WarpCompensator final : public CompensatorBase {
   float fallback_depth_m_ = 0;
   /// ρ = 1/z per raw pixel [1/m]; sign bit set where the missing-depth policy was applied.
   std::vector<float> inv_depth_;
-  std::vector<float> median_scratch_;
+  std::vector<float> depth_sample_;  ///< the strided valid depths (median or reach)
   std::vector<float> raw_rho_, row_max_;  ///< ρ before hole filling; its running maximum along rows
 };
 
