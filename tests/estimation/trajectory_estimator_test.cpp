@@ -61,6 +61,20 @@ TEST(TrajectoryEstimator, RejectsInvalidOptions) {
   o.event_focal_px = 500;
   o.huber_depth = -1;
   EXPECT_THROW(TrajectoryEstimator{o}, ConfigError);
+  o.huber_depth = 1.96;
+  o.event_size_noise = -0.1;
+  EXPECT_THROW(TrajectoryEstimator{o}, ConfigError);
+}
+
+// A detection's σ: the fixed 3 px when the size term is off; with 0.1 a 40 px ball's is
+// √(3² + 4²) = 5 px, at a 500 px focal length 0.01 in normalised units.
+TEST(TrajectoryEstimator, DetectionSigmaGrowsWithTheSizeInQuadrature) {
+  EstimatorOptions o;
+  o.event_focal_px = 500;
+  EXPECT_DOUBLE_EQ(detection_sigma_n(o, 40), 3.0 / 500);
+  o.event_size_noise = 0.1;
+  EXPECT_DOUBLE_EQ(detection_sigma_n(o, 40), 0.01);
+  EXPECT_DOUBLE_EQ(detection_sigma_n(o, 0), 3.0 / 500);
 }
 
 // Exact observations: the fit must reproduce the true trajectory (fusion, both Table II scenes).

@@ -102,6 +102,7 @@ const char* to_string(AddResult r) {
 std::string EstimatorOptions::validate() const {
   if (!gravity_W.allFinite()) return "gravity_W must be finite";
   if (!positive_finite(event_sigma_px)) return "event_sigma_px must be > 0";
+  if (!(event_size_noise >= 0 && std::isfinite(event_size_noise))) return "event_size_noise must be >= 0";
   if (!positive_finite(event_focal_px))
     return "event_focal_px must be set (> 0): the event camera's fx";
   if (!positive_finite(huber_event) || !positive_finite(huber_depth))
@@ -132,6 +133,10 @@ std::optional<Eigen::Matrix3d> TrajectoryEstimate::position_covariance(TimeNs t)
   Eigen::Matrix<double, 3, 6> J;
   J << Eigen::Matrix3d::Identity(), to_seconds(t - trajectory.t0) * Eigen::Matrix3d::Identity();
   return J * *covariance * J.transpose();
+}
+
+double detection_sigma_n(const EstimatorOptions& o, double size_px) {
+  return std::hypot(o.event_sigma_px, o.event_size_noise * size_px) / o.event_focal_px;
 }
 
 std::optional<double> TrajectoryEstimate::observation_mahalanobis2(TimeNs t, const Eigen::Isometry3d& T_W_E,

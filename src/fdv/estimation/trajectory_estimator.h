@@ -73,6 +73,10 @@ struct EstimatorOptions {
   /// centre error on training seeds (docs/ESTIMATION.md, section 3).
   double event_sigma_px = 3.0;
   double event_focal_px = 0.0;
+  /// A whole detection's centre noise grows with its size D (its box's larger side [px]): the
+  /// pipeline sets an observation's σ_n = √(event_sigma_px² + (event_size_noise·D)²) / event_focal_px,
+  /// and the same σ in the gate its trajectory lends the tracker (0 = the fixed σ).
+  double event_size_noise = 0.0;
   /// Huber thresholds in sigmas of the whitened residual norm: sqrt of the χ² 95 % quantile for
   /// the block's dimension (2-dof event: 2.45; 1-dof depth: 1.96), so ~95 % of inlier residuals
   /// stay in the quadratic zone.
@@ -114,6 +118,10 @@ struct EstimatorOptions {
   std::string validate() const;
 };
 
+/// σ_n [normalised units] of a whole detection whose box's larger side is `size_px`:
+/// √(event_sigma_px² + (event_size_noise · size_px)²) / event_focal_px.
+double detection_sigma_n(const EstimatorOptions& o, double size_px);
+
 /// The field list (fdv/core/field_list.h): YAML section `estimation`. `mode` is not a key: the
 /// pipeline runs fusion, and the monocular baseline beside it (PerceptionOptions).
 template <class V>
@@ -123,6 +131,8 @@ void describe(V& v, EstimatorOptions& o) {
   v("gravity", o.gravity_W, "m/s²", "gravity in W, [x, y, z] (W's z axis up)");
   v("event_sigma_px", o.event_sigma_px, "px", "detection centre noise (σ_n = event_sigma_px / event_focal_px)");
   v("event_focal_px", o.event_focal_px, "px", "the event camera's focal length; 0 = from the calibration");
+  v("event_size_noise", o.event_size_noise, "-",
+    "a whole detection's centre noise grows by this × its size (in quadrature); 0 = fixed");
   v("huber_event", o.huber_event, "σ", "Huber threshold of an event residual (whitened norm)");
   v("huber_depth", o.huber_depth, "σ", "Huber threshold of a depth residual");
   v("min_event_observations", o.min_event_observations, "-", "fusion needs at least this many event observations");

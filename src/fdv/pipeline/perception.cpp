@@ -493,6 +493,8 @@ std::vector<int> Perception::add_event_observations(const TrackerStep& step, std
     if (const Detection2D& found = detections[a.detection]; found.partial)
       observe_cut_object(found, calibration_.event_camera,
                          options_.estimation.event_sigma_px / options_.estimation.event_focal_px, obs);
+    else if (options_.estimation.event_size_noise > 0)
+      obs.sigma_n = detection_sigma_n(options_.estimation, d.box_size_px.maxCoeff());
     TrackEstimators& e = estimators_for(a.track_id);
     // A cut object's box is the visible part's: its size is not the object's.
     if (const Detection2D& found = detections[a.detection]; !found.partial)
@@ -550,7 +552,7 @@ std::optional<double> Perception::trajectory_mahalanobis2(const TrajectoryEstima
   const auto T_W_E = camera_pose(d.t);
   if (!T_W_E) return std::nullopt;
   return est.observation_mahalanobis2(d.t, *T_W_E, d.center_normalized,
-                                      options_.estimation.event_sigma_px / options_.estimation.event_focal_px);
+                                      detection_sigma_n(options_.estimation, d.box_size_px.maxCoeff()));
 }
 
 void Perception::segment_pending_depth(TimeNs up_to) {
