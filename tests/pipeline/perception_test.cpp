@@ -197,6 +197,24 @@ TEST(Perception, TrackGatesLieOnTheCompensatedGridDuringATilt) {
   EXPECT_EQ(on_grid, turning);
 }
 
+// estimation.event_size_noise reaches the estimator: the first fusion estimate, from the same
+// observations, is less certain when each detection's σ grows with its size (here tens of px).
+TEST(Perception, TheSizeTermWidensTheFirstEstimatesSigma) {
+#ifdef FDV_TEST_SANITIZED
+  GTEST_SKIP() << "10 s of 640x480 simulation: 10-20x slower instrumented; the Release build runs it";
+#endif
+  PerceptionOptions fixed;
+  fixed.dodge_from = DodgeSource::kNone;
+  PerceptionOptions sized = fixed;
+  sized.estimation.event_size_noise = 1.0;
+  const Collected a = run(0, tilted_throw(), fixed), b = run(0, tilted_throw(), sized);
+  ASSERT_FALSE(a.fusion.empty());
+  ASSERT_FALSE(b.fusion.empty());
+  EXPECT_EQ(a.fusion_t.front(), b.fusion_t.front());
+  EXPECT_EQ(a.fusion.front().event_observations, b.fusion.front().event_observations);
+  EXPECT_GT(b.fusion.front().position_sigma_m, 1.2 * a.fusion.front().position_sigma_m);
+}
+
 // The ball unseen for six windows during the tilt (its events removed from 0.375 to 0.525 s, past
 // the tracker's 100 ms gap): by default its track is deleted and the ball, seen again, starts a new
 // one with no 3D history. With the track held by its usable 3D estimate (tracking.held_max_gap_ms)
