@@ -805,6 +805,7 @@ TEST_F(DetectorTest, InvalidOptionsAreRejected) {
       {"evidence_min_travel_cells", [](DetectorOptions& x) { x.evidence.min_travel_cells = 6; }},
       {"evidence_warmup_windows", [](DetectorOptions& x) { x.evidence.warmup_windows = -1; }},
       {"evidence_max_surround_ratio", [](DetectorOptions& x) { x.evidence.max_surround_ratio = -0.1; }},
+      {"evidence_min_isolation", [](DetectorOptions& x) { x.evidence.min_isolation = NAN; }},
   };
   for (const auto& [name, make_bad] : cases) {
     DetectorOptions bad;

@@ -148,7 +148,10 @@ struct NoisyWindows {
   std::mt19937 rng{7};
 
   /// An edge: a 48 px bar across the motion, 2 px wide, as the moving contour of a large object.
-  enum class Object { kNone, kBlob, kEdge };
+  /// A patch: a 20 px square firing on about half its pixels, as a spot of texture that the
+  /// compensation leaves: its excess lies in the candidate's 3 × 3 cells, and in the window's image
+  /// it runs on into the candidate box's surround.
+  enum class Object { kNone, kBlob, kEdge, kPatch };
   CompensatedEventsView make(int k, bool blob, Eigen::Vector2d& blob_at) {
     return make(k, blob ? Object::kBlob : Object::kNone, blob_at);
   }
@@ -168,6 +171,12 @@ struct NoisyWindows {
         const int v = static_cast<int>(std::lround(blob_at.y() + r * std::sin(a)));
         ev.push_back({static_cast<float>(t(rng)), v * kNoisyWidth + u});
       }
+    if (object == Object::kPatch)
+      for (int v = -10; v < 10; ++v)
+        for (int u = -10; u < 10; ++u)
+          if (unit(rng) < 0.5)
+            ev.push_back({static_cast<float>(t(rng)), (static_cast<int>(std::lround(blob_at.y())) + v) * kNoisyWidth +
+                                                          static_cast<int>(std::lround(blob_at.x())) + u});
     if (object == Object::kEdge)
       for (int i = -24; i < 24; ++i)  // along (−3, 5), perpendicular to the motion (5, 3)
         for (int w = 0; w < 2; ++w) {
@@ -195,10 +204,12 @@ struct BlobRun {
 };
 
 BlobRun run_blob(bool evidence, NoisyWindows::Object object = NoisyWindows::Object::kBlob,
-               double max_surround_ratio = EvidenceSourceOptions{}.max_surround_ratio) {
+               double max_surround_ratio = EvidenceSourceOptions{}.max_surround_ratio,
+               double min_isolation = EvidenceSourceOptions{}.min_isolation) {
   DetectorOptions o;
   o.evidence.enabled = evidence;
   o.evidence.max_surround_ratio = max_surround_ratio;
+  o.evidence.min_isolation = min_isolation;
   Detector detector(o, small_camera());
   NoisyWindows windows;
   BlobRun out;
@@ -277,6 +288,19 @@ TEST(EvidenceSource, AMovingEdgeRunsThroughTheSurroundAndIsNoCandidate) {
   const BlobRun blob = run_blob(true, NoisyWindows::Object::kBlob, 0.5);
   EXPECT_GT(edge_unchecked.evidence_hits + edge_unchecked.evidence_misplaced, 0);
   EXPECT_EQ(edge.evidence_hits + edge.evidence_misplaced, 0);
+  EXPECT_GT(blob.evidence_hits, 0);
+}
+
+TEST(EvidenceSource, ATextureSpotRunsOnIntoItsImageSurroundAndIsNoCandidate) {
+  // The patch's events lie in its 3 × 3 cells, so the grid's surround test passes it; in the
+  // window's image the 8 px candidate box holds about 0.5 events per pixel and its surround (the
+  // box grown by 8 px) about 0.33 of the patch's, an isolation near 1.5, against the blob's
+  // 45 events on 28 px in noise of 0.026 per pixel.
+  const BlobRun patch_unchecked = run_blob(true, NoisyWindows::Object::kPatch, EvidenceSourceOptions{}.max_surround_ratio, 0);
+  const BlobRun patch = run_blob(true, NoisyWindows::Object::kPatch);
+  const BlobRun blob = run_blob(true, NoisyWindows::Object::kBlob);
+  EXPECT_GT(patch_unchecked.evidence_hits, 0);
+  EXPECT_EQ(patch.evidence_hits + patch.evidence_misplaced, 0);
   EXPECT_GT(blob.evidence_hits, 0);
 }
 

@@ -11,6 +11,15 @@
 #include "fdv/detection/track_aided_source.h"
 
 namespace fdv {
+
+double isolation(const cv::Mat& count, const cv::Rect& box, double box_events, double floor_density) {
+  const cv::Rect surround =
+      cv::Rect(box.x - box.width, box.y - box.height, 3 * box.width, 3 * box.height) & cv::Rect(0, 0, count.cols, count.rows);
+  const double surround_pixels = static_cast<double>(surround.area() - box.area());
+  const double surround_density = surround_pixels > 0 ? (cv::sum(count(surround))[0] - box_events) / surround_pixels : 0;
+  return box_events / box.area() / std::max(surround_density, floor_density);
+}
+
 namespace {
 
 /// The built-in sources, in the order a Detector tries them (detector.h says why this order): one

@@ -46,6 +46,13 @@ struct Candidate {
   int fit_iterations = 0;    ///< Algorithm 1's iterations for the box (0: not a fit's)
 };
 
+/// A box's events per pixel over its surround's, the surround being the box grown by its own sides
+/// on every side (within the image), whose density is floored at `floor_density` (the image's mean:
+/// an empty surround must not make any small cluster infinitely isolated). `box_events`: the count
+/// image's sum over `box`. A small object is a blob on its own; texture and edges run on into the
+/// surround.
+double isolation(const cv::Mat& count, const cv::Rect& box, double box_events, double floor_density);
+
 /// One window as every source sees it, built by Detector::detect once the window passed its
 /// guards. Borrowed: valid for the call.
 struct SourceWindow {

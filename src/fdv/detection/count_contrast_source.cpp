@@ -315,12 +315,7 @@ bool CountContrastSource::still_camera_object(const SourceWindow& in, const Cand
                                               CountContrastDiagnostics& diagnostics) const {
   const CountContrastSourceOptions& cc = options_.count_contrast;
   if (!camera_still(in)) return false;
-  const cv::Mat& count = in.ti.count;
-  const cv::Rect surround =
-      cv::Rect(box.x - box.width, box.y - box.height, 3 * box.width, 3 * box.height) & cv::Rect(0, 0, count.cols, count.rows);
-  const double surround_pixels = static_cast<double>(surround.area() - box.area());
-  const double surround_density = surround_pixels > 0 ? (cv::sum(count(surround))[0] - cand.events) / surround_pixels : 0;
-  diagnostics.isolation = cand.event_density / std::max(surround_density, image_density);
+  diagnostics.isolation = isolation(in.ti.count, box, cand.events, image_density);
   if (!(diagnostics.isolation >= cc.still_min_isolation)) return false;
   if (in_gate) return true;  // a track's gate: its track is the evidence of motion
   diagnostics.motion_z = motion_z(in.events, box);

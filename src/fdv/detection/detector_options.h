@@ -233,6 +233,13 @@ struct EvidenceSourceOptions {
   /// recordings with a moving person clean with 8 warm-up windows (docs/DETECTION.md).
   /// YAML `evidence_max_surround_ratio`
   double max_surround_ratio = 0.3;
+  /// A candidate's events per pixel over its surround's in this window's count image (`isolation`
+  /// in candidate_source.h: the C-sided box around the events' centroid against the box grown by
+  /// its own sides, floored at the image's mean) at least this [-]; 0 = off. A far ball stands
+  /// out of its surround; the texture that forward flight's parallax or a swinging camera leaves
+  /// uncompensated runs on into it (docs/DETECTION.md, "Evidence source"). YAML
+  /// `evidence_min_isolation`; tuned.
+  double min_isolation = 3.0;
   std::string validate() const;
 };
 
@@ -248,6 +255,7 @@ void describe(V& v, EvidenceSourceOptions& o) {
   v("evidence_min_travel_cells", o.min_travel_cells, "cells", "a candidate path's recent travel over the scene at least (T ← 0.8 T + step)");
   v("evidence_warmup_windows", o.warmup_windows, "-", "windows that learn the background before evidence counts");
   v("evidence_max_surround_ratio", o.max_surround_ratio, "-", "κ: a candidate's excess (beyond μ + σ) in the ring 2-3 cells away, at most this times its 3x3 cells'");
+  v("evidence_min_isolation", o.min_isolation, "-", "a candidate's events per pixel over its surround's (the box grown by its sides) in the window's count image, at least this (0 = off); tuned");
 }
 
 struct DetectorOptions {

@@ -27,6 +27,8 @@ std::string EvidenceSourceOptions::validate() const {
     why << "evidence_warmup_windows must be in [0, 1000], got " << warmup_windows;
   else if (!(max_surround_ratio >= 0 && std::isfinite(max_surround_ratio)))
     why << "evidence_max_surround_ratio must be finite and ≥ 0, got " << max_surround_ratio;
+  else if (!(min_isolation >= 0 && std::isfinite(min_isolation)))
+    why << "evidence_min_isolation must be finite and ≥ 0, got " << min_isolation;
   return why.str();
 }
 
@@ -238,31 +240,9 @@ bool EvidenceSource::isolated(int x, int y) const {
   return surround <= options_.evidence.max_surround_ratio * centre;
 }
 
-std::optional<Candidate> EvidenceSource::find(SourceWindow& in, DetectionResult& res) {
-  if (!in.events.new_evidence) return std::nullopt;
-  if (!updated_ || in.events.t_start != last_start_ || in.events.t_end != last_end_) begin_window(in);
-  const EvidenceSourceOptions& o = options_.evidence;
-  const cv::Mat& L = grid_.evidence();
-  // The best path that has travelled over the scene: the static scene's paths (texture that a
-  // hovering camera sweeps, a person's slow sway) hop about their place.
-  double best = 0;
-  cv::Point cell(-1, -1);
-  const float min_travel2 = static_cast<float>(o.min_travel_cells * o.min_travel_cells);
-  // Not in the two outermost rings of cells: content entering the view (and the compensation's
-  // worst part) is there; a ball entering is found by the other sources once it is in.
-  for (int y = kBorderCells; y + kBorderCells < rows_; ++y) {
-    const float* Ly = L.ptr<float>(y);
-    const cv::Vec2f* travel = grid_.travel().ptr<cv::Vec2f>(y);
-    for (int x = kBorderCells; x + kBorderCells < cols_; ++x)
-      if (Ly[x] > best && travel[x].dot(travel[x]) >= min_travel2 && isolated(x, y)) best = Ly[x], cell = {x, y};
-  }
-  EvidenceDiagnostics& diag = res.diagnostics_of(kName).write<EvidenceDiagnostics>();
-  diag.evidence = best;
-  diag.cell_x = cell.x;
-  diag.cell_y = cell.y;
-  if (best < o.threshold) return std::nullopt;
-
+std::optional<Candidate> EvidenceSource::candidate_at(const SourceWindow& in, cv::Point cell, double evidence) const {
   // The object's events: the cell and half a cell around it (it may straddle cells).
+  const EvidenceSourceOptions& o = options_.evidence;
   const int c = o.cell_px;
   const cv::Rect region = cv::Rect(cell.x * c - c / 2, cell.y * c - c / 2, 2 * c, 2 * c) & cv::Rect(0, 0, width_, height_);
   const cv::Mat& I = in.ti.count;
@@ -284,9 +264,55 @@ std::optional<Candidate> EvidenceSource::find(SourceWindow& in, DetectionResult&
   found.box = Box2D{found.center.x() - half, found.center.y() - half, found.center.x() + half, found.center.y() + half};
   found.source = DetectionSource::kEvidence;
   found.events = static_cast<int>(events);
-  found.score = best / (best + o.threshold);
+  found.score = evidence / (evidence + o.threshold);
   found.event_density = events / (static_cast<double>(c) * c);
   found.t_mean_s = st / events;
+  return found;
+}
+
+double EvidenceSource::isolation_of(const SourceWindow& in, const Candidate& found) const {
+  const cv::Rect box = box_pixels(found.box, width_, height_);
+  if (box.area() == 0) return 0;
+  const double image_density = static_cast<double>(in.ti.events) / (static_cast<double>(width_) * height_);
+  return isolation(in.ti.count, box, cv::sum(in.ti.count(box))[0], image_density);
+}
+
+std::optional<Candidate> EvidenceSource::find(SourceWindow& in, DetectionResult& res) {
+  if (!in.events.new_evidence) return std::nullopt;
+  if (!updated_ || in.events.t_start != last_start_ || in.events.t_end != last_end_) begin_window(in);
+  const EvidenceSourceOptions& o = options_.evidence;
+  const cv::Mat& L = grid_.evidence();
+  // The best path that has travelled over the scene and stands alone, over the grid and in this
+  // window's image: the static scene's paths (texture that a hovering camera sweeps, a person's
+  // slow sway, forward flight's parallax) hop about their place or run on into their surround.
+  double best = 0;
+  cv::Point cell(-1, -1);
+  std::optional<Candidate> found;
+  double found_isolation = 0;
+  const float min_travel2 = static_cast<float>(o.min_travel_cells * o.min_travel_cells);
+  // Not in the two outermost rings of cells: content entering the view (and the compensation's
+  // worst part) is there; a ball entering is found by the other sources once it is in.
+  for (int y = kBorderCells; y + kBorderCells < rows_; ++y) {
+    const float* Ly = L.ptr<float>(y);
+    const cv::Vec2f* travel = grid_.travel().ptr<cv::Vec2f>(y);
+    for (int x = kBorderCells; x + kBorderCells < cols_; ++x) {
+      if (!(Ly[x] > best) || travel[x].dot(travel[x]) < min_travel2 || !isolated(x, y)) continue;
+      if (Ly[x] < o.threshold) {  // no candidate; the diagnostics' best path
+        if (!found) best = Ly[x], cell = {x, y};
+        continue;
+      }
+      std::optional<Candidate> c = candidate_at(in, {x, y}, Ly[x]);
+      if (!c) continue;
+      const double iso = isolation_of(in, *c);
+      if (o.min_isolation > 0 && !(iso >= o.min_isolation)) continue;
+      best = Ly[x], cell = {x, y}, found = c, found_isolation = iso;
+    }
+  }
+  EvidenceDiagnostics& diag = res.diagnostics_of(kName).write<EvidenceDiagnostics>();
+  diag.evidence = best;
+  diag.cell_x = cell.x;
+  diag.cell_y = cell.y;
+  diag.isolation = found_isolation;
   return found;
 }
 

@@ -77,8 +77,9 @@ class EvidenceGrid {
 
 /// The best path's sum and cell in the last window, once the source updated.
 struct EvidenceDiagnostics {
-  double evidence = 0;  ///< max L over the image
+  double evidence = 0;  ///< the candidate's L, else the largest L below h of a path that passed the grid's tests
   int cell_x = -1, cell_y = -1;
+  double isolation = 0;  ///< the candidate's (EvidenceSourceOptions::min_isolation); 0 without one
 };
 
 class EvidenceSource final : public CandidateSource {
@@ -98,6 +99,11 @@ class EvidenceSource final : public CandidateSource {
   void predict_motion(const SourceWindow& in);
   /// The surround test of EvidenceSourceOptions::max_surround_ratio at cell (x, y).
   bool isolated(int x, int y) const;
+  /// The candidate of a path at `cell` with sum `evidence`: a C-sided box around the events'
+  /// centroid over the cell and half a cell around it; nothing with too few events.
+  std::optional<Candidate> candidate_at(const SourceWindow& in, cv::Point cell, double evidence) const;
+  /// `found`'s isolation in the window's count image (EvidenceSourceOptions::min_isolation).
+  double isolation_of(const SourceWindow& in, const Candidate& found) const;
 
   static constexpr int kCoarseStep = 4;   ///< the ego-motion is evaluated every this many cells
   static constexpr int kBorderCells = 2;  ///< rings of cells at the border that make no candidate
