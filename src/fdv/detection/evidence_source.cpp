@@ -183,13 +183,19 @@ bool EvidenceSource::begin_window(const SourceWindow& in) {
 
 void EvidenceSource::count_fired(const SourceWindow& in) {
   // Fired pixels, not events: a hot pixel or a flickering one counts once however often it fires.
+  // One pass over the count image's rows: a pass over the events costs a division per event to find
+  // its pixel's row, several times more at 100 k events or more.
   std::fill(fired_.begin<float>(), fired_.end<float>(), 0.f);  // setTo allocates
   const int c = options_.evidence.cell_px;
   const cv::Mat& I = in.ti.count;
-  for (const std::int32_t p : in.events.pixel) {
-    const int x = p % width_, y = p / width_;
-    const int n = I.at<std::int32_t>(y, x);
-    if (n > 0) fired_.at<float>(y / c, x / c) += 1.f / static_cast<float>(n);
+  for (int y = 0; y < height_; ++y) {
+    const std::int32_t* row = I.ptr<std::int32_t>(y);
+    float* cells = fired_.ptr<float>(y / c);
+    for (int x0 = 0, cell = 0; x0 < width_; x0 += c, ++cell) {
+      int fired = 0;
+      for (int x = x0; x < std::min(x0 + c, width_); ++x) fired += row[x] > 0;
+      cells[cell] += static_cast<float>(fired);
+    }
   }
 }
 

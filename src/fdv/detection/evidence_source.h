@@ -92,7 +92,7 @@ class EvidenceSource final : public CandidateSource {
   std::optional<Candidate> find(SourceWindow& in, DetectionResult& res) override;
 
  private:
-  /// Each cell's fired pixels from the window's events: an event adds 1 / I at its pixel.
+  /// Each cell's fired pixels: the pixels of its count image with an event.
   void count_fired(const SourceWindow& in);
   /// Where each cell's centre goes by the next window's start (the window's observed_at after its
   /// length), into previous_ for the next update; moved_ false without ego-motion.
