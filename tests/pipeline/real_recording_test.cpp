@@ -8,7 +8,6 @@
 
 #include "fdv/core/calibration.h"
 #include "fdv/io/recording.h"
-#include "fdv/pipeline/options_yaml.h"
 #include "fdv/pipeline/replay.h"
 #include "fdv/pipeline/sensor_policy.h"
 #include "fdv/tables/experiment.h"
@@ -27,14 +26,9 @@ const std::map<std::uint64_t, Eigen::Vector2d> kBallByHand = {
     {5, {113, 117}}, {6, {117, 143}}, {7, {117, 187}}, {8, {113, 207}},
 };
 
-/// The evidence source on, in the eager setting shipped for drones (examples/configs/
-/// drone_far_ball.yaml: 8 windows of warm-up, 1 cell of travel): its surround test must keep a
-/// moving person out.
-void eager_evidence(PerceptionOptions& options) {
-  const PerceptionOptions drone = load_perception_options_file(FDV_EXAMPLES_DIR "/configs/drone_far_ball.yaml");
-  ASSERT_TRUE(drone.detection.evidence.enabled);
-  options.detection.evidence = drone.detection.evidence;
-}
+/// The defaults run the evidence source (8 windows of warm-up, 1 cell of travel), whose surround
+/// and isolation tests must keep a moving person out; the other variant runs without it.
+void without_evidence(PerceptionOptions& options) { options.detection.evidence.enabled = false; }
 
 class RealRecordingThrow : public ::testing::TestWithParam<bool> {};
 
@@ -44,7 +38,7 @@ TEST_P(RealRecordingThrow, TheThrownBallIsFoundInFlightAndThePersonIsNotReported
   const Calibration calib = load_calibration(test::real_data("davis346_00000133_calibration.xml"));
   PerceptionOptions options;
   options.compensation.method = CompensationMethod::kRotation;  // events and IMU only
-  if (GetParam()) eager_evidence(options);
+  if (GetParam()) without_evidence(options);
   std::map<std::uint64_t, Detection2D> detections;
   std::uint64_t windows = 0;
   PerceptionCallbacks callbacks;
@@ -74,7 +68,7 @@ TEST_P(RealRecordingThrow, TheThrownBallIsFoundInFlightAndThePersonIsNotReported
 
 INSTANTIATE_TEST_SUITE_P(RealRecording, RealRecordingThrow, ::testing::Bool(),
                          [](const ::testing::TestParamInfo<bool>& evidence) {
-                           return std::string(evidence.param ? "EagerEvidenceSource" : "Defaults");
+                           return std::string(evidence.param ? "WithoutEvidenceSource" : "Defaults");
                          });
 
 // The same throw, where the ball leaves through the bottom edge (windows 8-10), labelled by hand
@@ -145,12 +139,12 @@ struct StillRecording {
 class RealRecordingWithoutObject : public ::testing::TestWithParam<std::tuple<StillRecording, bool>> {};
 
 TEST_P(RealRecordingWithoutObject, NoWindowReportsAnObject) {
-  const auto& [recording, evidence] = GetParam();
+  const auto& [recording, no_evidence] = GetParam();
   const std::string path = test::real_data(recording.file);
   FDV_REQUIRE_REAL_FILE(path);
   auto reader = open_recording(path);
   PerceptionOptions options;
-  if (evidence) eager_evidence(options);
+  if (no_evidence) without_evidence(options);
   const SensorPolicy policy = apply_sensor_policy(declared_sensors(reader->info()), options);
   std::uint64_t windows = 0;
   PerceptionCallbacks callbacks;
@@ -172,7 +166,7 @@ INSTANTIATE_TEST_SUITE_P(RealRecording, RealRecordingWithoutObject,
                                             ::testing::Bool()),
                          [](const ::testing::TestParamInfo<std::tuple<StillRecording, bool>>& p) {
                            const std::string file = std::get<0>(p.param).file;
-                           return file.substr(0, file.find('.')) + (std::get<1>(p.param) ? "_EagerEvidenceSource" : "");
+                           return file.substr(0, file.find('.')) + (std::get<1>(p.param) ? "_WithoutEvidenceSource" : "");
                          });
 
 }  // namespace

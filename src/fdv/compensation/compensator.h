@@ -58,10 +58,11 @@ constexpr std::array<CompensationMethod, 4> all_values(CompensationMethod) {
 
 /// What to do with an event whose pixel has no registered depth (rotation_translation).
 enum class MissingDepthPolicy {
-  kMedianDepth,   ///< use the median depth of the registered frame (the default, see DETECTION.md)
+  kMedianDepth,   ///< use the median depth of the registered frame
   kRotationOnly,  ///< ρ = 0 for that event: rotation compensated, translation not
-  /// Beyond the depth camera's reach, at twice the frame's farthest valid depth (ρ half way
-  /// between 0 and the reach's: the least worst-case error for any farther surface).
+  /// The default (DETECTION.md): beyond the depth camera's reach, at twice the frame's farthest
+  /// valid depth (ρ half way between 0 and the reach's: the least worst-case error for any farther
+  /// surface).
   kBeyondRange,
 };
 std::string_view to_string(MissingDepthPolicy p);
@@ -99,7 +100,7 @@ struct CompensationOptions {
   /// Registered depth older (or newer) than this relative to the window's middle is not used
   /// (rotation only for the window). 100 ms = 3 periods of a 30 Hz depth camera.
   TimeNs max_depth_age_ns = 100 * kNsPerMs;
-  MissingDepthPolicy missing_depth = MissingDepthPolicy::kMedianDepth;  ///< DETECTION.md
+  MissingDepthPolicy missing_depth = MissingDepthPolicy::kBeyondRange;  ///< DETECTION.md
   /// Holes in the registered depth up to this radius [px] take the nearest surface among their
   /// neighbours (registration leaves pinholes when the depth camera is coarser or offset).
   int hole_fill_radius_px = 1;

@@ -32,7 +32,7 @@ struct ReferenceMotion {
   Eigen::Vector3d v_E = Eigen::Vector3d::Zero();         ///< camera velocity in E [m/s]
   TimeNs rotation_refresh_ns = 1 * kNsPerMs;
   int hole_fill_radius_px = 1;
-  MissingDepthPolicy missing_depth = MissingDepthPolicy::kMedianDepth;
+  MissingDepthPolicy missing_depth = MissingDepthPolicy::kBeyondRange;
   double fallback_depth_m = 0;  ///< the depth of pixels without depth (not for kRotationOnly)
 };
 

@@ -196,9 +196,9 @@ void describe(V& v, CountContrastSourceOptions& o) {
 /// the cell's own history, summed along paths over windows (L = max(0, ℓ + the best neighbour's L
 /// a window ago)); a cell at L ≥ h is a candidate (evidence_source.h states the model).
 struct EvidenceSourceOptions {
-  /// Off by default: on Table I's scenes with a moving background (scene2_ball, swing) it adds
-  /// false detections (docs/DETECTION.md, "Evidence source"). YAML `evidence`
-  bool enabled = false;
+  /// On by default since its image isolation test (min_isolation) keeps the texture of a moving
+  /// background out (docs/DETECTION.md, "Evidence source"). YAML `evidence`
+  bool enabled = true;
   /// C [px] at DetectorOptions::gate_focal_px (a longer focal length scales it up): a far ball
   /// (4-10 px) lies in one or two cells and moves about a cell a window. YAML `evidence_cell_px`
   int cell_px = 8;
@@ -218,14 +218,15 @@ struct EvidenceSourceOptions {
   /// must not be evidence. YAML `evidence_min_background`
   double min_background = 1.0;
   /// The least travel over the scene of a path that makes a candidate [cells]: T ← 0.8·T + the
-  /// path's step over the scene each window (after the ego-motion), so five steps of a cell make
-  /// 3.36 and six 3.69; the static scene's paths hop about their place, and a person's moving
-  /// parts wander (docs/DETECTION.md, "Evidence source"). YAML `evidence_min_travel_cells`
-  double min_travel_cells = 3.5;
-  /// Windows in which each cell's mean and variance are learned before any evidence counts: 1/α,
-  /// where the running average turns exponential (a variance from 8 windows let a moving
-  /// person's head through on a real recording). YAML `evidence_warmup_windows`
-  int warmup_windows = 20;
+  /// path's step over the scene each window (after the ego-motion), so two steps of a cell make
+  /// 1.8; a head-on ball hardly moves on the image, and the static scene's paths, which hop about
+  /// their place, are kept out by the surround and isolation tests (docs/DETECTION.md, "Evidence
+  /// source"). YAML `evidence_min_travel_cells`
+  double min_travel_cells = 1.0;
+  /// Windows in which each cell's mean and variance are learned before any evidence counts (0.2 s
+  /// at 25 ms; the surround test keeps the real recordings' people out with 8). YAML
+  /// `evidence_warmup_windows`
+  int warmup_windows = 8;
   /// κ: a candidate's surround (the ring of cells 2-3 away) may hold at most κ times the excess
   /// of its own 3 × 3 cells [-], the excess being the fired pixels beyond μ + σ. A far ball is a
   /// blob on its own; the moving edge of a person or of a swinging object runs on through the
