@@ -201,6 +201,7 @@ struct BlobRun {
   int found = 0;  ///< windows after the evidence could exist (warm-up + 3) with the blob found, of 26
   int evidence_hits = 0, evidence_misplaced = 0;
   double worst_px = 0;  ///< the evidence detections' largest distance from the blob's centre
+  double least_isolation = 1e9;  ///< the smallest isolation the source reported with a detection
 };
 
 BlobRun run_blob(bool evidence, NoisyWindows::Object object = NoisyWindows::Object::kBlob,
@@ -221,6 +222,7 @@ BlobRun run_blob(bool evidence, NoisyWindows::Object object = NoisyWindows::Obje
       const bool on_blob = (d.center_undistorted - blob_at).norm() < 3.0;
       found = found || on_blob;
       if (d.source == DetectionSource::kEvidence) {
+        out.least_isolation = std::min(out.least_isolation, r.diagnostics<EvidenceDiagnostics>(EvidenceSource::kName)->isolation);
         ++(on_blob ? out.evidence_hits : out.evidence_misplaced);
         out.worst_px = std::max(out.worst_px, (d.center_undistorted - blob_at).norm());
       }
@@ -302,6 +304,9 @@ TEST(EvidenceSource, ATextureSpotRunsOnIntoItsImageSurroundAndIsNoCandidate) {
   EXPECT_GT(patch_unchecked.evidence_hits, 0);
   EXPECT_EQ(patch.evidence_hits + patch.evidence_misplaced, 0);
   EXPECT_GT(blob.evidence_hits, 0);
+  // The diagnostics report the candidate's isolation: the gate's, and the patch's under it.
+  EXPECT_GE(blob.least_isolation, EvidenceSourceOptions{}.min_isolation);
+  EXPECT_LT(patch_unchecked.least_isolation, EvidenceSourceOptions{}.min_isolation);
 }
 
 }  // namespace

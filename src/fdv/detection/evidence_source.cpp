@@ -303,8 +303,8 @@ std::optional<Candidate> EvidenceSource::find(SourceWindow& in, DetectionResult&
     const cv::Vec2f* travel = grid_.travel().ptr<cv::Vec2f>(y);
     for (int x = kBorderCells; x + kBorderCells < cols_; ++x) {
       if (!(Ly[x] > best) || travel[x].dot(travel[x]) < min_travel2 || !isolated(x, y)) continue;
-      if (Ly[x] < o.threshold) {  // no candidate; the diagnostics' best path
-        if (!found) best = Ly[x], cell = {x, y};
+      if (Ly[x] < o.threshold) {  // no candidate (none found yet: best < h); the diagnostics' path
+        best = Ly[x], cell = {x, y};
         continue;
       }
       std::optional<Candidate> c = candidate_at(in, {x, y}, Ly[x]);
