@@ -1,13 +1,14 @@
 """Front-end time of two `fdv` builds on the same recordings (docs/BENCHMARKS.md, "Several objects,
 any size, border cuts").
 
-    /usr/bin/python3 bench/run_timing_compare.py BEFORE_FDV AFTER_FDV DATASET... [--rounds 4]
+    /usr/bin/python3 bench/run_timing_compare.py BEFORE_FDV AFTER_FDV DATASET... [--rounds 4] [--threads N] [--stage NAME]
 
 Runs `fdv run` of each build on every dataset, alternating the builds round by round so that both
 see the same machine load. The front end of a run is the median of `compensation` plus the median
 of `detection_total` from its summary.json's `timing_ms` (so a build that predates timing.csv can
 be compared). Per dataset, each build's figure is the median over its rounds; the report gives
-the after / before ratio per dataset and the median ratio. Standard library only.
+the after / before ratio per dataset and the median ratio. `--stage NAME` compares one stage's median
+instead (a key of `timing_ms`, e.g. `evidence`). Standard library only.
 """
 import argparse
 import json
@@ -18,12 +19,15 @@ import tempfile
 from pathlib import Path
 
 
-def front_end_ms(summary_path):
+def front_end_ms(summary_path, stage=None):
     try:
         timing = json.loads(Path(summary_path).read_text())["timing_ms"]
+        if stage:
+            return timing[stage]["median"]
         return timing["compensation"]["median"] + timing["detection_total"]["median"]
     except (OSError, ValueError, KeyError, TypeError) as e:
-        sys.exit(f"{summary_path}: no timing_ms.compensation / detection_total median ({e!r})")
+        wanted = stage or "compensation / detection_total"
+        sys.exit(f"{summary_path}: no timing_ms.{wanted} median ({e!r})")
 
 
 def main():
@@ -32,6 +36,8 @@ def main():
     parser.add_argument("after", help="the fdv binary it is compared with")
     parser.add_argument("datasets", nargs="+", help="recordings or dataset folders")
     parser.add_argument("--rounds", type=int, default=4)
+    parser.add_argument("--threads", type=int, help="passed to `fdv run` (its default otherwise)")
+    parser.add_argument("--stage", help="compare this timing_ms stage's median instead of the front end")
     args = parser.parse_args()
     if args.rounds < 1:
         parser.error("--rounds must be at least 1")
@@ -43,12 +49,14 @@ def main():
                 for i, dataset in enumerate(args.datasets):
                     out = Path(work) / f"{build}_{round_index}_{i}"
                     try:
-                        run = subprocess.run([binary, "run", dataset, "--out", str(out)], capture_output=True, text=True)
+                        threads = ["--threads", str(args.threads)] if args.threads else []
+                        run = subprocess.run([binary, "run", dataset, "--out", str(out), *threads],
+                                             capture_output=True, text=True)
                     except OSError as e:
                         sys.exit(f"{binary}: cannot run it ({e.strerror})")
                     if run.returncode != 0:
                         sys.exit(f"{binary} run {dataset} failed ({run.returncode}): {run.stderr.strip()[-400:]}")
-                    figures[build][dataset].append(front_end_ms(out / "summary.json"))
+                    figures[build][dataset].append(front_end_ms(out / "summary.json", args.stage))
 
     ratios = []
     print(f"{'dataset':<50} {'before ms':>10} {'after ms':>10} {'ratio':>7}")

@@ -14,8 +14,10 @@
 ///   std::optional<Candidate> c = source.find(in, res);
 ///   res.diagnostics<EvidenceDiagnostics>(EvidenceSource::kName)   // the best path's sum
 /// Thread safety: not thread-safe (evidence across windows); owned by one Detector, used by one thread.
+#include <cstdint>
 #include <optional>
 #include <string_view>
+#include <vector>
 
 #include <opencv2/core.hpp>
 
@@ -112,6 +114,7 @@ class EvidenceSource final : public CandidateSource {
   EvidenceGrid grid_;
   int width_ = 0, height_ = 0, cols_ = 0, rows_ = 0;
   cv::Mat fired_, coarse_;
+  std::vector<std::uint16_t> column_fired_;  ///< count_fired's per-column sums over one row of cells
   /// Where each cell's scene point was in the last window (EvidenceGrid::update's `previous`),
   /// written after each update for the next; valid when `moved_` (the window had ego-motion).
   cv::Mat previous_;
