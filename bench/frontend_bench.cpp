@@ -27,6 +27,7 @@
 
 #include "fdv/compensation/compensator.h"
 #include "fdv/compensation/reference_warp.h"
+#include "fdv/compensation/undistortion_map.h"
 #include "fdv/detection/detector.h"
 #include "fdv/detection/gaussian_fit_source.h"
 #include "fdv/detection/hot_pixels.h"
@@ -181,6 +182,14 @@ void BM_DepthPreparation(benchmark::State& state, bool all_invalid) {
 }
 BENCHMARK_CAPTURE(BM_DepthPreparation, valid, false)->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_DepthPreparation, all_invalid, true)->Unit(benchmark::kMillisecond);
+
+// The lens inverse per raw pixel that every compensator builds when it is made (UndistortionMap):
+// part of each new Perception's cost, not of a window's. The benchmark camera's lens (640x480).
+void BM_UndistortionMap(benchmark::State& state) {
+  const PinholeCamera camera = bench_calibration().event_camera;
+  for (auto _ : state) benchmark::DoNotOptimize(UndistortionMap(camera).pixels_without_inverse());
+}
+BENCHMARK(BM_UndistortionMap)->Unit(benchmark::kMillisecond);
 
 // Cutting the stream into windows (EventWindower, the pipeline's first stage): 40 windows of the
 // benchmark window's events (5 M ev/s, 1 s) pushed in 1 ms slices, as a driver delivers them.

@@ -483,6 +483,31 @@ TEST(Warp, APinholeCamerasMapIsKInverseAndTheIdentityGrid) {
     }
 }
 
+TEST(Warp, ADistortedCamerasMapIsTheLensInverseAtEveryPixel) {
+  // The map solves each pixel from its left neighbour's solution: it must give the camera model's
+  // own inverse (solved cold, per pixel) to float precision, and no inverse at the same pixels,
+  // on a lens that folds inside the image (the corners) and on a mild one with tangential terms.
+  for (const PinholeCamera& camera :
+       {PinholeCamera{640, 480, 400.0, 400.0, 320.0, 240.0, {-0.2, 0, 0, 0, 0}},
+        PinholeCamera{346, 260, 255.5, 250.25, 170.3, 131.7, {-0.35, 0.15, 0.001, -0.0008, -0.02}}}) {
+    const UndistortionMap map(camera);
+    int without_inverse = 0;
+    for (int y = 0; y < camera.height; ++y)
+      for (int x = 0; x < camera.width; ++x) {
+        const Eigen::Vector2d xn = camera.pixel_to_normalized({x, y});
+        if (!xn.allFinite()) {
+          ++without_inverse;
+          ASSERT_EQ(map.grid_index(x, y), UndistortionMap::kNoInverse) << x << ", " << y;
+          continue;
+        }
+        ASSERT_NEAR(map.ray(x, y).x, xn.x(), 1e-6 * std::max(1.0, std::abs(xn.x()))) << x << ", " << y;
+        ASSERT_NEAR(map.ray(x, y).y, xn.y(), 1e-6 * std::max(1.0, std::abs(xn.y()))) << x << ", " << y;
+        ASSERT_NE(map.grid_index(x, y), UndistortionMap::kNoInverse) << x << ", " << y;
+      }
+    EXPECT_EQ(map.pixels_without_inverse(), without_inverse);
+  }
+}
+
 TEST(Warp, EmptyWindowIsFine) {
   Calibration calib;
   calib.event_camera = test_camera();

@@ -15,13 +15,15 @@ FDV_NO_FUZZ_COVERAGE UndistortionMap::UndistortionMap(const PinholeCamera& camer
   // Without distortion the lens solver returns K⁻¹·px (PinholeCamera::undistort): the same
   // arithmetic without its per-pixel call, which was most of a new Perception's cost.
   const bool pinhole = camera.distortion.is_zero();
-  for (int y = 0; y < camera.height; ++y)
+  for (int y = 0; y < camera.height; ++y) {
+    Eigen::Vector2d near(-camera.cx / camera.fx, (y - camera.cy) / camera.fy);  // the row's left end
     for (int x = 0; x < camera.width; ++x) {
       const std::size_t i = static_cast<std::size_t>(y) * camera.width + x;
       // Plain doubles, not an Eigen vector: in the fuzz build each element access was a call.
       double nx = (x - camera.cx) / camera.fx, ny = (y - camera.cy) / camera.fy;
       if (!pinhole) {
-        const Eigen::Vector2d xn = camera.undistort({nx, ny});
+        const Eigen::Vector2d xn = camera.undistort_near({nx, ny}, near);
+        if (xn.allFinite()) near = xn;
         nx = xn.x(), ny = xn.y();
         if (!std::isfinite(nx) || !std::isfinite(ny)) {
           const float nan = std::nanf("");
@@ -40,6 +42,7 @@ FDV_NO_FUZZ_COVERAGE UndistortionMap::UndistortionMap(const PinholeCamera& camer
         grid_index_[i] = kOutside;
       }
     }
+  }
 }
 
 Eigen::Vector2d UndistortionMap::undistorted_to_raw(const Eigen::Vector2d& uv) const {

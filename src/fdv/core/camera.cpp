@@ -89,6 +89,18 @@ LensInversion PinholeCamera::invert_distortion(const Eigen::Vector2d& xd,
   return out;
 }
 
+Eigen::Vector2d PinholeCamera::undistort_near(const Eigen::Vector2d& xd, const Eigen::Vector2d& near) const {
+  constexpr LensInversionSettings kFromNeighbour{.max_steps = 19, .tolerance = 1e-13, .damped = false};
+  const LensInversion inverse = invert_distortion(xd, near, kFromNeighbour);
+  // Undamped steps can leap past the lens map's fold onto a branch where it has turned back (det J
+  // ≤ 0) or even mirrored the image (a negative radial factor): a root there is no inverse.
+  const Eigen::Vector2d& xn = inverse.xn;
+  const double r2 = xn.squaredNorm();
+  const double radial = 1 + r2 * (distortion.k1 + r2 * (distortion.k2 + r2 * distortion.k3));
+  const bool on_the_lens = radial > 0 && distortion_jacobian(distortion, xn).determinant() > 0;
+  return !inverse.folded && inverse.residual < kFromNeighbour.tolerance && on_the_lens ? xn : undistort(xd);
+}
+
 Eigen::Vector2d PinholeCamera::project(const Eigen::Vector3d& X) const {
   return normalized_to_pixel(X.head<2>() / X.z());
 }

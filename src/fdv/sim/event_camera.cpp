@@ -90,9 +90,6 @@ void EventCameraSim::lay_out_tiles() {
 // neighbour's solution (2-3 steps instead of a cold start per pixel); the camera model's own
 // inverse where that fails, and beyond the lens model's fold its radial extension.
 EventCameraSim::LensGrid EventCameraSim::trace_pixel_rays() const {
-  // Plain Newton steps suffice from a neighbour's solution (it converges in 2-3 of them); a
-  // pixel still unsolved after 19 falls back to the camera model's damped inverse.
-  const LensInversionSettings from_neighbour{.max_steps = 19, .tolerance = 1e-13, .damped = false};
   const PinholeCamera& cam = calib_.event_camera;
   const auto n = static_cast<std::size_t>(width_) * height_;
   LensGrid lens;
@@ -102,9 +99,7 @@ EventCameraSim::LensGrid EventCameraSim::trace_pixel_rays() const {
     Eigen::Vector2d guess((0 - cam.cx) / cam.fx, (v - cam.cy) / cam.fy);
     for (int u = 0; u < width_; ++u) {
       const Eigen::Vector2d xd((u - cam.cx) / cam.fx, (v - cam.cy) / cam.fy);
-      const LensInversion inverse = cam.invert_distortion(xd, guess, from_neighbour);
-      const bool converged = !inverse.folded && inverse.residual < from_neighbour.tolerance;
-      Eigen::Vector2d xn = converged ? inverse.xn : cam.pixel_to_normalized({u, v});
+      Eigen::Vector2d xn = cam.undistort_near(xd, guess);
       if (!xn.allFinite()) xn = radial_extension(cam, xd);
       guess = xn;
       lens.ray_x[row * width_ + u] = xn.x(), lens.ray_y[row * width_ + u] = xn.y();
