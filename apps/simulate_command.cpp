@@ -222,7 +222,8 @@ void run_simulate(const SimulateArgs& args) {
                    {"tilt_clipped", summary.flight.tilt_clipped},
                    {"late", summary.flight.late},
                    {"floor_holds", summary.flight.floor_holds},
-                   {"ceiling_holds", summary.flight.ceiling_holds}};
+                   {"ceiling_holds", summary.flight.ceiling_holds},
+                   {"wall_holds", summary.flight.wall_holds}};
   j["wall_s"] = summary.wall_s;
   j["realtime_factor"] = summary.simulated_s / summary.wall_s;
   j["mean_pixel_sample_rate_hz"] = summary.mean_sample_rate_hz;

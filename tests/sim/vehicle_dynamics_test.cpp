@@ -135,6 +135,49 @@ TEST(FlownVehicle, TheCeilingStopsAClimbAndHoldsItsHeight) {
   EXPECT_EQ(flown.counters().floor_holds, 0u);
 }
 
+TEST(FlownVehicle, AWallStopsASidewaysMotionInsideTheRoom) {
+  // A room 5 m to each side of the hover point; a sideways command the vehicle follows by tilting.
+  const VehicleConfig config = still_hover();
+  const VehicleTrajectory path(config, 1, kGravity);
+  const Eigen::AlignedBox3d room(Eigen::Vector3d(-10, -5, 0), Eigen::Vector3d(60, 5, 5));
+  FlownVehicle flown(path, config.response, kGravity, room);
+  flown.command(0, {0, 8.0, 0});
+  flown.advance_to(3.0);
+  double farthest = -10;
+  for (double t = 0; t <= 3.0; t += 1e-3) farthest = std::max(farthest, flown.at(t).p_W.y());
+  // Unbraked, 3 s at 8 m/s² would carry it 36 m; braked by a tilt, which lags by τ, it stops
+  // within the margin's 0.5 m beyond the wall's line and inside the room.
+  const double wall = room.max().y() - config.response.wall_margin_m;
+  EXPECT_LT(farthest, room.max().y());
+  EXPECT_GT(farthest, wall - 0.05);  // it did go up to the wall
+  // Stopped, the command towards the wall is dropped; the brake's tilt relaxes with the lag, so
+  // the vehicle drifts back into the room at about |g|·τ (0.8 m/s), never towards the wall.
+  const double drift = flown.at(3.0).v_W.y();
+  EXPECT_LE(drift, 0.0);
+  EXPECT_GT(drift, -9.81 * config.response.attitude_time_constant_s - 0.1);
+  EXPECT_EQ(flown.counters().wall_holds, 1u);
+  EXPECT_EQ(flown.counters().floor_holds + flown.counters().ceiling_holds, 0u);
+}
+
+TEST(FlownVehicle, FarFromTheWallsTheRoomChangesNothing) {
+  // Bit for bit: the walls' rule only acts once a wall is near.
+  const VehicleConfig config = still_hover();
+  const VehicleTrajectory path(config, 1, kGravity);
+  FlownVehicle open(path, config.response, kGravity);
+  FlownVehicle walled(path, config.response, kGravity,
+                      Eigen::AlignedBox3d(Eigen::Vector3d(-10, -5, 0), Eigen::Vector3d(60, 5, 5)));
+  for (FlownVehicle* v : {&open, &walled}) {
+    v->command(from_seconds(0.1), {0, 8.0, 2.0});
+    v->command(from_seconds(0.35), {0, 0, 0});
+    v->advance_to(1.5);
+  }
+  for (double t = 0; t <= 1.5; t += 0.0137) {
+    EXPECT_EQ(open.at(t).p_W, walled.at(t).p_W) << t;
+    EXPECT_EQ(open.at(t).R_W_B, walled.at(t).R_W_B) << t;
+  }
+  EXPECT_EQ(walled.counters().wall_holds, 0u);
+}
+
 TEST(FlownVehicle, ACommandForATimeAlreadyFlownActsFromTheHorizonAndIsCounted) {
   const VehicleConfig config = still_hover();
   const VehicleTrajectory path(config, 1, kGravity);
@@ -273,6 +316,8 @@ TEST(SimFlight, TheIMUReadsTheSteadyTiltOfALateralCommand) {
   c.imu.gyro_random_walk = c.imu.accel_random_walk = 0;
   c.imu.gyro_bias_sigma = c.imu.accel_bias_sigma = 0;
   const double a = 6.0, t_cmd = 0.2;
+  // A second at 6 m/s² sideways: wide enough a room that no wall brakes it (6 m/s needs 3.7 m).
+  c.scene.room_min_W_m.y() = -50, c.scene.room_max_W_m.y() = 50;
   Simulator sim(c);
   MemorySink sink;
   sim.begin(sink, Flight::kCommanded);

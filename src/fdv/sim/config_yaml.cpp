@@ -156,6 +156,7 @@ void describe(V& v, VehicleResponseConfig& c) {
   v("max_tilt_deg", c.max_tilt_deg);
   v("min_height_m", c.min_height_m);
   v("max_height_m", c.max_height_m);
+  v("wall_margin_m", c.wall_margin_m);
   v("step_s", c.step_s);
 }
 

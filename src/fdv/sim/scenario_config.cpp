@@ -183,6 +183,7 @@ Problem ScenarioConfig::find_problem() const {
   c.need(v.response.max_height_m <= scene.room_max_W_m.z(), rk + "max_height_m",
          fmt::format("must not be above the room's ceiling (scene.room_max_W_m z = {}), got {}",
                      scene.room_max_W_m.z(), v.response.max_height_m));
+  c.in_range(v.response.wall_margin_m, 0, 10, rk + "wall_margin_m");
   c.in_range(v.response.step_s, 1e-5, 1e-2, rk + "step_s");
 
   const auto& s = scene;

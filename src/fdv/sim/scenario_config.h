@@ -139,6 +139,10 @@ struct VehicleResponseConfig {
   double min_height_m = 0.5;
   /// [m] its ceiling in W z, the same rule for a climb (chosen: 0.5 m below the default room's).
   double max_height_m = 4.5;
+  /// [m] the walls, the same rule horizontally: a motion towards a side of the room
+  /// (scene.room_min_W_m / room_max_W_m, x and y) is braked to stop this far inside it (chosen: a
+  /// sideways stop lags the tilt by about τ, 0.2-0.3 m at the 2-3 m/s of a dodge).
+  double wall_margin_m = 0.5;
   double step_s = 2.5e-4;  ///< [s] integration step of the flown deviation
 };
 

@@ -15,12 +15,13 @@ constexpr double kBrakeStart = 0.5;
 }  // namespace
 
 FlownVehicle::FlownVehicle(const VehicleTrajectory& path, const VehicleResponseConfig& response,
-                           const Eigen::Vector3d& gravity_W)
+                           const Eigen::Vector3d& gravity_W, const Eigen::AlignedBox3d& room)
     : path_(&path),
       response_(response),
       gravity_(gravity_W),
       up_(-gravity_W.normalized()),
-      step_s_(response.step_s) {}
+      step_s_(response.step_s),
+      room_(room) {}
 
 FlownVehicle::FlownVehicle(const FlownVehicle& state, const VehicleTrajectory& path)
     : FlownVehicle(state) {
@@ -57,32 +58,43 @@ Eigen::Vector3d FlownVehicle::command_at(std::size_t k) {
   const double height = (path.p_W + nodes_[k].p).dot(up_);
   const double climb = (path.v_W + nodes_[k].v).dot(up_);
   const double vertical = a_c.dot(up_);
-  double held = hold_height(height - response_.min_height_m, climb, vertical, floor_holding_,
-                            counters_.floor_holds);
-  held = -hold_height(response_.max_height_m - height, -climb, -held, ceiling_holding_,
-                      counters_.ceiling_holds);
+  double held = hold_at_limit(height - response_.min_height_m, climb, vertical, floor_holding_,
+                              counters_.floor_holds);
+  held = -hold_at_limit(response_.max_height_m - height, -climb, -held, ceiling_holding_,
+                        counters_.ceiling_holds);
   if (floor_holding_ || ceiling_holding_) a_c += (held - vertical) * up_;
+  if (room_.isEmpty()) return a_c;
+  // The walls: the same rule along W x and y (the room is a box in W). The brake is a tilt, which
+  // the attitude lags by about τ; the margin takes the overshoot.
+  for (int axis : {0, 1}) {
+    const double p = path.p_W[axis] + nodes_[k].p[axis], v = path.v_W[axis] + nodes_[k].v[axis];
+    const double lo = room_.min()[axis] + response_.wall_margin_m, hi = room_.max()[axis] - response_.wall_margin_m;
+    double across = hold_at_limit(p - lo, v, a_c[axis], wall_holding_[axis][0], counters_.wall_holds);
+    across = -hold_at_limit(hi - p, -v, -across, wall_holding_[axis][1], counters_.wall_holds);
+    if (wall_holding_[axis][0] || wall_holding_[axis][1]) a_c[axis] = across;
+  }
   return a_c;
 }
 
-double FlownVehicle::hold_height(double gap, double approach, double vertical, bool& holding,
-                                 std::uint64_t& holds) const {
+double FlownVehicle::hold_at_limit(double gap, double approach, double away, bool& holding,
+                                   std::uint64_t& holds) const {
   // Brake a motion towards the limit once stopping there needs half of |g| (braking at up to |g|
-  // then always stops it there), keep braking as needed until it stops, then hold the height
-  // reached while the command points towards the limit. `gap` is the distance to the limit,
-  // `approach` the speed away from it and `vertical` the command's acceleration away from it,
-  // all negative towards it.
+  // then always stops it there), keep braking as needed until it stops, then drop the command's
+  // part towards the limit while it points there (a height is then held; a wall's tilt lags, and
+  // the vehicle drifts back from it while the tilt relaxes). `gap` is the distance to the limit,
+  // `approach` the speed away from it and `away` the command's acceleration away from it, all
+  // negative towards it.
   const double g = gravity_.norm();
   const double brake = approach >= 0 ? 0.0 : gap > 0 ? approach * approach / (2 * gap) : g;
-  const bool hold = brake >= kBrakeStart * g || (gap <= 0 && vertical < 0) ||
-                    (holding && (approach < 0 || vertical < 0));
+  const bool hold = brake >= kBrakeStart * g || (gap <= 0 && away < 0) ||
+                    (holding && (approach < 0 || away < 0));
   if (hold) {
     if (!holding) ++holds;
-    vertical = std::max(vertical, std::min(brake, g));
-    if (gap <= 0 || approach >= 0) vertical = std::max(vertical, 0.0);  // stopped: hold the height
+    away = std::max(away, std::min(brake, g));
+    if (gap <= 0 || approach >= 0) away = std::max(away, 0.0);  // stopped: hold the position
   }
   holding = hold;
-  return vertical;
+  return away;
 }
 
 Eigen::Vector3d FlownVehicle::thrust_direction(const Eigen::Vector3d& a_c) const {

@@ -17,7 +17,8 @@
 /// steady state. The tilt R_Δ (n = R_Δ u) rotates the path's own attitude: R_W_B = R_Δ R_W_B,path.
 /// Near min_height_m a descent is braked (at up to |g|, from when half of that is needed to stop
 /// at the floor), and at the floor a downward command is dropped; max_height_m is a ceiling with
-/// the same rule upside down (braking a climb at up to |g| is cutting the thrust).
+/// the same rule upside down (braking a climb at up to |g| is cutting the thrust). The room's
+/// sides (x and y), less wall_margin_m, are walls with the same rule, braking by a tilt.
 ///
 /// A command takes effect from its time on and replaces every command scheduled at or after it.
 /// A command earlier than the integrated horizon takes effect at the horizon (counted as late).
@@ -46,12 +47,15 @@ struct FlightCounters {
   std::uint64_t late = 0;          ///< commands for a time already integrated
   std::uint64_t floor_holds = 0;   ///< times the floor stopped a descent
   std::uint64_t ceiling_holds = 0;  ///< times the ceiling stopped a climb
+  std::uint64_t wall_holds = 0;     ///< times a wall stopped a sideways motion
 };
 
 class FlownVehicle {
  public:
+  /// `room`: the scene's room (scene.room_min_W_m / room_max_W_m), whose sides are walls; empty
+  /// (the default): none.
   FlownVehicle(const VehicleTrajectory& path, const VehicleResponseConfig& response,
-               const Eigen::Vector3d& gravity_W);
+               const Eigen::Vector3d& gravity_W, const Eigen::AlignedBox3d& room = {});
   /// `state`'s vehicle as it is now (its commands and integrated deviation), flying on `path`
   /// (equal to the one `state` flies on): a fork of a run.
   FlownVehicle(const FlownVehicle& state, const VehicleTrajectory& path);
@@ -81,12 +85,13 @@ class FlownVehicle {
     Eigen::Vector3d w_W = Eigen::Vector3d::Zero();
     Eigen::Quaterniond q = Eigen::Quaterniond::Identity();  ///< R_Δ
   };
-  /// The command in force over the step starting at node `k`, with the height band applied.
+  /// The command in force over the step starting at node `k`, with the height band and the
+  /// walls applied.
   Eigen::Vector3d command_at(std::size_t k);
-  /// The vertical acceleration left of `vertical` by one side of the band (see command_at).
-  /// `holding` is that side's state, `holds` its counter.
-  double hold_height(double gap, double approach, double vertical, bool& holding,
-                     std::uint64_t& holds) const;
+  /// The acceleration left of `away` (along one axis, positive away from the limit) by one
+  /// limit: the floor, the ceiling or a wall. `holding` is that limit's state, `holds` its counter.
+  double hold_at_limit(double gap, double approach, double away, bool& holding,
+                       std::uint64_t& holds) const;
   /// n_c, clipped to the tilt limit.
   Eigen::Vector3d thrust_direction(const Eigen::Vector3d& a_c) const;
   /// T n + g for command `a_c` with the tilt `q`.
@@ -102,7 +107,9 @@ class FlownVehicle {
   double horizon_s_ = 0;  ///< the last advance_to()
   std::vector<Node> nodes_;
   std::map<TimeNs, Eigen::Vector3d> commands_;  ///< by the time each takes effect
+  Eigen::AlignedBox3d room_;
   bool floor_holding_ = false, ceiling_holding_ = false;
+  bool wall_holding_[2][2] = {};  ///< [x, y][the room's min side, its max side]
   FlightCounters counters_;
 };
 

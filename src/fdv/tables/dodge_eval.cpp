@@ -516,7 +516,8 @@ nlohmann::json to_json(const DodgeEval& e, const DodgeEvalOptions& options) {
                      {"tilt_clipped", row.flight.tilt_clipped},
                      {"late", row.flight.late},
                      {"floor_holds", row.flight.floor_holds},
-                     {"ceiling_holds", row.flight.ceiling_holds}};
+                     {"ceiling_holds", row.flight.ceiling_holds},
+                     {"wall_holds", row.flight.wall_holds}};
     }
     j["throws"].push_back(t);
   }
