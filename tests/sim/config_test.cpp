@@ -114,6 +114,9 @@ TEST(ScenarioConfig, BadFilesGiveFileKeyAndReason) {
   EXPECT_EQ(error_of("scene:\n  room_max_W_m: [60, 5, 3]\n"),
             "key vehicle.response.max_height_m | must not be above the room's ceiling "
             "(scene.room_max_W_m z = 3), got 4.5");
+  EXPECT_EQ(error_of("vehicle:\n  response: {wall_margin_m: 5}\n"),
+            "key vehicle.response.wall_margin_m | must leave the walls apart: twice it below the "
+            "room's narrowest side in x and y (10 m), got 5");
 }
 
 /// "where | reason" of apply_scenario_yaml_text on `yaml` (named "scenario.yaml").

@@ -40,11 +40,14 @@ Eigen::Vector2d PinholeCamera::undistort(const Eigen::Vector2d& xd) const {
 
 namespace {
 
+/// 1 + k1 r² + k2 r⁴ + k3 r⁶: the radial part of distort() at squared radius r2.
+double radial_factor(const Distortion& d, double r2) { return 1 + r2 * (d.k1 + r2 * (d.k2 + r2 * d.k3)); }
+
 /// d distort / d xn at xn.
 Eigen::Matrix2d distortion_jacobian(const Distortion& d, const Eigen::Vector2d& xn) {
   const double x = xn.x(), y = xn.y();
   const double r2 = x * x + y * y;
-  const double radial = 1 + r2 * (d.k1 + r2 * (d.k2 + r2 * d.k3));
+  const double radial = radial_factor(d, r2);
   const double dradial_dr2 = d.k1 + r2 * (2 * d.k2 + 3 * r2 * d.k3);
   Eigen::Matrix2d J;
   J(0, 0) = radial + 2 * x * x * dradial_dr2 + 2 * d.p1 * y + 6 * d.p2 * x;
@@ -95,9 +98,8 @@ Eigen::Vector2d PinholeCamera::undistort_near(const Eigen::Vector2d& xd, const E
   // Undamped steps can leap past the lens map's fold onto a branch where it has turned back (det J
   // ≤ 0) or even mirrored the image (a negative radial factor): a root there is no inverse.
   const Eigen::Vector2d& xn = inverse.xn;
-  const double r2 = xn.squaredNorm();
-  const double radial = 1 + r2 * (distortion.k1 + r2 * (distortion.k2 + r2 * distortion.k3));
-  const bool on_the_lens = radial > 0 && distortion_jacobian(distortion, xn).determinant() > 0;
+  const bool on_the_lens = radial_factor(distortion, xn.squaredNorm()) > 0 &&
+                           distortion_jacobian(distortion, xn).determinant() > 0;
   return !inverse.folded && inverse.residual < kFromNeighbour.tolerance && on_the_lens ? xn : undistort(xd);
 }
 

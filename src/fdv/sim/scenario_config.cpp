@@ -184,6 +184,12 @@ Problem ScenarioConfig::find_problem() const {
          fmt::format("must not be above the room's ceiling (scene.room_max_W_m z = {}), got {}",
                      scene.room_max_W_m.z(), v.response.max_height_m));
   c.in_range(v.response.wall_margin_m, 0, 10, rk + "wall_margin_m");
+  // Walls that met or crossed would brake every sideways motion both ways at once.
+  const double narrowest = (scene.room_max_W_m - scene.room_min_W_m).head<2>().minCoeff();
+  c.need(2 * v.response.wall_margin_m < narrowest, rk + "wall_margin_m",
+         fmt::format("must leave the walls apart: twice it below the room's narrowest side in x and y "
+                     "({} m), got {}",
+                     narrowest, v.response.wall_margin_m));
   c.in_range(v.response.step_s, 1e-5, 1e-2, rk + "step_s");
 
   const auto& s = scene;

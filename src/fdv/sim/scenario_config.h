@@ -17,6 +17,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <array>
 #include <cstdint>
 #include <optional>
@@ -193,6 +194,7 @@ struct PanelConfig {
 struct SceneConfig {
   Eigen::Vector3d room_min_W_m{-10.0, -5.0, 0.0};  ///< [m] floor at z = min
   Eigen::Vector3d room_max_W_m{60.0, 5.0, 5.0};    ///< [m]
+  Eigen::AlignedBox3d room() const { return {room_min_W_m, room_max_W_m}; }
   double illuminance_lux = 500.0;  ///< [lux] bright indoor (paper: 240-1100 lux bright runs)
   double ambient_fraction = 0.6;   ///< share of diffuse light; the rest comes from light_direction
   Eigen::Vector3d light_direction_W{0.3, 0.2, 1.0};  ///< towards the light (normalised on use)

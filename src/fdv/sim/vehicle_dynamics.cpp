@@ -91,7 +91,7 @@ double FlownVehicle::hold_at_limit(double gap, double approach, double away, boo
   if (hold) {
     if (!holding) ++holds;
     away = std::max(away, std::min(brake, g));
-    if (gap <= 0 || approach >= 0) away = std::max(away, 0.0);  // stopped: hold the position
+    if (gap <= 0 || approach >= 0) away = std::max(away, 0.0);  // stopped: no more towards it
   }
   holding = hold;
   return away;

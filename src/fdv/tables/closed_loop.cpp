@@ -265,8 +265,7 @@ ClosedLoopFlight fly_oracle(const sim::ScenarioConfig& config, const DatasetTrut
                             const PerceptionOptions& options) {
   ClosedLoopFlight out;
   const sim::VehicleTrajectory path(config.vehicle, config.seed, config.gravity_W_m_s2);
-  sim::FlownVehicle vehicle(path, config.vehicle.response, config.gravity_W_m_s2,
-                            {config.scene.room_min_W_m, config.scene.room_max_W_m});
+  sim::FlownVehicle vehicle(path, config.vehicle.response, config.gravity_W_m_s2, config.scene.room());
   DodgePlanner planner(options.dodge, options.prediction.safety_radius_m);
   for (TimeNs t : window_ends) {
     if (!start || t < *start) continue;
@@ -303,8 +302,7 @@ std::optional<DodgeDecision> decide_on_truth(DodgePlanner& planner, const Datase
 DatasetTruth fly_decisions(const sim::ScenarioConfig& config, const DatasetTruth& truth,
                            const std::vector<DodgeDecision>& decisions, sim::FlightCounters* counters) {
   const sim::VehicleTrajectory path(config.vehicle, config.seed, config.gravity_W_m_s2);
-  sim::FlownVehicle vehicle(path, config.vehicle.response, config.gravity_W_m_s2,
-                            {config.scene.room_min_W_m, config.scene.room_max_W_m});
+  sim::FlownVehicle vehicle(path, config.vehicle.response, config.gravity_W_m_s2, config.scene.room());
   for (const SetpointChange& c : setpoint_schedule(decisions)) vehicle.command(c.t, c.acceleration_W);
   DatasetTruth out = truth_frame(config);
   out.body = sample_body(config, vehicle);
