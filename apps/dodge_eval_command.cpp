@@ -5,6 +5,8 @@
 #include <spdlog/spdlog.h>
 
 #include <iostream>
+#include <string>
+#include <vector>
 
 #include "apps/commands.h"
 #include "fdv/eval/statistics.h"
@@ -22,15 +24,17 @@ struct DodgeEvalArgs {
   int jobs = 2;
   bool keep = false;
   bool closed_loop = false;
+  std::vector<std::string> baselines;
 };
 
 std::string percent(int n, int of) { return of > 0 ? fmt::format("{:.1f} %", 100.0 * n / of) : "-"; }
 
-void print_table(const DodgeEval& e, OutcomeSet set, const std::string& title) {
+void print_table(const DodgeEval& e, const std::vector<std::string>& methods, OutcomeSet set,
+                 const std::string& title) {
   std::cout << "\n" << title << "\n\n| method | threats escaped | false alarms (non-threats) | near misses manoeuvred | "
                "warning time median [s] | miss error at decision median [m] | re-plans |\n"
                "|---|---|---|---|---|---|---|\n";
-  for (const std::string& method : kDodgeMethods) {
+  for (const std::string& method : methods) {
     const DodgeTotals t = dodge_totals(e.throws, method, set);
     const Summary w = summarize(t.warning_times_s), m = summarize(t.miss_errors_m);
     std::cout << fmt::format("| {} | {}/{} ({}) | {}/{} ({}) | {}/{} | {} | {} | {} |\n", method, t.escaped, t.threats,
@@ -43,7 +47,7 @@ void print_table(const DodgeEval& e, OutcomeSet set, const std::string& title) {
 
 /// What the manoeuvres did to perception, per perception method: in the loop, and open loop (the
 /// same windows without the manoeuvre seen) as the reference.
-void print_maneuver_perception(const DodgeEval& e) {
+void print_maneuver_perception(const DodgeEval& e, const std::vector<std::string>& methods) {
   std::cout << "\nFrom the first decision to the closest approach (the ball eligible):\n\n"
                "| method | recall, closed loop | recall, open loop | tracks lost, closed loop | tracks lost, open loop | "
                "re-created, closed loop | re-created, open loop |\n"
@@ -54,7 +58,8 @@ void print_maneuver_perception(const DodgeEval& e) {
                                                                         static_cast<double>(t.eligible_after_decision))
                                                  : "-");
   };
-  for (const char* method : {"ours", "point_estimate", "mono", "rotation"}) {
+  for (const std::string& method : methods) {
+    if (method.starts_with("oracle")) continue;  // no perception
     const DodgeTotals closed = dodge_totals(e.throws, method), open = dodge_totals(e.throws, method, &DodgeThrow::open_loop_outcomes);
     std::cout << fmt::format("| {} | {} | {} | {}/{} | {}/{} | {}/{} | {}/{} |\n", method, recall(closed), recall(open),
                              closed.tracks_lost, closed.tracks_checked, open.tracks_lost, open.tracks_checked,
@@ -91,23 +96,34 @@ void add_dodge_eval_command(CLI::App& app) {
   cmd->add_flag("--closed-loop", args->closed_loop,
                 "also fly every method through the simulator's vehicle model, the scene rendered again as it "
                 "manoeuvres (docs/AVOIDANCE.md \"Closed loop\"); the totals are then the closed loop's");
-  cmd->callback([args] {
+  CLI::Option* baselines =
+      cmd->add_option("--baselines", args->baselines,
+                      "the baselines evaluated beside ours, comma-separated, or none (default "
+                      "point_estimate,mono,rotation); fewer is faster, the oracles always run")
+          ->delimiter(',');
+  cmd->callback([args, baselines] {
     DodgeEvalOptions o;
     o.seeds = parse_seed_list(args->seeds);
     o.out_dir = args->out;
     o.jobs = args->jobs;
     o.keep = args->keep;
     o.closed_loop = args->closed_loop;
+    if (baselines->count() > 0) {
+      o.baselines = args->baselines;
+      std::erase(o.baselines, "none");
+    }
     if (!args->config.empty()) o.perception = load_perception_options_file(args->config);
     spdlog::info("dodge-eval: {} throws, {} at a time, into {}", o.seeds.size(), o.jobs, o.out_dir);
     const DodgeEval e = run_dodge_eval(o);
+    const std::vector<std::string> methods = evaluated_methods(o);
     if (o.closed_loop) {
-      print_table(e, &DodgeThrow::outcomes, "Closed loop (flown, the scene rendered again):");
-      print_maneuver_perception(e);
-      print_table(e, &DodgeThrow::dynamics_outcomes, "Open-loop decisions flown by the vehicle model, not rendered again:");
-      print_table(e, &DodgeThrow::open_loop_outcomes, "Open loop (kinematic replay):");
+      print_table(e, methods, &DodgeThrow::outcomes, "Closed loop (flown, the scene rendered again):");
+      print_maneuver_perception(e, methods);
+      print_table(e, methods, &DodgeThrow::dynamics_outcomes,
+                  "Open-loop decisions flown by the vehicle model, not rendered again:");
+      print_table(e, methods, &DodgeThrow::open_loop_outcomes, "Open loop (kinematic replay):");
     } else {
-      print_table(e, &DodgeThrow::outcomes, "Open loop (kinematic replay):");
+      print_table(e, methods, &DodgeThrow::outcomes, "Open loop (kinematic replay):");
     }
     const nlohmann::json j = to_json(e, o);
     print_lags(j["late_against_oracle_visible"]);

@@ -7,8 +7,11 @@
 #include <algorithm>
 #include <cmath>
 #include <optional>
+#include <string>
+#include <vector>
 
 #include "eval/handmade_truth.h"
+#include "fdv/core/error.h"
 #include "fdv/sim/dataset_cache.h"
 #include "fdv/sim/scenario_config.h"
 #include "test_support.h"
@@ -119,6 +122,41 @@ TEST(DodgeEval, ThrowNeverInViewGivesNoDecisionWithTheReason) {
   }
   EXPECT_FALSE(row.first_in_view_t_s);
   EXPECT_FALSE(row.first_detection_t_s);
+}
+
+// The baselines chosen are the ones that run: hover_headon seed 1 at 320x240, a head-on throw
+// that ours dodges at 0.80 s, scored with every baseline and with `rotation` alone. Ours'
+// decisions do not depend on which baselines run beside it, nor do the oracles' (they start
+// from ours' windows); a name that is not a baseline is refused.
+TEST(DodgeEval, OnlyTheChosenBaselinesRunAndOursIsUnchanged) {
+  sim::ScenarioConfig c = sim::make_preset("hover_headon", 1);
+  sim::set_event_resolution(c, 320, 240);
+  c.depth_camera.width = 320, c.depth_camera.height = 240;
+  c.depth_camera.fx = c.depth_camera.fy = 192.85, c.depth_camera.cx = 160, c.depth_camera.cy = 120;
+  c.duration_s = 0.9;
+  c.threads = 1;
+  const std::string dir = test::scratch_dir("dodge_eval_baselines") + "/dataset";
+  sim::ensure_simulated(c, dir);
+  DodgeEvalOptions all;
+  DodgeEvalOptions rotation_only;
+  rotation_only.baselines = {"rotation"};
+  EXPECT_EQ(evaluated_methods(rotation_only),
+            (std::vector<std::string>{"ours", "rotation", "oracle", "oracle_visible"}));
+  const DodgeThrow full = score_dodge_dataset(dir, all);
+  const DodgeThrow some = score_dodge_dataset(dir, rotation_only);
+  ASSERT_EQ(full.outcomes.size(), kDodgeMethods.size());
+  ASSERT_EQ(some.outcomes.size(), 4u);
+  ASSERT_TRUE(full.outcomes.at("ours").decision_t);  // what the test is for: a decided throw
+  for (const auto& [method, o] : some.outcomes) {
+    SCOPED_TRACE(method);
+    const DodgeOutcome& reference = full.outcomes.at(method);
+    EXPECT_EQ(o.decision_t, reference.decision_t);
+    EXPECT_EQ(o.decisions, reference.decisions);
+    EXPECT_EQ(o.miss_with_maneuver_m, reference.miss_with_maneuver_m);
+  }
+  DodgeEvalOptions unknown;
+  unknown.baselines = {"rotation", "rotaton"};
+  EXPECT_THROW(evaluated_methods(unknown), ConfigError);
 }
 
 std::vector<TimeNs> window_ends_every_25ms(int count) {

@@ -1,5 +1,7 @@
 #include "fdv/tables/dodge_eval.h"
 
+#include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -90,19 +92,25 @@ std::vector<DodgeDecision> oracle_decisions(const DatasetTruth& truth, int ball,
   return decisions;
 }
 
-/// Ours, and the baselines that change one thing each.
-std::map<std::string, PerceptionOptions> perception_variants(const PerceptionOptions& options) {
-  PerceptionOptions ours = options;
+/// Ours, and the baselines of `options` that change one thing each.
+std::map<std::string, PerceptionOptions> perception_variants(const DodgeEvalOptions& options) {
+  PerceptionOptions ours = options.perception;
   ours.threads = 1;
   std::map<std::string, PerceptionOptions> variants;
   variants["ours"] = ours;
-  variants["point_estimate"] = ours;
-  variants["point_estimate"].dodge_from = DodgeSource::kFusionPointEstimate;
-  variants["mono"] = ours;
-  variants["mono"].dodge_from = DodgeSource::kMonocular;
-  variants["mono"].monocular_baseline = true;
-  variants["rotation"] = ours;
-  variants["rotation"].compensation.method = CompensationMethod::kRotation;
+  for (const std::string& method : evaluated_methods(options)) {
+    if (method == "point_estimate") {
+      variants[method] = ours;
+      variants[method].dodge_from = DodgeSource::kFusionPointEstimate;
+    } else if (method == "mono") {
+      variants[method] = ours;
+      variants[method].dodge_from = DodgeSource::kMonocular;
+      variants[method].monocular_baseline = true;
+    } else if (method == "rotation") {
+      variants[method] = ours;
+      variants[method].compensation.method = CompensationMethod::kRotation;
+    }
+  }
   return variants;
 }
 
@@ -131,7 +139,7 @@ void add_maneuver_perception(DodgeOutcome& o, const ManeuverPerception& p) {
 std::map<std::string, ClosedLoopFlight> fly_perception_methods(
     const sim::ScenarioConfig& config, const DodgeEvalOptions& options, const std::string& dir,
     const std::string& open_loop_dataset) {
-  const std::map<std::string, PerceptionOptions> variants = perception_variants(options.perception);
+  const std::map<std::string, PerceptionOptions> variants = perception_variants(options);
   std::map<std::string, FlightOutputs> kept;
   if (!dir.empty())
     for (const auto& [method, perception] : variants) {
@@ -156,7 +164,7 @@ void score_closed_loop(DodgeThrow& row, const sim::ScenarioConfig& config,
   const double radius = options.perception.prediction.safety_radius_m;
   const std::optional<TimeNs> contact = true_contact_time(truth, ball, radius);
   row.open_loop_outcomes = row.outcomes;
-  for (const std::string& method : kDodgeMethods) {
+  for (const std::string& method : evaluated_methods(options)) {
     const std::vector<DodgeDecision>& open_loop = row.decisions[method];
     row.dynamics_outcomes[method] =
         scored(row, method, dodge_outcome(fly_decisions(config, truth, open_loop), ball, open_loop, radius, false), contact);
@@ -204,6 +212,19 @@ MissCalibration miss_calibration(std::span<const PredictionResult> predictions, 
     out.within_2_sigma += error <= 2 * *p.miss_distance_sigma_m;
   }
   return out;
+}
+
+std::vector<std::string> evaluated_methods(const DodgeEvalOptions& options) {
+  for (const std::string& name : options.baselines)
+    if (std::find(kPerceptionBaselines.begin(), kPerceptionBaselines.end(), name) == kPerceptionBaselines.end())
+      throw ConfigError(fmt::format("dodge-eval: unknown baseline '{}' (one of {})", name,
+                                    fmt::join(kPerceptionBaselines, ", ")));
+  std::vector<std::string> methods;
+  for (const std::string& method : kDodgeMethods)
+    if (std::find(kPerceptionBaselines.begin(), kPerceptionBaselines.end(), method) == kPerceptionBaselines.end() ||
+        std::find(options.baselines.begin(), options.baselines.end(), method) != options.baselines.end())
+      methods.push_back(method);
+  return methods;
 }
 
 std::optional<TimeNs> first_window_in_view(const DatasetTruth& truth, int ball, std::span<const TimeNs> window_ends) {
@@ -280,7 +301,7 @@ DodgeThrow score_dodge_dataset(const std::string& dataset, const DodgeEvalOption
   const std::optional<TimeNs> contact = true_contact_time(truth, ball, radius);
   if (contact) row.true_contact_t_s = to_seconds(*contact);
 
-  const std::map<std::string, PerceptionOptions> variants = perception_variants(options.perception);
+  const std::map<std::string, PerceptionOptions> variants = perception_variants(options);
   const PerceptionOptions& ours = variants.at("ours");
   std::map<std::string, std::vector<DodgeDecision>>& decisions = row.decisions;
   std::optional<TimeNs> first_detection;
@@ -303,7 +324,7 @@ DodgeThrow score_dodge_dataset(const std::string& dataset, const DodgeEvalOption
                                                 perception.prediction.horizon_s);
     }
   }
-  for (const std::string& method : kDodgeMethods) {
+  for (const std::string& method : evaluated_methods(options)) {
     DodgeOutcome o = scored(row, method, dodge_outcome(truth, ball, decisions[method], radius), contact);
     if (const auto it = windows.find(method); it != windows.end() && o.decision_t)
       add_maneuver_perception(o, maneuver_perception(truth, ball, it->second, *o.decision_t));
@@ -430,8 +451,9 @@ nlohmann::json outcome_json(const DodgeOutcome& o) {
   return j;
 }
 
-/// The totals of one outcome set: ours' (totals_json), ours against the oracles, the baselines'.
-nlohmann::json outcome_set_json(const DodgeEval& e, OutcomeSet set) {
+/// The totals of one outcome set: ours' (totals_json), ours against the oracles, the baselines'
+/// (those of `methods` but ours).
+nlohmann::json outcome_set_json(const DodgeEval& e, OutcomeSet set, const std::vector<std::string>& methods) {
   auto totals = [&](const std::string& method) {
     const DodgeTotals t = dodge_totals(e.throws, method, set);
     nlohmann::json j = totals_json(t);
@@ -473,7 +495,7 @@ nlohmann::json outcome_set_json(const DodgeEval& e, OutcomeSet set) {
   j["escaped_where_oracle_visible_escaped"] = ours_too_visible;
 
   j["baselines"] = nlohmann::json::object();
-  for (const std::string& method : kDodgeMethods)
+  for (const std::string& method : methods)
     if (method != "ours") j["baselines"][method] = totals(method);
   return j;
 }
@@ -481,15 +503,16 @@ nlohmann::json outcome_set_json(const DodgeEval& e, OutcomeSet set) {
 }  // namespace
 
 nlohmann::json to_json(const DodgeEval& e, const DodgeEvalOptions& options) {
-  nlohmann::json j = outcome_set_json(e, &DodgeThrow::outcomes);
+  const std::vector<std::string> methods = evaluated_methods(options);
+  nlohmann::json j = outcome_set_json(e, &DodgeThrow::outcomes, methods);
   MissCalibration calibration;  // ours' open-loop run's
   for (const DodgeThrow& row : e.throws) calibration += row.miss_calibration;
   if (!options.closed_loop) j["miss_calibration"] = miss_calibration_json(calibration);
   if (options.closed_loop) {
     j["closed_loop"] = true;
-    j["open_loop"] = outcome_set_json(e, &DodgeThrow::open_loop_outcomes);
+    j["open_loop"] = outcome_set_json(e, &DodgeThrow::open_loop_outcomes, methods);
     j["open_loop"]["miss_calibration"] = miss_calibration_json(calibration);
-    j["dynamics_only"] = outcome_set_json(e, &DodgeThrow::dynamics_outcomes);
+    j["dynamics_only"] = outcome_set_json(e, &DodgeThrow::dynamics_outcomes, methods);
     std::vector<double> window_ms;
     for (const DodgeThrow& row : e.throws) window_ms.insert(window_ms.end(), row.window_total_ms.begin(), row.window_total_ms.end());
     j["window_total_ms"] = summarize(window_ms).to_json();
@@ -522,6 +545,7 @@ nlohmann::json to_json(const DodgeEval& e, const DodgeEvalOptions& options) {
     j["throws"].push_back(t);
   }
   j["safety_radius_m"] = options.perception.prediction.safety_radius_m;
+  j["methods"] = methods;
   j["wall_s"] = e.wall_s;
   j["options"] = to_json(options.perception);
   return j;
@@ -530,6 +554,7 @@ nlohmann::json to_json(const DodgeEval& e, const DodgeEvalOptions& options) {
 DodgeEval run_dodge_eval(const DodgeEvalOptions& options) {
   if (options.seeds.empty()) throw ConfigError("dodge-eval: no seeds");
   if (options.jobs < 1) throw ConfigError("dodge-eval: --jobs must be >= 1");
+  evaluated_methods(options);  // an unknown baseline fails here, before any throw
   if (const auto why = options.perception.validate(); !why.empty()) throw ConfigError(why);
   const auto start = Clock::now();
   DodgeEval eval;
@@ -567,7 +592,7 @@ DodgeEval run_dodge_eval(const DodgeEvalOptions& options) {
     }
     eval.throws[i] = std::move(row);
   });
-  for (const std::string& method : kDodgeMethods) eval.totals[method] = dodge_totals(eval.throws, method);
+  for (const std::string& method : evaluated_methods(options)) eval.totals[method] = dodge_totals(eval.throws, method);
   eval.wall_s = std::chrono::duration<double>(Clock::now() - start).count();
   std::filesystem::create_directories(options.out_dir);
   const std::string path = options.out_dir + "/dodge_eval.json";

@@ -44,6 +44,8 @@ namespace fdv {
 /// (first_window_in_view), a bound that does not move with our detector.
 inline const std::vector<std::string> kDodgeMethods = {"ours",   "point_estimate", "mono",
                                                        "rotation", "oracle",       "oracle_visible"};
+/// The baselines that run a pipeline, each changing one thing of ours (DodgeEvalOptions).
+inline const std::vector<std::string> kPerceptionBaselines = {"point_estimate", "mono", "rotation"};
 
 /// `oracle_visible` starts at the end of the first window in which the ball, in flight, looks at
 /// least this large (its true apparent diameter, raw pixels) ...
@@ -61,6 +63,10 @@ struct DodgeEvalOptions {
   int jobs = 2;       ///< throws evaluated at once (each single-threaded)
   bool keep = false;  ///< keep DIR/throws/SEED/{dataset,run}
   bool closed_loop = false;  ///< also fly every method through the closed loop (above)
+  /// The perception baselines evaluated beside ours (of kPerceptionBaselines; any order). Each
+  /// runs its own pipeline and, closed loop, flies its own fork of the simulation, so leaving them
+  /// out makes the evaluation of ours faster. The oracles always run: they need no rendering.
+  std::vector<std::string> baselines = kPerceptionBaselines;
   /// Ours; the baselines change one thing each: dodge_from (point_estimate, mono), the
   /// compensation method (rotation), or the estimate itself (oracle: the true trajectory).
   PerceptionOptions perception;
@@ -109,7 +115,7 @@ struct DodgeThrow {
   std::optional<double> first_in_view_t_s, first_detection_t_s, first_usable_estimate_t_s;
   MissCalibration miss_calibration;  ///< ours', open loop
   bool threat = false, non_threat = false, near_miss = false;
-  std::map<std::string, DodgeOutcome> outcomes;  ///< by kDodgeMethods
+  std::map<std::string, DodgeOutcome> outcomes;  ///< by method (evaluated_methods)
   /// With closed_loop: the kinematic replay's outcomes, and the open-loop decisions flown by the
   /// vehicle model without rendering again.
   std::map<std::string, DodgeOutcome> open_loop_outcomes, dynamics_outcomes;
@@ -169,6 +175,10 @@ DodgeEval run_dodge_eval(const DodgeEvalOptions& options);
 
 /// Which of a throw's outcomes: the reported ones, the open loop's, the dynamics-only ones.
 using OutcomeSet = std::map<std::string, DodgeOutcome> DodgeThrow::*;
+
+/// The methods `options` evaluates, in kDodgeMethods' order. Throws ConfigError naming a baseline
+/// that is not one of kPerceptionBaselines.
+std::vector<std::string> evaluated_methods(const DodgeEvalOptions& options);
 
 DodgeTotals dodge_totals(const std::vector<DodgeThrow>& throws, const std::string& method,
                          OutcomeSet set = &DodgeThrow::outcomes);
