@@ -371,11 +371,21 @@ TEST(CliDodgeEval, OneThrowGivesTheTotalsTheBaselinesAndItsRow) {
   EXPECT_TRUE(fs::exists(out / "throws" / "6" / "dataset" / "dataset.yaml"));
   for (const char* file : {"detections.jsonl", "dodge.jsonl", "summary.json"})
     EXPECT_TRUE(fs::exists(out / "throws" / "6" / "run" / file)) << file;
+  // The row was also written as the throw ended, a line of throws.jsonl.
+  std::ifstream lines(out / "throws.jsonl");
+  std::string line;
+  ASSERT_TRUE(std::getline(lines, line));
+  EXPECT_EQ(json::parse(line), row);
+  EXPECT_FALSE(std::getline(lines, line));
   // Bad arguments: a clear error, nothing written.
   const Ran bad = fdv("dodge-eval --seeds 9-3 --out " + (out / "bad").string());
   EXPECT_NE(bad.exit_code, 0);
   EXPECT_NE(bad.output.find("runs backwards"), std::string::npos) << bad.output;
   EXPECT_FALSE(fs::exists(out / "bad" / "dodge_eval.json"));
+  const Ran typo = fdv("dodge-eval --seeds 6 --baselines rotation,rotaton --out " + (out / "typo").string());
+  EXPECT_NE(typo.exit_code, 0);
+  EXPECT_NE(typo.output.find("unknown baseline 'rotaton'"), std::string::npos) << typo.output;
+  EXPECT_FALSE(fs::exists(out / "typo"));
 }
 
 

@@ -502,6 +502,32 @@ nlohmann::json outcome_set_json(const DodgeEval& e, OutcomeSet set, const std::v
 
 }  // namespace
 
+nlohmann::json throw_json(const DodgeThrow& row, const DodgeEvalOptions& options) {
+  nlohmann::json t = {{"seed", row.seed},           {"parameters", row.parameters},
+                      {"true_miss_m", row.true_miss_m}, {"threat", row.threat},
+                      {"non_threat", row.non_threat},   {"near_miss", row.near_miss},
+                      {"seconds", row.seconds}};
+  if (row.true_contact_t_s) t["true_contact_t_s"] = *row.true_contact_t_s;
+  if (row.first_in_view_t_s) t["first_in_view_t_s"] = *row.first_in_view_t_s;
+  if (row.first_detection_t_s) t["first_detection_t_s"] = *row.first_detection_t_s;
+  if (row.first_usable_estimate_t_s) t["first_usable_estimate_t_s"] = *row.first_usable_estimate_t_s;
+  if (row.error.empty()) (options.closed_loop ? t["open_loop"] : t)["miss_calibration"] = miss_calibration_json(row.miss_calibration);
+  if (!row.error.empty()) t["error"] = row.error;
+  for (const auto& [method, o] : row.outcomes) t["outcomes"][method] = outcome_json(o);
+  if (options.closed_loop && row.error.empty()) {
+    for (const auto& [method, o] : row.open_loop_outcomes) t["open_loop"]["outcomes"][method] = outcome_json(o);
+    for (const auto& [method, o] : row.dynamics_outcomes) t["dynamics_only"]["outcomes"][method] = outcome_json(o);
+    t["window_total_ms"] = summarize(row.window_total_ms).to_json();
+    t["flight"] = {{"commands", row.flight.commands},
+                   {"tilt_clipped", row.flight.tilt_clipped},
+                   {"late", row.flight.late},
+                   {"floor_holds", row.flight.floor_holds},
+                   {"ceiling_holds", row.flight.ceiling_holds},
+                   {"wall_holds", row.flight.wall_holds}};
+  }
+  return t;
+}
+
 nlohmann::json to_json(const DodgeEval& e, const DodgeEvalOptions& options) {
   const std::vector<std::string> methods = evaluated_methods(options);
   nlohmann::json j = outcome_set_json(e, &DodgeThrow::outcomes, methods);
@@ -519,31 +545,7 @@ nlohmann::json to_json(const DodgeEval& e, const DodgeEvalOptions& options) {
     j["response_delay_s"] = options.perception.dodge.limits.response_delay_s;
   }
   j["throws"] = nlohmann::json::array();
-  for (const DodgeThrow& row : e.throws) {
-    nlohmann::json t = {{"seed", row.seed},           {"parameters", row.parameters},
-                        {"true_miss_m", row.true_miss_m}, {"threat", row.threat},
-                        {"non_threat", row.non_threat},   {"near_miss", row.near_miss},
-                        {"seconds", row.seconds}};
-    if (row.true_contact_t_s) t["true_contact_t_s"] = *row.true_contact_t_s;
-    if (row.first_in_view_t_s) t["first_in_view_t_s"] = *row.first_in_view_t_s;
-    if (row.first_detection_t_s) t["first_detection_t_s"] = *row.first_detection_t_s;
-    if (row.first_usable_estimate_t_s) t["first_usable_estimate_t_s"] = *row.first_usable_estimate_t_s;
-    if (row.error.empty()) (options.closed_loop ? t["open_loop"] : t)["miss_calibration"] = miss_calibration_json(row.miss_calibration);
-    if (!row.error.empty()) t["error"] = row.error;
-    for (const auto& [method, o] : row.outcomes) t["outcomes"][method] = outcome_json(o);
-    if (options.closed_loop && row.error.empty()) {
-      for (const auto& [method, o] : row.open_loop_outcomes) t["open_loop"]["outcomes"][method] = outcome_json(o);
-      for (const auto& [method, o] : row.dynamics_outcomes) t["dynamics_only"]["outcomes"][method] = outcome_json(o);
-      t["window_total_ms"] = summarize(row.window_total_ms).to_json();
-      t["flight"] = {{"commands", row.flight.commands},
-                     {"tilt_clipped", row.flight.tilt_clipped},
-                     {"late", row.flight.late},
-                     {"floor_holds", row.flight.floor_holds},
-                     {"ceiling_holds", row.flight.ceiling_holds},
-                     {"wall_holds", row.flight.wall_holds}};
-    }
-    j["throws"].push_back(t);
-  }
+  for (const DodgeThrow& row : e.throws) j["throws"].push_back(throw_json(row, options));
   j["safety_radius_m"] = options.perception.prediction.safety_radius_m;
   j["methods"] = methods;
   j["wall_s"] = e.wall_s;
@@ -559,6 +561,11 @@ DodgeEval run_dodge_eval(const DodgeEvalOptions& options) {
   const auto start = Clock::now();
   DodgeEval eval;
   eval.throws.resize(options.seeds.size());
+  std::filesystem::create_directories(options.out_dir);
+  // Each throw's row as it ends, so that an interrupted evaluation keeps what it did.
+  const std::string lines_path = options.out_dir + "/throws.jsonl";
+  std::ofstream lines(lines_path);
+  if (!lines) throw InputError(lines_path, "", "cannot create output file");
   std::mutex progress;
   std::size_t done = 0;
   ThreadPool pool(options.jobs);
@@ -574,6 +581,7 @@ DodgeEval run_dodge_eval(const DodgeEvalOptions& options) {
     }
     if (!options.keep) std::filesystem::remove_all(throw_dir);
     const std::lock_guard<std::mutex> lock(progress);
+    lines << throw_json(row, options).dump() << std::endl;  // flushed: readable while running
     ++done;
     const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
     const double eta = elapsed / static_cast<double>(done) * static_cast<double>(options.seeds.size() - done);
@@ -594,7 +602,6 @@ DodgeEval run_dodge_eval(const DodgeEvalOptions& options) {
   });
   for (const std::string& method : evaluated_methods(options)) eval.totals[method] = dodge_totals(eval.throws, method);
   eval.wall_s = std::chrono::duration<double>(Clock::now() - start).count();
-  std::filesystem::create_directories(options.out_dir);
   const std::string path = options.out_dir + "/dodge_eval.json";
   std::ofstream out(path);
   if (!out) throw InputError(path, "", "cannot create output file");

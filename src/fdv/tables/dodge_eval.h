@@ -170,7 +170,9 @@ DodgeThrow score_dodge_dataset(const std::string& dataset, const DodgeEvalOption
 /// it; the dataset is removed afterwards unless options.keep.
 DodgeThrow evaluate_dodge_throw(std::uint64_t seed, const DodgeEvalOptions& options, const std::string& throw_dir);
 
-/// Every seed, `jobs` at a time with a progress line per throw; writes DIR/dodge_eval.json.
+/// Every seed, `jobs` at a time with a progress line per throw; writes DIR/dodge_eval.json at the
+/// end and, as each throw ends, its row (throw_json) as a line of DIR/throws.jsonl, in the order
+/// the throws end.
 DodgeEval run_dodge_eval(const DodgeEvalOptions& options);
 
 /// Which of a throw's outcomes: the reported ones, the open loop's, the dynamics-only ones.
@@ -182,6 +184,8 @@ std::vector<std::string> evaluated_methods(const DodgeEvalOptions& options);
 
 DodgeTotals dodge_totals(const std::vector<DodgeThrow>& throws, const std::string& method,
                          OutcomeSet set = &DodgeThrow::outcomes);
+/// One throw's row of dodge_eval.json's `throws`.
+nlohmann::json throw_json(const DodgeThrow& row, const DodgeEvalOptions& options);
 nlohmann::json to_json(const DodgeEval& e, const DodgeEvalOptions& options);
 
 }  // namespace fdv
