@@ -48,6 +48,14 @@ TEST(EnsureSimulated, SimulatesOnceThenReusesUntilIncompleteOrChanged) {
   EXPECT_FALSE(fs::exists(sentinel)) << "a folder without the marker must be simulated again";
   EXPECT_TRUE(fs::exists(fs::path(dir) / sim::kSimulationMarker));
 
+  // The vehicle model's response acts on commands only: a dataset without any is the same.
+  std::ofstream(sentinel) << "x";
+  sim::ScenarioConfig slower = tiny_scene();
+  slower.vehicle.response.attitude_time_constant_s *= 2;
+  slower.vehicle.response.wall_margin_m = 1;
+  sim::ensure_simulated(slower, dir);
+  EXPECT_TRUE(fs::exists(sentinel)) << "the vehicle's response does not change an uncommanded dataset";
+
   std::ofstream(sentinel) << "x";
   sim::ScenarioConfig other = tiny_scene();
   other.seed = 2;

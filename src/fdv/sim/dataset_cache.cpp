@@ -22,9 +22,13 @@ std::string read_text(const fs::path& path) {
   return s.str();
 }
 
-/// The configuration and the simulator's revision: either changed = another dataset.
+/// The configuration and the simulator's revision: either changed = another dataset. The vehicle
+/// model's response is left out: it acts on commands only, and a cached dataset has none (a run
+/// without commands renders the path: SimFlight.ACommandedRunWithoutCommandsRendersExactlyAsThePathRun).
 std::string fingerprint(const ScenarioConfig& config) {
-  return fmt::format("# fdv simulator revision {}\n{}", kSimulatorRevision, to_yaml(config));
+  ScenarioConfig uncommanded = config;
+  uncommanded.vehicle.response = VehicleResponseConfig{};
+  return fmt::format("# fdv simulator revision {}\n{}", kSimulatorRevision, to_yaml(uncommanded));
 }
 
 }  // namespace
