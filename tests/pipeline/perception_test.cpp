@@ -414,6 +414,34 @@ TEST(Perception, AnObjectCutByTheBorderIsObservedAtItsWholeCenterWithItsNoiseGro
   EXPECT_NEAR(obs.sigma_n, sigma_n / 0.1, 1e-15);
 }
 
+// The planner takes usable estimates and, up to dodge.max_horizon_sigma_m, converged ones whose only
+// fault is their position σ at the usable horizon; never one without a covariance or not converged.
+TEST(DodgeDecidesOn, UsableEstimatesAndThoseTooWideOnlyAtTheHorizonUpToTheLimit) {
+  DodgeOptions strict;
+  strict.max_horizon_sigma_m = 1;  // estimation.max_position_sigma_m's default: the usable ones only
+  DodgeOptions wide;
+  wide.max_horizon_sigma_m = 2;
+  TrajectoryEstimate usable;
+  usable.usable = usable.converged = true;
+  usable.horizon_sigma_m = std::numeric_limits<double>::infinity();  // covariance not computed
+  EXPECT_TRUE(dodge_decides_on(usable, strict));
+  TrajectoryEstimate too_wide;
+  too_wide.converged = true;
+  too_wide.covariance = Eigen::Matrix<double, 6, 6>::Identity();
+  too_wide.horizon_sigma_m = 1.5;
+  EXPECT_FALSE(dodge_decides_on(too_wide, strict));
+  EXPECT_TRUE(dodge_decides_on(too_wide, wide));
+  too_wide.horizon_sigma_m = 2.5;
+  EXPECT_FALSE(dodge_decides_on(too_wide, wide));
+  TrajectoryEstimate unconverged = too_wide;
+  unconverged.converged = false;
+  unconverged.horizon_sigma_m = 0.5;
+  EXPECT_FALSE(dodge_decides_on(unconverged, wide));
+  TrajectoryEstimate degenerate;  // the rank test failed: no covariance
+  degenerate.converged = true;
+  EXPECT_FALSE(dodge_decides_on(degenerate, wide));
+}
+
 TEST(Perception, ATentativeTrackLendsItsGateOnlyWhenDetectedInTheLastWindow) {
   Tracker tracker;  // confirm_hits 3
   const PerceptionOptions on;

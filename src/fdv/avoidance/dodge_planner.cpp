@@ -192,6 +192,8 @@ std::string DodgeOptions::validate() const {
     return fmt::format("replan_probability_step must be in (0, 1] (got {})", replan_probability_step);
   if (directions < 4 || directions > 3600)
     return fmt::format("directions must be in [4, 3600] (got {})", directions);
+  if (!(max_horizon_sigma_m > 0 && std::isfinite(max_horizon_sigma_m)))
+    return fmt::format("max_horizon_sigma_m must be finite and > 0 (got {})", max_horizon_sigma_m);
   return {};
 }
 

@@ -105,6 +105,10 @@ struct DodgeOptions {
   double duration_margin_s = 0.1;
   /// Candidate directions, evenly spaced in the plane normal to the relative velocity.
   int directions = 72;
+  /// Estimates decided on: the usable ones, and also converged ones whose only fault is a
+  /// position σ at the usable horizon above estimation.max_position_sigma_m, up to this [m]. The
+  /// risk's probability weighs that σ, so a wide estimate acts only on a likely contact.
+  double max_horizon_sigma_m = 3.0;
   std::string validate() const;
 };
 
@@ -123,6 +127,8 @@ void describe(V& v, DodgeOptions& o) {
   v("replan_probability_step", o.replan_probability_step, "-", "re-plan when the probability moves this much");
   v("duration_margin_s", o.duration_margin_s, "s", "hold the set-point until the closest approach + this");
   v("directions", o.directions, "-", "candidate directions in the plane normal to the relative velocity");
+  v("max_horizon_sigma_m", o.max_horizon_sigma_m, "m",
+    "also decide on converged estimates not usable only for a horizon σ up to this");
 }
 
 /// An acceleration set-point held for a duration, starting after the response delay.

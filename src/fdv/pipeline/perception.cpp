@@ -364,6 +364,11 @@ const CompensatedWindow& Perception::compensate(const PendingWindow& w) {
   return compensator_->compensate(in);
 }
 
+bool dodge_decides_on(const TrajectoryEstimate& estimate, const DodgeOptions& dodge) {
+  return estimate.usable ||
+         (estimate.converged && estimate.covariance && estimate.horizon_sigma_m <= dodge.max_horizon_sigma_m);
+}
+
 bool lends_detector_gate(const Track& track, const PerceptionOptions& options) {
   return track.confirmed() || (options.tentative_track_priors && track.misses() == 0);
 }
@@ -654,7 +659,7 @@ void Perception::estimate(int track_id, TimeNs t) {
   if (vehicle)
     fused_risk = assess_collision_risk(*fused, {*vehicle, vehicle_state_covariance(options_.prediction)}, options_.prediction);
   const TrajectoryEstimate* dodge_on = options_.dodge_from == DodgeSource::kMonocular ? mono : fused;
-  if (dodge_on && dodge_on->usable)
+  if (dodge_on && dodge_decides_on(*dodge_on, options_.dodge))
     decide_dodge(track_id, *dodge_on, t, dodge_on == fused && fused_risk ? &*fused_risk : nullptr);
   if (fused && fused->method == EstimateMethod::kEventOnly && counters_.depth_frames == 0)
     warn_once("no depth", "no depth frames: 3D estimates are event-only, their range observable only through "
@@ -676,16 +681,19 @@ void Perception::decide_dodge(int track_id, const TrajectoryEstimate& estimate, 
   const auto odometry = vehicle_state(now);
   if (!odometry) return;
   VehicleState vehicle{*odometry, vehicle_state_covariance(options_.prediction)};
+  // The risk takes usable estimates only; one the planner takes beyond them (dodge_decides_on) is
+  // weighed by its covariance as a usable one is.
+  TrajectoryEstimate taken = estimate;
+  taken.usable = true;
   RiskAssessment assessed;
   if (options_.dodge_from == DodgeSource::kFusionPointEstimate) {
-    TrajectoryEstimate mean_only = estimate;
-    mean_only.covariance = Eigen::Matrix<double, 6, 6>::Zero();
+    taken.covariance = Eigen::Matrix<double, 6, 6>::Zero();
     vehicle.covariance.setZero();
-    assessed = assess_collision_risk(mean_only, vehicle, options_.prediction);
+    assessed = assess_collision_risk(taken, vehicle, options_.prediction);
   } else if (assessed_at_t && now == t) {
     assessed = *assessed_at_t;
   } else {
-    assessed = assess_collision_risk(estimate, vehicle, options_.prediction);
+    assessed = assess_collision_risk(taken, vehicle, options_.prediction);
   }
   std::optional<DodgeDecision> decision;
   if (assessed.risk) {

@@ -157,6 +157,10 @@ PerceptionOptions overlapping_window_options(PerceptionOptions options);
 /// last window (DetectionPrior::confirmed false: the dense-motion source and the sparse search only).
 bool lends_detector_gate(const Track& track, const PerceptionOptions& options);
 
+/// Whether the dodge planner decides on `estimate` (DodgeOptions::max_horizon_sigma_m): usable, or
+/// converged with a covariance and not usable only for its position σ at the usable horizon.
+bool dodge_decides_on(const TrajectoryEstimate& estimate, const DodgeOptions& dodge);
+
 /// Whether a track other than `held`, detected in the last window, follows the object that
 /// `held`'s 3D trajectory puts at `projected_px` (raw pixels, time t): its prediction within the
 /// larger of the two tracks' box sizes and `min_reach_px`. Such a `held` is a duplicate and is not
