@@ -124,19 +124,23 @@ TEST(DodgeEval, ThrowNeverInViewGivesNoDecisionWithTheReason) {
   EXPECT_FALSE(row.first_detection_t_s);
 }
 
-// The baselines chosen are the ones that run: hover_headon seed 1 at 320x240, a head-on throw
-// that ours dodges at 0.80 s, scored with every baseline and with `rotation` alone. Ours'
-// decisions do not depend on which baselines run beside it, nor do the oracles' (they start
-// from ours' windows); a name that is not a baseline is refused.
-TEST(DodgeEval, OnlyTheChosenBaselinesRunAndOursIsUnchanged) {
+/// hover_headon seed 1 at 320x240, 0.9 s: a head-on throw that ours dodges (simulated once).
+std::string headon_320x240_dataset() {
   sim::ScenarioConfig c = sim::make_preset("hover_headon", 1);
   sim::set_event_resolution(c, 320, 240);
   c.depth_camera.width = 320, c.depth_camera.height = 240;
   c.depth_camera.fx = c.depth_camera.fy = 192.85, c.depth_camera.cx = 160, c.depth_camera.cy = 120;
   c.duration_s = 0.9;
   c.threads = 1;
-  const std::string dir = test::scratch_dir("dodge_eval_baselines") + "/dataset";
-  sim::ensure_simulated(c, dir);
+  const std::string dir = test::scratch_dir("dodge_eval_headon") + "/dataset";
+  return sim::ensure_simulated(c, dir);
+}
+
+// The baselines chosen are the ones that run: the head-on throw scored with every baseline and
+// with `rotation` alone. Ours' decisions do not depend on which baselines run beside it, nor do
+// the oracles' (they start from ours' windows); a name that is not a baseline is refused.
+TEST(DodgeEval, OnlyTheChosenBaselinesRunAndOursIsUnchanged) {
+  const std::string dir = headon_320x240_dataset();
   DodgeEvalOptions all;
   DodgeEvalOptions rotation_only;
   rotation_only.baselines = {"rotation"};
@@ -157,6 +161,28 @@ TEST(DodgeEval, OnlyTheChosenBaselinesRunAndOursIsUnchanged) {
   DodgeEvalOptions unknown;
   unknown.baselines = {"rotation", "rotaton"};
   EXPECT_THROW(evaluated_methods(unknown), ConfigError);
+}
+
+// The planner decides on estimates wider than `usable` up to dodge.max_horizon_sigma_m: on the
+// head-on throw, with the bound at usable's own 1 m the first dodge waits for the first usable
+// estimate; with the default 3 m it comes before it, on a converged estimate the risk weighs.
+TEST(DodgeEval, WideEstimatesDecideBeforeTheFirstUsableOne) {
+  const std::string dir = headon_320x240_dataset();
+  DodgeEvalOptions usable_only;
+  usable_only.baselines = {};
+  usable_only.perception.dodge.max_horizon_sigma_m = usable_only.perception.estimation.max_position_sigma_m;
+  DodgeEvalOptions wide = usable_only;
+  wide.perception.dodge.max_horizon_sigma_m = DodgeOptions{}.max_horizon_sigma_m;
+  ASSERT_GT(wide.perception.dodge.max_horizon_sigma_m, usable_only.perception.dodge.max_horizon_sigma_m);
+  const DodgeThrow late = score_dodge_dataset(dir, usable_only);
+  const DodgeThrow early = score_dodge_dataset(dir, wide);
+  ASSERT_TRUE(late.first_usable_estimate_t_s);
+  EXPECT_EQ(early.first_usable_estimate_t_s, late.first_usable_estimate_t_s);  // usable is unchanged
+  const auto& late_t = late.outcomes.at("ours").decision_t;
+  const auto& early_t = early.outcomes.at("ours").decision_t;
+  ASSERT_TRUE(late_t && early_t);
+  EXPECT_GE(to_seconds(*late_t), *late.first_usable_estimate_t_s - 1e-9);
+  EXPECT_LT(to_seconds(*early_t), *early.first_usable_estimate_t_s);
 }
 
 std::vector<TimeNs> window_ends_every_25ms(int count) {

@@ -92,6 +92,10 @@ std::vector<DodgeDecision> oracle_decisions(const DatasetTruth& truth, int ball,
   return decisions;
 }
 
+bool is_perception_baseline(const std::string& method) {
+  return std::find(kPerceptionBaselines.begin(), kPerceptionBaselines.end(), method) != kPerceptionBaselines.end();
+}
+
 /// Ours, and the baselines of `options` that change one thing each.
 std::map<std::string, PerceptionOptions> perception_variants(const DodgeEvalOptions& options) {
   PerceptionOptions ours = options.perception;
@@ -99,17 +103,11 @@ std::map<std::string, PerceptionOptions> perception_variants(const DodgeEvalOpti
   std::map<std::string, PerceptionOptions> variants;
   variants["ours"] = ours;
   for (const std::string& method : evaluated_methods(options)) {
-    if (method == "point_estimate") {
-      variants[method] = ours;
-      variants[method].dodge_from = DodgeSource::kFusionPointEstimate;
-    } else if (method == "mono") {
-      variants[method] = ours;
-      variants[method].dodge_from = DodgeSource::kMonocular;
-      variants[method].monocular_baseline = true;
-    } else if (method == "rotation") {
-      variants[method] = ours;
-      variants[method].compensation.method = CompensationMethod::kRotation;
-    }
+    if (!is_perception_baseline(method)) continue;
+    PerceptionOptions& variant = variants[method] = ours;
+    if (method == "point_estimate") variant.dodge_from = DodgeSource::kFusionPointEstimate;
+    if (method == "mono") variant.dodge_from = DodgeSource::kMonocular, variant.monocular_baseline = true;
+    if (method == "rotation") variant.compensation.method = CompensationMethod::kRotation;
   }
   return variants;
 }
@@ -216,12 +214,12 @@ MissCalibration miss_calibration(std::span<const PredictionResult> predictions, 
 
 std::vector<std::string> evaluated_methods(const DodgeEvalOptions& options) {
   for (const std::string& name : options.baselines)
-    if (std::find(kPerceptionBaselines.begin(), kPerceptionBaselines.end(), name) == kPerceptionBaselines.end())
+    if (!is_perception_baseline(name))
       throw ConfigError(fmt::format("dodge-eval: unknown baseline '{}' (one of {})", name,
                                     fmt::join(kPerceptionBaselines, ", ")));
   std::vector<std::string> methods;
   for (const std::string& method : kDodgeMethods)
-    if (std::find(kPerceptionBaselines.begin(), kPerceptionBaselines.end(), method) == kPerceptionBaselines.end() ||
+    if (!is_perception_baseline(method) ||
         std::find(options.baselines.begin(), options.baselines.end(), method) != options.baselines.end())
       methods.push_back(method);
   return methods;
