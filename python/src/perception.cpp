@@ -7,6 +7,8 @@
 #include <cstring>
 #include <mutex>
 #include <optional>
+#include <string>
+#include <tuple>
 
 #include "common.h"
 #include "fdv/core/error.h"
@@ -27,6 +29,8 @@ constexpr const char* kListNames[] = {"windows", "depth", "trajectories", "predi
 struct WindowImages {
   cv::Mat count, normalized, segmentation, preprocessed;
   std::vector<DetectionPrior> priors;
+  /// Each stateful source's state images (Detector::for_each_source_state): source, name, copy.
+  std::vector<std::tuple<std::string, std::string, cv::Mat>> source_states;
 };
 
 struct Row {
@@ -47,7 +51,11 @@ struct RowQueue {
         const Detector& d = *w.detector;
         copy = std::make_unique<WindowImages>(WindowImages{d.time_images().count.clone(), d.time_images().normalized.clone(),
                                                            d.segmentation().clone(), d.preprocessed().clone(),
-                                                           {w.priors.begin(), w.priors.end()}});
+                                                           {w.priors.begin(), w.priors.end()}, {}});
+        d.for_each_source_state([&](std::string_view source, const std::vector<SourceStateImage>& state) {
+          for (const SourceStateImage& im : state)
+            copy->source_states.emplace_back(std::string(source), std::string(im.name), im.image->clone());
+        });
       }
       rows.push_back({RowKind::kWindow, window_row(w), std::move(copy)});
     };
@@ -69,8 +77,19 @@ py::array_t<T> image_array(const cv::Mat& m) {
   return a;
 }
 
-/// {"count", "normalized", "segmentation", "preprocessed", "gates"}: the window's detector images
-/// (docs/DETECTION.md: I, N, S, P on the compensated grid) and the gates the tracks lent it.
+/// A float image of one or more channels as a (height, width) or (height, width, channels) array.
+py::array_t<float> float_image_array(const cv::Mat& m) {
+  CV_Assert(m.depth() == CV_32F && m.isContinuous());
+  std::vector<py::ssize_t> shape{m.rows, m.cols};
+  if (m.channels() > 1) shape.push_back(m.channels());
+  py::array_t<float> a(shape);
+  std::memcpy(a.mutable_data(), m.ptr<float>(), m.total() * m.elemSize());
+  return a;
+}
+
+/// {"count", "normalized", "segmentation", "preprocessed", "gates", "sources"}: the window's
+/// detector images (docs/DETECTION.md: I, N, S, P on the compensated grid), the gates the tracks
+/// lent it, and the state of the sources that keep one ({source: {name: array}}).
 py::dict images_dict(const WindowImages& im) {
   py::dict d;
   d["count"] = image_array<std::int32_t>(im.count);
@@ -87,6 +106,13 @@ py::dict images_dict(const WindowImages& im) {
     gates.append(g);
   }
   d["gates"] = gates;
+  py::dict sources;
+  for (const auto& [source, name, image] : im.source_states) {
+    const py::str key(source);
+    if (!sources.contains(key)) sources[key] = py::dict();
+    sources[key].cast<py::dict>()[py::str(name)] = float_image_array(image);
+  }
+  d["sources"] = sources;
   return d;
 }
 

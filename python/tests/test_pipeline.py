@@ -188,6 +188,19 @@ def test_window_images_are_the_time_images_of_its_events():
         assert images["gates"] == []  # no track: nothing expected anywhere
 
 
+def test_window_images_hold_the_evidence_grid_of_the_window():
+    # The evidence source's state (docs/DETECTION.md, "Evidence source"), one value per 8x8 cell:
+    # each cell's fired pixels are the count image's pixels with an event in that cell.
+    _, windows = windows_of_scattered_events(images=True)
+    for w in windows:
+        grid = w["images"]["sources"]["evidence"]
+        assert sorted(grid) == ["evidence", "excess", "fired", "llr", "mean", "travel", "variance"]
+        fired = (w["images"]["count"] > 0).reshape(6, 8, 8, 8).sum(axis=(1, 3))
+        np.testing.assert_array_equal(grid["fired"], fired)
+        assert grid["evidence"].shape == grid["mean"].shape == (6, 8) and grid["travel"].shape == (6, 8, 2)
+        assert (grid["evidence"] >= 0).all()
+
+
 def test_window_images_are_off_by_default():
     _, windows = windows_of_scattered_events()
     assert len(windows) == 3 and not any("images" in w for w in windows)

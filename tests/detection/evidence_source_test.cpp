@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "fdv/detection/detector.h"
@@ -307,6 +308,45 @@ TEST(EvidenceSource, ATextureSpotRunsOnIntoItsImageSurroundAndIsNoCandidate) {
   // The diagnostics report the candidate's isolation: the gate's, and the patch's under it.
   EXPECT_GE(blob.least_isolation, EvidenceSourceOptions{}.min_isolation);
   EXPECT_LT(patch_unchecked.least_isolation, EvidenceSourceOptions{}.min_isolation);
+}
+
+TEST(EvidenceSource, ItsStateImagesAreTheGridOfTheLastWindow) {
+  DetectorOptions o;
+  o.evidence.enabled = true;
+  Detector detector(o, small_camera());
+  const int c = detector.options().evidence.cell_px, cols = (kNoisyWidth + c - 1) / c, rows = (kNoisyHeight + c - 1) / c;
+  int calls = 0;
+  detector.for_each_source_state([&](std::string_view, const std::vector<SourceStateImage>&) { ++calls; });
+  EXPECT_EQ(calls, 0);  // nothing learned before the first window
+  NoisyWindows windows;
+  for (int k = 0; k < 12; ++k) {
+    Eigen::Vector2d blob_at;
+    detector.detect(windows.make(k, true, blob_at));
+    // Each cell's fired pixels, counted here from the window's count image.
+    cv::Mat fired(rows, cols, CV_32F, cv::Scalar(0));
+    const cv::Mat& I = detector.time_images().count;
+    for (int y = 0; y < kNoisyHeight; ++y)
+      for (int x = 0; x < kNoisyWidth; ++x) fired.at<float>(y / c, x / c) += I.at<std::int32_t>(y, x) > 0 ? 1.f : 0.f;
+    std::vector<std::string> names;
+    detector.for_each_source_state([&](std::string_view source, const std::vector<SourceStateImage>& images) {
+      ASSERT_EQ(source, EvidenceSource::kName);
+      for (const SourceStateImage& im : images) {
+        names.emplace_back(im.name);
+        ASSERT_EQ(im.image->size(), cv::Size(cols, rows)) << im.name;
+        EXPECT_EQ(im.image->type(), im.name == "travel" ? CV_32FC2 : CV_32F) << im.name;
+        if (im.name == "fired") {
+          EXPECT_EQ(cv::norm(*im.image, fired, cv::NORM_INF), 0) << "window " << k;
+        }
+        if (im.name == "evidence") {  // L in [0, 2h]
+          double lo, hi;
+          cv::minMaxLoc(*im.image, &lo, &hi);
+          EXPECT_GE(lo, 0);
+          EXPECT_LE(hi, 2 * o.evidence.threshold);
+        }
+      }
+    });
+    EXPECT_EQ(names, (std::vector<std::string>{"fired", "mean", "variance", "llr", "evidence", "excess", "travel"}));
+  }
 }
 
 }  // namespace

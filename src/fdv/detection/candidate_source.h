@@ -82,6 +82,12 @@ struct SourceWindow {
   DetectionStatus why_not = DetectionStatus::kRemovedAsNoise;
 };
 
+/// One image of the state a source keeps across windows (CandidateSource::state_images).
+struct SourceStateImage {
+  std::string_view name;
+  const cv::Mat* image;  ///< the source's own, valid until its next window
+};
+
 class CandidateSource {
  public:
   virtual ~CandidateSource() = default;
@@ -94,6 +100,9 @@ class CandidateSource {
   /// The source's candidate in this window, or nothing. Writes its diagnostics to
   /// res.diagnostics_of(its name); may add to res.candidates and set res.track_aided.
   virtual std::optional<Candidate> find(SourceWindow& in, DetectionResult& res) = 0;
+  /// The state it keeps across windows, as named images, for inspection (Python's
+  /// `Perception(images=True)`); nothing in the pipeline reads them. None by default.
+  virtual void state_images(std::vector<SourceStateImage>& /*out*/) const {}
 };
 
 /// Makes a registered source for a detector's options (valid ones: DetectorOptions::validate);

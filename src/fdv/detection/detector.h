@@ -57,6 +57,17 @@ class Detector {
   const TimeImages& time_images() const { return ti_; }
   const cv::Mat& segmentation() const { return S_; }   ///< S, CV_32F
   const cv::Mat& preprocessed() const { return pre_.P(); }  ///< P = (open(mean(S)))², CV_32F (before any blanking)
+  /// Calls f(source name, its state images) for each source that keeps state across windows
+  /// (CandidateSource::state_images), in the order the sources are tried.
+  template <class F>
+  void for_each_source_state(F&& f) const {
+    std::vector<SourceStateImage> images;
+    for (const Source& s : sources_) {
+      images.clear();
+      s.source->state_images(images);
+      if (!images.empty()) f(s.name, images);
+    }
+  }
   /// The options in use: the constructor's, scaled_to_camera.
   const DetectorOptions& options() const { return options_; }
 

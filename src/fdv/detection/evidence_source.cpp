@@ -296,6 +296,17 @@ double EvidenceSource::isolation_of(const SourceWindow& in, const Candidate& fou
   return isolation(in.ti.count, box, cv::sum(in.ti.count(box))[0], image_density);
 }
 
+void EvidenceSource::state_images(std::vector<SourceStateImage>& out) const {
+  if (grid_.windows() == 0) return;
+  out.insert(out.end(), {{"fired", &fired_},
+                         {"mean", &grid_.mean()},
+                         {"variance", &grid_.variance()},
+                         {"llr", &grid_.llr()},
+                         {"evidence", &grid_.evidence()},
+                         {"excess", &grid_.excess()},
+                         {"travel", &grid_.travel()}});
+}
+
 std::optional<Candidate> EvidenceSource::find(SourceWindow& in, DetectionResult& res) {
   if (!in.events.new_evidence) return std::nullopt;
   if (!updated_ || in.events.t_start != last_start_ || in.events.t_end != last_end_) begin_window(in);

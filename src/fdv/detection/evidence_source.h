@@ -92,6 +92,11 @@ class EvidenceSource final : public CandidateSource {
   void allocate(int width, int height) override;
   bool begin_window(const SourceWindow& in) override;
   std::optional<Candidate> find(SourceWindow& in, DetectionResult& res) override;
+  /// The grid after the last window that reached the sources, one value per cell: `fired` (n),
+  /// `llr` (ℓ), `evidence` (L), `excess` (e), `mean` and `variance` (m and v once this window is
+  /// learned; ℓ used them as they were before), all CV_32F, and `travel` (T [cells], CV_32FC2).
+  /// Row y, column x is the cell of pixels [xC, (x+1)C) × [yC, (y+1)C).
+  void state_images(std::vector<SourceStateImage>& out) const override;
 
  private:
   /// Each cell's fired pixels: the pixels of its count image with an event.
