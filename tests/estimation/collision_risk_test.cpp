@@ -171,7 +171,7 @@ Throw make_throw(const Eigen::Vector3d& miss_W, double s_closest, const Eigen::V
   // d(s) = a + b s + c s² with d(s_c) = miss; the caller makes miss ⊥ ḋ(s_c) = b + 2 c s_c.
   const Eigen::Vector3d a = miss_W - rel_v * s_closest - c * s_closest * s_closest;
   const BallisticTrajectory at_vehicle{t_vehicle, o.p_W_B + a, o.v_W + rel_v, g};
-  th.estimate.usable = true;
+  th.estimate.usable = th.estimate.converged = true;
   th.estimate.trajectory = at_vehicle.anchored_at(2 * kNsPerS);
   th.estimate.covariance = estimate_cov;
   th.estimate.t_first = kNsPerS;
@@ -406,9 +406,9 @@ TEST(CollisionRisk, BadInputGivesAReason) {
   };
   const double nan = std::numeric_limits<double>::quiet_NaN();
   Throw t = good;
-  t.estimate.usable = false;
+  t.estimate.usable = t.estimate.converged = false;
   t.estimate.message = "too few observations";
-  EXPECT_EQ(reason(t), "estimate not usable: too few observations");
+  EXPECT_EQ(reason(t), "estimate not converged: too few observations");
   t = good;
   t.estimate.covariance.reset();
   EXPECT_EQ(reason(t), "estimate has no (p0, v0) covariance");

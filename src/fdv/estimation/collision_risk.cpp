@@ -237,8 +237,8 @@ std::string covariance_problem(const Eigen::Matrix<double, 6, 6>& cov) {
 
 /// Why the inputs give no risk, or empty.
 std::string input_problem(const TrajectoryEstimate& estimate, const VehicleState& vehicle) {
-  if (!estimate.usable)
-    return "estimate not usable" + (estimate.message.empty() ? std::string() : ": " + estimate.message);
+  if (!estimate.converged)
+    return "estimate not converged" + (estimate.message.empty() ? std::string() : ": " + estimate.message);
   if (!estimate.covariance) return "estimate has no (p0, v0) covariance";
   const BallisticTrajectory& tr = estimate.trajectory;
   if (!tr.p0_W.allFinite() || !tr.v0_W.allFinite() || !tr.gravity_W.allFinite())

@@ -57,8 +57,10 @@ struct CollisionRisk {
   Eigen::Vector3d relative_velocity_W = Eigen::Vector3d::Zero();
 };
 
-/// A risk, or the reason there is none (no covariance, non-finite input, vehicle state older than
-/// the estimate's newest observation, estimate not usable).
+/// A risk, or the reason there is none (estimate not converged, no covariance, non-finite input,
+/// vehicle state older than the estimate's newest observation). Whether a converged estimate that
+/// is not usable is worth acting on is the caller's policy (the dodge's max_horizon_sigma_m): its
+/// covariance weighs it here as a usable one's does.
 struct RiskAssessment {
   std::optional<CollisionRisk> risk;
   std::string reason;  ///< empty when risk is set

@@ -681,19 +681,16 @@ void Perception::decide_dodge(int track_id, const TrajectoryEstimate& estimate, 
   const auto odometry = vehicle_state(now);
   if (!odometry) return;
   VehicleState vehicle{*odometry, vehicle_state_covariance(options_.prediction)};
-  // The risk takes usable estimates only; one the planner takes beyond them (dodge_decides_on) is
-  // weighed by its covariance as a usable one is.
-  TrajectoryEstimate taken = estimate;
-  taken.usable = true;
   RiskAssessment assessed;
   if (options_.dodge_from == DodgeSource::kFusionPointEstimate) {
-    taken.covariance = Eigen::Matrix<double, 6, 6>::Zero();
+    TrajectoryEstimate point = estimate;
+    point.covariance = Eigen::Matrix<double, 6, 6>::Zero();
     vehicle.covariance.setZero();
-    assessed = assess_collision_risk(taken, vehicle, options_.prediction);
+    assessed = assess_collision_risk(point, vehicle, options_.prediction);
   } else if (assessed_at_t && now == t) {
     assessed = *assessed_at_t;
   } else {
-    assessed = assess_collision_risk(taken, vehicle, options_.prediction);
+    assessed = assess_collision_risk(estimate, vehicle, options_.prediction);
   }
   std::optional<DodgeDecision> decision;
   if (assessed.risk) {
