@@ -150,16 +150,16 @@ void expect_same_flight(const ClosedLoopFlight& a, const ClosedLoopFlight& b) {
 }
 
 // Three methods through one simulation (fly_with_perceptions): two that dodge the head-on throw
-// (hover_headon seed 1 at 320x240), each then on its own fork, and one that decides nothing and
-// rides the shared simulation to its end. Each flies exactly as it does alone, and the open loop
-// riding along gets exactly the scene of a simulation without commands.
+// (hover_headon seed 1 at 160x120, small for the sanitizer run), each then on its own fork, and one
+// that decides nothing and rides the shared simulation to its end. Each flies exactly as it does
+// alone, and the open loop riding along gets exactly the scene of a simulation without commands.
 TEST(ClosedLoop, MethodsSharingOneSimulationFlyExactlyAsEachDoesAlone) {
   sim::ScenarioConfig config = sim::make_preset("hover_headon", 1);
-  sim::set_event_resolution(config, 320, 240);
-  config.depth_camera.width = 320, config.depth_camera.height = 240;
-  config.depth_camera.fx = config.depth_camera.fy = 192.85, config.depth_camera.cx = 160,
-  config.depth_camera.cy = 120;
-  config.duration_s = 0.9;  // both dodging methods decide at 0.80 s
+  sim::set_event_resolution(config, 160, 120);
+  config.depth_camera.width = 160, config.depth_camera.height = 120;
+  config.depth_camera.fx = config.depth_camera.fy = 96.425, config.depth_camera.cx = 80,
+  config.depth_camera.cy = 60;
+  config.duration_s = 0.9;  // both dodging methods decide at 0.775 s
   config.threads = 1;
   PerceptionOptions ours;
   ours.threads = 1;
