@@ -100,6 +100,55 @@ TEST(Dataset, RoundTripsEveryStreamInChunks) {
   EXPECT_EQ(read_object_truth(dir).size(), 10u);
 }
 
+// as_stored gives what a reader of the written folder reads back, to the bit: samples with more
+// digits than the rows keep (9 significant), a quaternion the rounding leaves a little off unit
+// length, depth between millimetres; and nothing for a row the reader drops.
+TEST(Dataset, AsStoredIsWhatTheReaderReadsBack) {
+  const auto dir = test::scratch_dir("dataset_as_stored");
+  const ImuSample imu{kNsPerMs, {0.123456789012345, -1.0 / 3.0, 2e-7 / 3.0}, {0.1, -9.80665432101, 1e5 / 7.0}};
+  OdometrySample odo;
+  odo.t = 2 * kNsPerMs;
+  odo.p_W_B = {1.0 / 3.0, -2.0 / 7.0, 1.2345678901234};
+  odo.q_W_B = Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized()));
+  odo.v_W = {0.7 / 3.0, 0, -1e-9 / 3.0};
+  odo.omega_B = {1.0 / 9.0, 2.0 / 9.0, 4.0 / 9.0};
+  DepthFrame depth{3 * kNsPerMs, 32, 24, std::vector<float>(32 * 24, 2.3456f)};
+  depth.depth_m[0] = std::numeric_limits<float>::quiet_NaN();
+  depth.depth_m[1] = 70.0f;  // beyond the 16-bit millimetres
+  {
+    DatasetWriter w(dir, small_calibration());
+    w.add_imu(imu);
+    w.add_odometry(odo);
+    w.add_depth(depth);
+    w.finish();
+  }
+  const AllStreams all = read_everything(*open_recording(dir, {}));
+  ASSERT_EQ(all.imu.size(), 1u);
+  ASSERT_EQ(all.odometry.size(), 1u);
+  ASSERT_EQ(all.depth.size(), 1u);
+  const auto imu_stored = as_stored(imu);
+  const auto odo_stored = as_stored(odo);
+  ASSERT_TRUE(imu_stored && odo_stored);
+  EXPECT_NE(imu_stored->gyro_rad_s, imu.gyro_rad_s);  // the rounding is real
+  EXPECT_EQ(imu_stored->t, all.imu[0].t);
+  EXPECT_EQ(imu_stored->gyro_rad_s, all.imu[0].gyro_rad_s);
+  EXPECT_EQ(imu_stored->accel_m_s2, all.imu[0].accel_m_s2);
+  EXPECT_EQ(odo_stored->t, all.odometry[0].t);
+  EXPECT_EQ(odo_stored->p_W_B, all.odometry[0].p_W_B);
+  EXPECT_EQ(odo_stored->q_W_B.coeffs(), all.odometry[0].q_W_B.coeffs());
+  EXPECT_EQ(odo_stored->v_W, all.odometry[0].v_W);
+  EXPECT_EQ(odo_stored->omega_B, all.odometry[0].omega_B);
+  const DepthFrame depth_stored = as_stored(depth);
+  EXPECT_EQ(depth_stored.t, all.depth[0].t);
+  EXPECT_EQ(depth_stored.depth_m, all.depth[0].depth_m);
+  EXPECT_EQ(depth_stored.depth_m[0], 0.0f);     // invalid
+  EXPECT_EQ(depth_stored.depth_m[1], 65535 * 0.001f);  // clamped
+  EXPECT_EQ(depth_stored.depth_m[2], 2346 * 0.001f);   // whole millimetres
+  ImuSample bad = imu;
+  bad.accel_m_s2.x() = std::numeric_limits<double>::infinity();
+  EXPECT_FALSE(as_stored(bad).has_value());  // the reader drops the row
+}
+
 TEST(Dataset, BadRowsAreCountedWithTheirLine) {
   const auto dir = test::scratch_dir("dataset_bad_rows");
   {

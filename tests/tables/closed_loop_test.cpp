@@ -1,15 +1,20 @@
 // The closed loop (tables/closed_loop.h): a pipeline that decides nothing flies the path and sees
 // exactly the open-loop scene; an oracle in the loop escapes a threat, by less than the kinematic
-// replay of the same decisions promises (the vehicle has to tilt first).
+// replay of the same decisions promises (the vehicle has to tilt first); a kept flight replays to
+// the loop's own results.
 #include "fdv/tables/closed_loop.h"
 
 #include <gtest/gtest.h>
 
+#include "eval/handmade_truth.h"
+#include "fdv/io/dataset/dataset_reader.h"
+#include "fdv/pipeline/replay.h"
 #include "fdv/sim/random_throw.h"
 #include "fdv/sim/simulator.h"
-#include "eval/handmade_truth.h"
 #include "fdv/tables/dodge_eval.h"
+#include "fdv/tables/experiment.h"
 #include "sim/sim_test_util.h"
+#include "test_support.h"
 
 namespace fdv {
 namespace {
@@ -149,18 +154,25 @@ void expect_same_flight(const ClosedLoopFlight& a, const ClosedLoopFlight& b) {
   EXPECT_EQ(a.flight.late, b.flight.late);
 }
 
-// Three methods through one simulation (fly_with_perceptions): two that dodge the head-on throw
-// (hover_headon seed 1 at 160x120, small for the sanitizer run), each then on its own fork, and one
-// that decides nothing and rides the shared simulation to its end. Each flies exactly as it does
-// alone, and the open loop riding along gets exactly the scene of a simulation without commands.
-TEST(ClosedLoop, MethodsSharingOneSimulationFlyExactlyAsEachDoesAlone) {
+/// The head-on throw (hover_headon seed 1) at 160x120, small for the sanitizer run: ours and
+/// `rotation` decide at 0.775 s.
+sim::ScenarioConfig headon_160x120() {
   sim::ScenarioConfig config = sim::make_preset("hover_headon", 1);
   sim::set_event_resolution(config, 160, 120);
   config.depth_camera.width = 160, config.depth_camera.height = 120;
   config.depth_camera.fx = config.depth_camera.fy = 96.425, config.depth_camera.cx = 80,
   config.depth_camera.cy = 60;
-  config.duration_s = 0.9;  // both dodging methods decide at 0.775 s
+  config.duration_s = 0.9;
   config.threads = 1;
+  return config;
+}
+
+// Three methods through one simulation (fly_with_perceptions): two that dodge the head-on throw,
+// each then on its own fork, and one that decides nothing and rides the shared simulation to its
+// end. Each flies exactly as it does
+// alone, and the open loop riding along gets exactly the scene of a simulation without commands.
+TEST(ClosedLoop, MethodsSharingOneSimulationFlyExactlyAsEachDoesAlone) {
+  const sim::ScenarioConfig config = headon_160x120();
   PerceptionOptions ours;
   ours.threads = 1;
   std::map<std::string, PerceptionOptions> methods{
@@ -182,6 +194,28 @@ TEST(ClosedLoop, MethodsSharingOneSimulationFlyExactlyAsEachDoesAlone) {
   EXPECT_GT(shared.at("ours").flight.commands, 0u);
   EXPECT_GT(shared.at("rotation").flight.commands, 0u);
   EXPECT_TRUE(shared.at("none").decisions.empty());
+}
+
+// A kept flight replays to the loop's own results: the loop's pipeline gets the streams as the
+// dataset stores them (rounded text, millimetre depth), so a run on the flown dataset finds the
+// same detections, to the bit, and makes the same decisions. Before, the loop's pipeline got the
+// simulator's doubles, and the replay's detections moved by ~1e-7 px (a threshold can flip on that).
+TEST(ClosedLoop, AKeptFlightReplaysToTheLoopsOwnResults) {
+  const sim::ScenarioConfig config = headon_160x120();
+  PerceptionOptions options;
+  options.threads = 1;
+  const std::string dataset = test::scratch_dir("closed_loop_replay") + "/dataset";
+  const ClosedLoopFlight flown = fly_with_perception(config, options, dataset, "");
+  ASSERT_FALSE(flown.decisions.empty());  // what the test is for: a flight that the camera sees
+
+  ClosedLoopFlight replayed;
+  PerceptionCallbacks callbacks;
+  callbacks.on_window = [&](const WindowResult& w) { replayed.windows.push_back(window_detections(w)); };
+  callbacks.on_dodge = [&](const DodgeDecision& d) { replayed.decisions.push_back(d); };
+  replay(open_dataset(dataset, {}), load_calibration(dataset + "/calibration.yaml"), options, callbacks);
+  replayed.truth = flown.truth;
+  replayed.flight = flown.flight;
+  expect_same_flight(flown, replayed);
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 
 #include "fdv/avoidance/maneuver_playback.h"
 #include "fdv/estimation/collision_risk.h"
+#include "fdv/io/dataset/dataset_writer.h"
 #include "fdv/pipeline/options_yaml.h"
 #include "fdv/results/run.h"
 #include "fdv/sim/dataset_sink.h"
@@ -40,7 +41,9 @@ std::vector<OdometrySample> sample_body(const sim::ScenarioConfig& config, sim::
 }
 
 /// Every stream of the simulation into a live Perception, the truth kept, and optionally the
-/// dataset written.
+/// dataset written. The pipeline gets the streams as the dataset stores them (as_stored: rounded
+/// text, millimetre depth), written or not, so that a run on the dataset gives the loop's results
+/// and the loop's pipeline sees what the open loop's does.
 class LoopSink : public sim::SimulationSink {
  public:
   LoopSink(Perception& perception, sim::DatasetSink* dataset) : perception_(perception), dataset_(dataset) {}
@@ -50,15 +53,15 @@ class LoopSink : public sim::SimulationSink {
   }
   void on_imu(const ImuSample& s) override {
     if (dataset_) dataset_->on_imu(s);
-    perception_.push_imu(s);
+    if (const auto stored = as_stored(s)) perception_.push_imu(*stored);
   }
   void on_depth(const DepthFrame& f) override {
     if (dataset_) dataset_->on_depth(f);
-    perception_.push_depth(f);
+    perception_.push_depth(as_stored(f));
   }
   void on_odometry(const OdometrySample& s) override {
     if (dataset_) dataset_->on_odometry(s);
-    perception_.push_odometry(s);
+    if (const auto stored = as_stored(s)) perception_.push_odometry(*stored);
   }
   void on_body_truth(const OdometrySample& s) override {
     if (dataset_) dataset_->on_body_truth(s);

@@ -410,8 +410,7 @@ std::optional<DepthFrame> decode_dataset_depth(std::span<const std::uint8_t> byt
   f.width = static_cast<int>(width);
   f.height = static_cast<int>(height);
   f.depth_m.resize(millimetres.size());
-  std::transform(millimetres.begin(), millimetres.end(), f.depth_m.begin(),
-                 [](std::uint16_t mm) { return static_cast<float>(mm) * 0.001f; });
+  millimetres_to_metres(millimetres, f.depth_m);
   return f;
 }
 

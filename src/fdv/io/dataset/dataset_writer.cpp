@@ -5,6 +5,8 @@
 #include <cstring>
 #include <filesystem>
 #include <fmt/format.h>
+#include <memory>
+#include <sstream>
 
 #include "fdv/core/error.h"
 #include "fdv/io/dataset/dataset_reader.h"
@@ -21,11 +23,28 @@ std::ofstream open_out(const fs::path& path, const char* header, bool binary = f
   return f;
 }
 
-void write_pose_row(std::ofstream& f, const OdometrySample& s) {
-  f << fmt::format("{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g}\n",
-                   s.t, s.p_W_B.x(), s.p_W_B.y(), s.p_W_B.z(), s.q_W_B.x(), s.q_W_B.y(),
-                   s.q_W_B.z(), s.q_W_B.w(), s.v_W.x(), s.v_W.y(), s.v_W.z(), s.omega_B.x(),
-                   s.omega_B.y(), s.omega_B.z());
+std::string pose_row(const OdometrySample& s) {
+  return fmt::format("{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g}\n",
+                     s.t, s.p_W_B.x(), s.p_W_B.y(), s.p_W_B.z(), s.q_W_B.x(), s.q_W_B.y(),
+                     s.q_W_B.z(), s.q_W_B.w(), s.v_W.x(), s.v_W.y(), s.v_W.z(), s.omega_B.x(),
+                     s.omega_B.y(), s.omega_B.z());
+}
+
+std::string imu_row(const ImuSample& s) {
+  return fmt::format("{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g}\n", s.t, s.gyro_rad_s.x(),
+                     s.gyro_rad_s.y(), s.gyro_rad_s.z(), s.accel_m_s2.x(), s.accel_m_s2.y(),
+                     s.accel_m_s2.z());
+}
+
+void write_pose_row(std::ofstream& f, const OdometrySample& s) { f << pose_row(s); }
+
+/// The one sample a reader parses from `row`, or nothing if it drops it.
+template <class Sample, class Read>
+std::optional<Sample> read_back(std::string row, Read read) {
+  ReadReport report;
+  std::vector<Sample> samples = read(std::make_unique<std::istringstream>(std::move(row)), "as_stored", report);
+  if (samples.size() != 1) return std::nullopt;
+  return samples.front();
 }
 
 constexpr const char* kPoseHeader = "# t_ns,px,py,pz,qx,qy,qz,qw,vx,vy,vz,wx,wy,wz";
@@ -79,11 +98,7 @@ void DatasetWriter::add_events(std::span<const Event> events) {
   event_count_ += events.size();
 }
 
-void DatasetWriter::add_imu(const ImuSample& s) {
-  imu_ << fmt::format("{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g}\n", s.t, s.gyro_rad_s.x(),
-                      s.gyro_rad_s.y(), s.gyro_rad_s.z(), s.accel_m_s2.x(), s.accel_m_s2.y(),
-                      s.accel_m_s2.z());
-}
+void DatasetWriter::add_imu(const ImuSample& s) { imu_ << imu_row(s); }
 
 void DatasetWriter::add_odometry(const OdometrySample& s) { write_pose_row(odometry_, s); }
 void DatasetWriter::add_body_truth(const OdometrySample& s) { write_pose_row(body_, s); }
@@ -134,6 +149,22 @@ void DatasetWriter::finish(const std::string& manifest_extra) {
   std::ofstream m(fs::path(dir_) / kDatasetManifest);
   m << manifest << "\n";
   if (!m) throw InputError(dir_, "", "cannot write dataset.yaml");
+}
+
+std::optional<ImuSample> as_stored(const ImuSample& s) {
+  return read_back<ImuSample>(imu_row(s), read_dataset_imu);
+}
+
+std::optional<OdometrySample> as_stored(const OdometrySample& s) {
+  return read_back<OdometrySample>(pose_row(s), read_dataset_poses);
+}
+
+DepthFrame as_stored(const DepthFrame& frame) {
+  std::vector<std::uint16_t> millimetres(frame.depth_m.size());
+  metres_to_millimetres(frame.depth_m, millimetres);
+  DepthFrame out = frame;
+  millimetres_to_metres(millimetres, out.depth_m);
+  return out;
 }
 
 }  // namespace fdv

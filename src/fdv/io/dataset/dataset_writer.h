@@ -7,6 +7,7 @@
 ///
 /// Each stream must be added in non-decreasing time. Not thread-safe.
 #include <fstream>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -50,5 +51,13 @@ class DatasetWriter {
   int depth_count_ = 0;
   bool finished_ = false;
 };
+
+/// A sample as a reader of the written folder gets it back: the text rows' 9 significant digits
+/// (the reader's parsing, a unit quaternion renormalised), depth in whole millimetres; nothing
+/// for a row the reader would drop. A consumer fed live beside the writer (the closed loop) so
+/// sees exactly what `fdv run` on the folder sees.
+std::optional<ImuSample> as_stored(const ImuSample& s);
+std::optional<OdometrySample> as_stored(const OdometrySample& s);
+DepthFrame as_stored(const DepthFrame& frame);
 
 }  // namespace fdv

@@ -112,6 +112,11 @@ void metres_to_millimetres(std::span<const float> metres, std::span<std::uint16_
   });
 }
 
+void millimetres_to_metres(std::span<const std::uint16_t> millimetres, std::span<float> metres) {
+  std::transform(millimetres.begin(), millimetres.end(), metres.begin(),
+                 [](std::uint16_t mm) { return static_cast<float>(mm) * 0.001f; });
+}
+
 std::vector<std::uint8_t> encode_depth_png(std::span<const std::uint16_t> millimetres, int width,
                                            int height) {
   if (millimetres.size() != static_cast<std::size_t>(width) * static_cast<std::size_t>(height))

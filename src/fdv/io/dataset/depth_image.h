@@ -23,6 +23,9 @@ bool sniff_depth_encoding(std::span<const std::uint8_t> bytes, DepthEncoding& en
 /// `millimetres` has the size of `metres`.
 void metres_to_millimetres(std::span<const float> metres, std::span<std::uint16_t> millimetres);
 
+/// The files' millimetres to metres, as the reader gives them (0 stays 0: invalid).
+void millimetres_to_metres(std::span<const std::uint16_t> millimetres, std::span<float> metres);
+
 /// Millimetres of a width × height frame, row-major.
 std::vector<std::uint8_t> encode_depth_png(std::span<const std::uint16_t> millimetres, int width,
                                            int height);
