@@ -409,6 +409,10 @@ TEST(CollisionRisk, BadInputGivesAReason) {
   t.estimate.usable = t.estimate.converged = false;
   t.estimate.message = "too few observations";
   EXPECT_EQ(reason(t), "estimate not converged: too few observations");
+  // Converged but not usable (too wide at the usable horizon): a risk, the caller decides.
+  t = good;
+  t.estimate.usable = false;
+  EXPECT_TRUE(assess_collision_risk(t.estimate, t.vehicle, po).risk.has_value());
   t = good;
   t.estimate.covariance.reset();
   EXPECT_EQ(reason(t), "estimate has no (p0, v0) covariance");

@@ -169,8 +169,8 @@ sim::ScenarioConfig headon_160x120() {
 
 // Three methods through one simulation (fly_with_perceptions): two that dodge the head-on throw,
 // each then on its own fork, and one that decides nothing and rides the shared simulation to its
-// end. Each flies exactly as it does
-// alone, and the open loop riding along gets exactly the scene of a simulation without commands.
+// end. Each flies exactly as it does alone, and the open loop riding along gets exactly the scene
+// of a simulation without commands.
 TEST(ClosedLoop, MethodsSharingOneSimulationFlyExactlyAsEachDoesAlone) {
   const sim::ScenarioConfig config = headon_160x120();
   PerceptionOptions ours;

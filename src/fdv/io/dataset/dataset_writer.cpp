@@ -36,8 +36,6 @@ std::string imu_row(const ImuSample& s) {
                      s.accel_m_s2.z());
 }
 
-void write_pose_row(std::ofstream& f, const OdometrySample& s) { f << pose_row(s); }
-
 /// The one sample a reader parses from `row`, or nothing if it drops it.
 template <class Sample, class Read>
 std::optional<Sample> read_back(std::string row, Read read) {
@@ -100,13 +98,13 @@ void DatasetWriter::add_events(std::span<const Event> events) {
 
 void DatasetWriter::add_imu(const ImuSample& s) { imu_ << imu_row(s); }
 
-void DatasetWriter::add_odometry(const OdometrySample& s) { write_pose_row(odometry_, s); }
-void DatasetWriter::add_body_truth(const OdometrySample& s) { write_pose_row(body_, s); }
+void DatasetWriter::add_odometry(const OdometrySample& s) { odometry_ << pose_row(s); }
+void DatasetWriter::add_body_truth(const OdometrySample& s) { body_ << pose_row(s); }
 
 void DatasetWriter::add_unflown_body_truth(const OdometrySample& s) {
   if (!body_unflown_.is_open())
     body_unflown_ = open_out(fs::path(dir_) / "truth" / "body_unflown.csv", kPoseHeader);
-  write_pose_row(body_unflown_, s);
+  body_unflown_ << pose_row(s);
 }
 
 void DatasetWriter::add_object_truth(const ObjectState& s) {
