@@ -64,7 +64,30 @@ void bin_slice(const std::int32_t* __restrict pixel, const float* __restrict t_s
 
 }  // namespace
 
-void EventRefiner::allocate(int width, int height) { acc_.create(height, width, CV_32FC2); }
+void EventRefiner::allocate(int width, int height) {
+  acc_.create(height, width, CV_32FC2);
+  acc_.setTo(0);  // every page faulted in here, not in the first window with a detection
+  if (options_.refine_fit_outline) warm_up_outline_fit();
+}
+
+// cv::fitEllipseDirect falls back, for a point set with no elliptical solution, to a fit through
+// OpenCV's SVD, which runs LAPACK. Its first call in a process binds the LAPACK symbols and faults
+// in their code: 1-5 ms once, measured in the first window of the DAVIS346 recording
+// (docs/BENCHMARKS.md, "No cold first window"). Both paths run once here, the fallback's own calls
+// on systems of its shapes (n x 5 decomposed and back-substituted; n x 3 and 2 x 2 solved).
+void EventRefiner::warm_up_outline_fit() {
+  std::vector<cv::Point2f> circle;
+  for (int i = 0; i < 16; ++i)
+    circle.emplace_back(static_cast<float>(8 + 5 * std::cos(0.4 * i)), static_cast<float>(8 + 4 * std::sin(0.4 * i)));
+  (void)cv::fitEllipseDirect(circle);
+  cv::Mat a(64, 5, CV_64F), b(64, 1, CV_64F, cv::Scalar(1)), w, u, vt, x;
+  for (int i = 0; i < a.rows; ++i)
+    for (int j = 0; j < a.cols; ++j) a.at<double>(i, j) = std::sin(1.0 + 0.7 * i + 1.3 * j * j);
+  cv::SVDecomp(a, w, u, vt);
+  cv::SVBackSubst(w, u, vt, b, x);
+  cv::solve(a.colRange(0, 3), b, x, cv::DECOMP_SVD);
+  cv::solve(a(cv::Rect(0, 0, 2, 2)), b.rowRange(0, 2), x, cv::DECOMP_SVD);
+}
 
 // The object's edges make events in proportion to the pixels they sweep: a ball that comes closer
 // as it moves sweeps more with its leading edge (growth plus motion) than with its trailing one

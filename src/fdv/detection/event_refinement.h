@@ -43,6 +43,8 @@ class EventRefiner {
   /// plausible outline of an object of `extent` px whose events' centroid is `centroid`.
   std::optional<Eigen::Vector2d> outline_center(const cv::Rect& square, const Eigen::Vector2d& centroid,
                                                 double extent) const;
+  /// Runs the ellipse fit's code paths once, so that the first window does not pay for loading them.
+  static void warm_up_outline_fit();
 
   DetectorOptions options_;
   cv::Mat acc_;  ///< the slice's events per pixel: (count, Σt), CV_32FC2
