@@ -246,5 +246,26 @@ TEST(Fallback, BurstIsDecimatedAndCounted) {
   EXPECT_EQ(out.pixel()[1], (4 / 320) * 320 + 4 % 320);
 }
 
+TEST(Fallback, AWindowOfOneEventPerPixelUsesTheBuffersMadeAtConstruction) {
+  // No cold first window: the output buffers hold a busy window (one event per pixel) from the
+  // start, so the first such window neither allocates nor faults them in.
+  const Calibration c = plain_rig();
+  const int n = c.event_camera.width * c.event_camera.height;
+  std::vector<Event> ev;
+  ev.reserve(static_cast<std::size_t>(n));
+  for (int i = 0; i < n; ++i)
+    ev.push_back({i * (25 * kNsPerMs / n), static_cast<std::uint16_t>(i % 320), static_cast<std::uint16_t>(i / 320), true});
+  for (const CompensationMethod method : {CompensationMethod::kNone, CompensationMethod::kRotation}) {
+    CompensationOptions opt;
+    opt.method = method;
+    auto comp = make_compensator(c, opt);
+    const std::vector<ImuSample> imu = {{.t = -kNsPerMs}, {.t = 26 * kNsPerMs}};
+    const float* made = comp->compensate({.events = {}, .t_start = 0, .t_end = 25 * kNsPerMs, .imu = imu}).x().data();
+    const CompensatedWindow& out = comp->compensate({.events = ev, .t_start = 0, .t_end = 25 * kNsPerMs, .imu = imu});
+    ASSERT_EQ(out.size(), static_cast<std::size_t>(n)) << to_string(method);
+    EXPECT_EQ(out.x().data(), made) << to_string(method);
+  }
+}
+
 }  // namespace
 }  // namespace fdv

@@ -7,6 +7,9 @@ CompensatorBase::CompensatorBase(CompensationMethod method, const Calibration& c
     : method_(method), calibration_(calibration), options_(options), map_(std::move(map)) {
   out_.width = map_->width();
   out_.height = map_->height();
+  // A busy window holds about one event per pixel: its buffers are made and faulted in here, not
+  // in the first window (docs/BENCHMARKS.md, "No cold first window"). A larger window grows them.
+  out_.reserve_events(static_cast<std::size_t>(out_.width) * static_cast<std::size_t>(out_.height));
 }
 
 ImuWindowSummary CompensatorBase::begin_window(const CompensationInput& in) {

@@ -40,6 +40,7 @@ vf vmax(vf a, vf b) { return select(a > b, a, b); }
 
 enum class Model { kNone, kRotation, kRotationTranslation };
 constexpr int kMaxParts = 64;  // CompensationOptions::threads ≤ 64
+constexpr std::size_t kDepthSampleSize = 50'000;  // about this many valid depths are sorted per frame
 
 /// Everything the loop reads, for one window.
 struct WarpParams {
@@ -279,7 +280,16 @@ FDV_AVX2_CLONES WarpCounts warp_range(const WarpParams& p, std::size_t begin, st
 
 WarpCompensator::WarpCompensator(CompensationMethod method, const Calibration& calibration,
                                  const CompensationOptions& options, std::shared_ptr<const UndistortionMap> map)
-    : CompensatorBase(method, calibration, options, std::move(map)) {}
+    : CompensatorBase(method, calibration, options, std::move(map)) {
+  if (method != CompensationMethod::kRotationTranslation) return;
+  // The depth frame's buffers, sized as prepare_depth sizes them (a registered frame has the event
+  // camera's size), so that the first frame does not fault them in inside a window.
+  const std::size_t n = static_cast<std::size_t>(map_->width()) * static_cast<std::size_t>(map_->height());
+  raw_rho_.resize(n);
+  row_max_.resize(n);
+  inv_depth_.resize(n);
+  depth_sample_.reserve(n / std::max<std::size_t>(1, n / kDepthSampleSize) + 1);
+}
 
 void WarpCompensator::build_rotation_slots(const Eigen::Vector3d& omega_E, const CompensationInput& in,
                                            TimeNs duration_ns) {
@@ -352,9 +362,9 @@ bool WarpCompensator::prepare_depth(const RegisteredDepth& depth) {
   const int w = depth.width, h = depth.height;
   const std::size_t n = static_cast<std::size_t>(w) * h;
   const float* z = depth.depth_m.data();
-  // The missing-depth policy's depth from the valid depths (strided: at most ~50 k are sorted).
+  // The missing-depth policy's depth from the valid depths (strided: about kDepthSampleSize sorted).
   depth_sample_.clear();
-  const std::size_t stride = std::max<std::size_t>(1, n / 50'000);
+  const std::size_t stride = std::max<std::size_t>(1, n / kDepthSampleSize);
   for (std::size_t i = 0; i < n; i += stride)
     if (z[i] > 0 && std::isfinite(z[i])) depth_sample_.push_back(z[i]);
   if (depth_sample_.empty()) {
