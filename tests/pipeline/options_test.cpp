@@ -124,6 +124,7 @@ FieldComparison compare_top(const PerceptionOptions& a, const PerceptionOptions&
   FDV_COMPARE_FIELD(monocular_baseline);
   FDV_COMPARE_FIELD(estimate_aided_association);
   FDV_COMPARE_FIELD(depth_since_first_detection);
+  FDV_COMPARE_FIELD(depth_before_first_detection_ns);
   FDV_COMPARE_FIELD(estimate_trajectories);
   FDV_COMPARE_FIELD(assume_static_vehicle);
   FDV_COMPARE_FIELD(max_lateness_ns);
@@ -145,6 +146,7 @@ threads: 2
 monocular_baseline: false
 estimate_aided_association: false
 depth_since_first_detection: false
+depth_before_first_detection_ms: 20.5
 estimate_trajectories: false
 assume_static_vehicle: true
 max_lateness_ms: 30
@@ -298,6 +300,7 @@ TEST(Options, FullFileLoadsEveryKey) {
   top.monocular_baseline = false;
   top.estimate_aided_association = false;
   top.depth_since_first_detection = false;
+  top.depth_before_first_detection_ns = 20'500'000;
   top.estimate_trajectories = false;
   top.assume_static_vehicle = true;
   top.max_lateness_ns = 30'000'000;
@@ -557,6 +560,7 @@ TEST(Options, InvalidValuesNameTheSectionAndTheYamlKey) {
   EXPECT_EQ(error_of("threads: 0"), " | threads must be in [1, 64], got 0");
   EXPECT_EQ(error_of("max_lateness_ms: -1"), " | max_lateness_ms must not be negative");
   EXPECT_EQ(error_of("odometry_max_extrapolation_ms: -2"), " | odometry_max_extrapolation_ms must not be negative");
+  EXPECT_EQ(error_of("depth_before_first_detection_ms: -3"), " | depth_before_first_detection_ms must not be negative");
 }
 
 TEST(Options, ErrorsFromAFileNameThatFile) {

@@ -692,6 +692,33 @@ TEST(Perception, DepthFramesFromBeforeATracksConfirmationAreUsed) {
   }
 }
 
+// PerceptionOptions::depth_before_first_detection_ns: the frame taken just before the ball was
+// first seen is segmented too, at the confirmed filter's prediction for its time, and finds the
+// ball at its true depth; without the option no frame before the first detection is used.
+TEST(Perception, TheDepthFrameJustBeforeTheFirstDetectionIsUsed) {
+  const SimulatedThrow& s = simulated_throw();
+  PerceptionOptions with, without;
+  with.depth_before_first_detection_ns = 34 * kNsPerMs;
+  const Collected a = run(0, s, with), b = run(0, s, without);
+  const int track = ball_track(s, a);
+  ASSERT_GE(track, 0);
+  ASSERT_EQ(ball_track(s, b), track);
+  TimeNs first_detection = std::numeric_limits<TimeNs>::max();
+  for (const WindowResult& w : a.results)
+    for (const auto& [d, track_id] : w.detections)
+      if (track_id == track) first_detection = std::min(first_detection, d.t);
+  auto before_first_detection = [&](const Collected& c) {
+    std::vector<DepthObservation> obs = depth_of(c, track);
+    std::erase_if(obs, [&](const DepthObservation& o) { return o.t >= first_detection; });
+    return obs;
+  };
+  EXPECT_TRUE(before_first_detection(b).empty());
+  const std::vector<DepthObservation> early = before_first_detection(a);
+  ASSERT_EQ(early.size(), 1u);
+  EXPECT_GE(early[0].t, first_detection - with.depth_before_first_detection_ns);
+  EXPECT_NEAR(early[0].depth_m, true_depth(s, early[0].t), 4 * early[0].sigma_m);
+}
+
 // trajectories.jsonl had rows that were no estimate: a solve at a track's confirmation before it
 // held enough observations (fit "none", zeros), and the monocular estimator re-solved on every depth
 // frame with nothing new. An estimate is emitted only with a fit, and a solve only follows a new

@@ -64,6 +64,7 @@ std::string PerceptionOptions::validate() const {
     if (!why.empty()) return std::string(name) + ": " + why;
   if (max_lateness_ns < 0) return "max_lateness_ms must not be negative";
   if (odometry_max_extrapolation_ns < 0) return "odometry_max_extrapolation_ms must not be negative";
+  if (depth_before_first_detection_ns < 0) return "depth_before_first_detection_ms must not be negative";
   return {};
 }
 
@@ -533,7 +534,7 @@ void Perception::segment_depth_since_first_detection(std::span<const int> confir
       for (const RegisteredDepth& d : recent_depth_) {
         const bool pending = std::any_of(pending_depth_.begin(), pending_depth_.end(),
                                          [&](const RegisteredDepth& p) { return p.t == d.t; });
-        if (d.t >= track->first_time() && !pending) segment_depth(d, *track);
+        if (d.t >= track->first_time() - options_.depth_before_first_detection_ns && !pending) segment_depth(d, *track);
       }
 }
 

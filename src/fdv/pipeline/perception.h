@@ -117,6 +117,10 @@ struct PerceptionOptions {
   /// each frame's time: the first depth observations of a throw are not lost to the confirmation
   /// delay (docs/ESTIMATION.md §2, "The pipeline's query").
   bool depth_since_first_detection = true;
+  /// With it, the frames up to this long before the first detection too [ns] (0 = none): the
+  /// filter's velocity, known at confirmation, places the object in a frame taken just before it
+  /// was first seen.
+  TimeNs depth_before_first_detection_ns = 0;
   PredictionOptions prediction;
   /// Dodge decisions (fdv/avoidance, docs/AVOIDANCE.md) on the collision risk of each usable
   /// estimate of the source's kind, at the time the estimate is made.
@@ -199,6 +203,8 @@ void describe(V& v, PerceptionOptions& o) {
     "a tentative track detected in the last window lends its gate to the detector's dense-motion cue and sparse count search");
   v("depth_since_first_detection", o.depth_since_first_detection, "-",
     "on confirmation, segment the depth frames since the track's first detection");
+  v.ms("depth_before_first_detection_ms", o.depth_before_first_detection_ns,
+       "with depth_since_first_detection, also the frames up to this long before the first detection (0 = none)");
   v.ms("max_lateness_ms", o.max_lateness_ns, "how long a completed window may wait for IMU and odometry");
   v.ms("odometry_max_extrapolation_ms", o.odometry_max_extrapolation_ns,
        "odometry extrapolation allowed beyond the newest sample");
