@@ -1,7 +1,9 @@
 // Simulator speed: simulated seconds per wall-clock second for the `fast_forward` preset (one
 // full default scene: 1 s with the ball crossing the view), event camera at 640x480 and at
 // 346x260, depth camera, IMU, odometry and truth included, all cores, output kept in memory
-// (counted, not stored). Run: build/bench/sim_bench [--benchmark_filter=...]
+// (counted, not stored); and `random_throw` throws as `fdv dodge-eval` simulates them (one
+// thread, whole throw) at two sampling steps (`max_motion_px` 0.5 and 1.0, alternating in one
+// run). Run: build/bench/sim_bench [--benchmark_filter=...]
 #include <benchmark/benchmark.h>
 
 #include <chrono>
@@ -18,11 +20,7 @@ class CountingSink : public fdv::sim::SimulationSink {
   std::uint64_t count = 0;
 };
 
-void BM_SimulateFastForward(benchmark::State& state) {
-  fdv::sim::ScenarioConfig config = fdv::sim::make_preset("fast_forward", 1);
-  fdv::sim::set_event_resolution(config, static_cast<int>(state.range(0)),
-                                 static_cast<int>(state.range(1)));
-  config.threads = 0;  // all cores
+void simulate(benchmark::State& state, const fdv::sim::ScenarioConfig& config) {
   double simulated = 0, wall = 0;
   fdv::sim::SimulationSummary summary;
   for (auto _ : state) {
@@ -43,6 +41,29 @@ void BM_SimulateFastForward(benchmark::State& state) {
       static_cast<double>(summary.events) / summary.simulated_s * 1e-6;
   state.counters["pixel_sample_rate_hz"] = summary.mean_sample_rate_hz;
 }
+
+void BM_SimulateFastForward(benchmark::State& state) {
+  fdv::sim::ScenarioConfig config = fdv::sim::make_preset("fast_forward", 1);
+  fdv::sim::set_event_resolution(config, static_cast<int>(state.range(0)),
+                                 static_cast<int>(state.range(1)));
+  config.threads = 0;  // all cores
+  simulate(state, config);
+}
+
+/// Args: seed (1: 640x480 forward flight, 4: 1280x720 hover, 6: 346x260 hover), max_motion_px × 10.
+void BM_SimulateRandomThrow(benchmark::State& state) {
+  fdv::sim::ScenarioConfig config =
+      fdv::sim::make_preset("random_throw", static_cast<std::uint64_t>(state.range(0)));
+  config.event_camera.max_motion_px = static_cast<double>(state.range(1)) / 10.0;
+  config.threads = 1;  // dodge-eval runs one throw per core
+  simulate(state, config);
+}
+BENCHMARK(BM_SimulateRandomThrow)
+    ->ArgsProduct({{1, 4, 6}, {5, 10}})
+    ->UseManualTime()
+    ->Unit(benchmark::kSecond)
+    ->Iterations(1);
+
 BENCHMARK(BM_SimulateFastForward)
     ->Args({640, 480})
     ->Args({346, 260})
