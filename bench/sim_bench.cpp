@@ -2,8 +2,8 @@
 // full default scene: 1 s with the ball crossing the view), event camera at 640x480 and at
 // 346x260, depth camera, IMU, odometry and truth included, all cores, output kept in memory
 // (counted, not stored); and `random_throw` throws as `fdv dodge-eval` simulates them (one
-// thread, whole throw) at two sampling steps (`max_motion_px` 0.5 and 1.0, alternating in one
-// run). Run: build/bench/sim_bench [--benchmark_filter=...]
+// thread, whole throw) at two sampling steps (`max_motion_px` 0.5, the default, and 1.0), in one
+// run. Run: build/bench/sim_bench [--benchmark_filter=...]
 #include <benchmark/benchmark.h>
 
 #include <chrono>
