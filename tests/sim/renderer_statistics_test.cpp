@@ -60,11 +60,26 @@ struct Statistics {
   std::vector<double> window_events, window_ball_events;  ///< per 25 ms window from t = 0
 };
 
-/// How far [px] the ray of pixel (x, y) passes outside the silhouette of the ball `ball` at time
-/// t (≤ 0 inside), from the truth: the ball's centre and the body's pose at t.
-double outside_silhouette_px(const Simulator& sim, const MemorySink& sink, const BallConfig& ball,
-                             const Event& e) {
-  const Calibration& calib = sim.calibration();
+/// Each pixel's viewing ray (x, y, 1) in E, undistorted, row-major: made once per throw.
+std::vector<Eigen::Vector3d> pixel_rays(const PinholeCamera& cam) {
+  std::vector<Eigen::Vector3d> rays;
+  rays.reserve(static_cast<std::size_t>(cam.width) * cam.height);
+  for (int y = 0; y < cam.height; ++y)
+    for (int x = 0; x < cam.width; ++x) {
+      const Eigen::Vector2d xn = cam.pixel_to_normalized({x, y});
+      rays.emplace_back(xn.x(), xn.y(), 1.0);
+    }
+  return rays;
+}
+
+const Eigen::Vector3d& ray_of(const std::vector<Eigen::Vector3d>& rays, int width, const Event& e) {
+  return rays[static_cast<std::size_t>(e.y) * width + e.x];
+}
+
+/// How far [px] the ray of event e's pixel passes outside the silhouette of the ball `ball` at the
+/// event's time (≤ 0 inside), from the truth: the ball's centre and the body's pose then.
+double outside_silhouette_px(const Calibration& calib, const std::vector<Eigen::Vector3d>& rays,
+                             const MemorySink& sink, const BallConfig& ball, const Event& e) {
   const PinholeCamera& cam = calib.event_camera;
   // The ball's centre at e.t, linear between the 1 kHz truth samples.
   auto after = std::lower_bound(sink.objects.begin(), sink.objects.end(), e.t,
@@ -82,8 +97,7 @@ double outside_silhouette_px(const Simulator& sim, const MemorySink& sink, const
   const OdometrySample body = interpolate_odometry(sink.body, e.t);
   const Eigen::Isometry3d T_W_E = Eigen::Translation3d(body.p_W_B) * body.q_W_B * calib.T_B_E;
   const Eigen::Vector3d centre_E = T_W_E.inverse() * p_W;
-  const Eigen::Vector2d xn = cam.pixel_to_normalized({e.x, e.y});
-  const Eigen::Vector3d ray = Eigen::Vector3d(xn.x(), xn.y(), 1.0).normalized();
+  const Eigen::Vector3d ray = ray_of(rays, cam.width, e).normalized();
   const double alpha = std::asin(std::min(1.0, ball.radius_m / centre_E.norm()));
   const double beta = std::acos(std::clamp(ray.dot(centre_E.normalized()), -1.0, 1.0));
   return (beta - alpha) * cam.fx;
@@ -93,9 +107,10 @@ double outside_silhouette_px(const Simulator& sim, const MemorySink& sink, const
 /// rotation to the window's start (the image of warped events; translation is left, the same for
 /// any renderer) and counted per pixel; the sharpness is Σ c² / Σ c, the mean count of an event's
 /// pixel, averaged over windows with ≥ 1000 scene events. Timing errors blur it.
-double scene_sharpness(const Simulator& sim, const MemorySink& sink, int width, int height) {
-  const Calibration& calib = sim.calibration();
+double scene_sharpness(const Calibration& calib, const std::vector<Eigen::Vector3d>& rays,
+                       const MemorySink& sink) {
   const PinholeCamera& cam = calib.event_camera;
+  const int width = cam.width, height = cam.height;
   const Eigen::Matrix3d R_B_E = calib.T_B_E.linear();
   std::vector<float> image(static_cast<std::size_t>(width) * height);
   double sum = 0;
@@ -112,8 +127,7 @@ double scene_sharpness(const Simulator& sim, const MemorySink& sink, int width, 
       if (sink.labels[i] != 0) continue;
       const Eigen::Matrix3d R_W_E =
           interpolate_odometry(sink.body, e.t).q_W_B.toRotationMatrix() * R_B_E;
-      const Eigen::Vector2d xn = cam.pixel_to_normalized({e.x, e.y});
-      const Eigen::Vector3d b = R_E0_W * R_W_E * Eigen::Vector3d(xn.x(), xn.y(), 1.0);
+      const Eigen::Vector3d b = R_E0_W * R_W_E * ray_of(rays, width, e);
       if (b.z() <= 0) continue;
       const long u = std::lround(cam.fx * b.x() / b.z() + cam.cx);
       const long v = std::lround(cam.fy * b.y() / b.z() + cam.cy);
@@ -139,6 +153,8 @@ Statistics measure(const ScenarioConfig& config) {
             [](const ObjectState& a, const ObjectState& b) {
               return a.id != b.id ? a.id < b.id : a.t < b.t;
             });
+  const Calibration& calib = sim.calibration();
+  const std::vector<Eigen::Vector3d> rays = pixel_rays(calib.event_camera);
   const int width = config.event_camera.width, height = config.event_camera.height;
   Statistics s;
   std::vector<char> fired(static_cast<std::size_t>(width) * height, 0);
@@ -154,7 +170,7 @@ Statistics measure(const ScenarioConfig& config) {
     if (label > 0) {
       s.window_ball_events[w] += 1, s.ball_events += 1;
       for (const BallConfig& ball : config.balls)
-        if (ball.id == label) misplaced += outside_silhouette_px(sim, sink, ball, e) > 0.5;
+        if (ball.id == label) misplaced += outside_silhouette_px(calib, rays, sink, ball, e) > 0.5;
     }
     if (label == 0) s.scene_events += 1;
     noise += label < 0;
@@ -165,7 +181,7 @@ Statistics measure(const ScenarioConfig& config) {
   s.on_share = on / std::max(1.0, s.events);
   s.noise_share = noise / std::max(1.0, s.events);
   s.ball_events_misplaced_share = misplaced / std::max(1.0, s.ball_events);
-  s.scene_sharpness = scene_sharpness(sim, sink, width, height);
+  s.scene_sharpness = scene_sharpness(calib, rays, sink);
   s.pixels_with_events_share = static_cast<double>(std::count(fired.begin(), fired.end(), 1)) /
                                static_cast<double>(fired.size());
   return s;

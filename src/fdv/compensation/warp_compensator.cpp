@@ -40,7 +40,9 @@ vf vmax(vf a, vf b) { return select(a > b, a, b); }
 
 enum class Model { kNone, kRotation, kRotationTranslation };
 constexpr int kMaxParts = 64;  // CompensationOptions::threads ≤ 64
-constexpr std::size_t kDepthSampleSize = 50'000;  // about this many valid depths are sorted per frame
+/// Every how many pixels a depth frame is sampled for the missing-depth policy's depth: about 50 k
+/// valid depths are sorted per frame.
+std::size_t depth_sample_stride(std::size_t pixels) { return std::max<std::size_t>(1, pixels / 50'000); }
 
 /// Everything the loop reads, for one window.
 struct WarpParams {
@@ -288,7 +290,7 @@ WarpCompensator::WarpCompensator(CompensationMethod method, const Calibration& c
   raw_rho_.resize(n);
   row_max_.resize(n);
   inv_depth_.resize(n);
-  depth_sample_.reserve(n / std::max<std::size_t>(1, n / kDepthSampleSize) + 1);
+  depth_sample_.reserve(n / depth_sample_stride(n) + 1);
 }
 
 void WarpCompensator::build_rotation_slots(const Eigen::Vector3d& omega_E, const CompensationInput& in,
@@ -362,9 +364,9 @@ bool WarpCompensator::prepare_depth(const RegisteredDepth& depth) {
   const int w = depth.width, h = depth.height;
   const std::size_t n = static_cast<std::size_t>(w) * h;
   const float* z = depth.depth_m.data();
-  // The missing-depth policy's depth from the valid depths (strided: about kDepthSampleSize sorted).
+  // The missing-depth policy's depth from the valid depths (strided).
   depth_sample_.clear();
-  const std::size_t stride = std::max<std::size_t>(1, n / kDepthSampleSize);
+  const std::size_t stride = depth_sample_stride(n);
   for (std::size_t i = 0; i < n; i += stride)
     if (z[i] > 0 && std::isfinite(z[i])) depth_sample_.push_back(z[i]);
   if (depth_sample_.empty()) {
