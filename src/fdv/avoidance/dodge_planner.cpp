@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <vector>
@@ -124,21 +125,33 @@ constexpr int kCauchyNodes = 256;
 /// E|x| for x ~ N(mean, covariance) in the plane, by Cauchy's formula |x| = ¼ ∮ |x·e(φ)| dφ: the
 /// expectation of each projection is that of a 1D Gaussian, s·sqrt(2/π)·exp(-m²/2s²) + m·erf(m/s√2),
 /// and the periodic integral over φ is a trapezoidal sum. Agrees with gaussian_expected_norm
-/// (adaptive quadrature, ~1000x slower), fast enough to score every candidate direction.
-double expected_norm(const Eigen::Vector2d& mean, const Eigen::Matrix2d& covariance) {
-  double sum = 0;
-  for (int k = 0; k < kCauchyNodes; ++k) {
-    const double phi = std::numbers::pi * k / kCauchyNodes;  // half the circle: |x·e| is even in φ + π
-    const Eigen::Vector2d e(std::cos(phi), std::sin(phi));
-    const double m = mean.dot(e);
-    const double s = std::sqrt(std::max(0.0, e.dot(covariance * e)));
-    sum += s > 1e-12
-               ? s * std::sqrt(2 / std::numbers::pi) * std::exp(-0.5 * m * m / (s * s)) +
-                     m * std::erf(m / (s * std::numbers::sqrt2))
-               : std::abs(m);
+/// (adaptive quadrature, ~1000x slower). The directions e(φ) and the projected σ s = sqrt(e·Σe)
+/// depend on the covariance alone: made once, they serve every candidate's mean.
+class ExpectedNorm {
+ public:
+  explicit ExpectedNorm(const Eigen::Matrix2d& covariance) {
+    for (int k = 0; k < kCauchyNodes; ++k) {
+      const double phi = std::numbers::pi * k / kCauchyNodes;  // half the circle: |x·e| is even in φ + π
+      e_[k] = Eigen::Vector2d(std::cos(phi), std::sin(phi));
+      s_[k] = std::sqrt(std::max(0.0, e_[k].dot(covariance * e_[k])));
+    }
   }
-  return 0.5 * std::numbers::pi * sum / kCauchyNodes;
-}
+  double operator()(const Eigen::Vector2d& mean) const {
+    double sum = 0;
+    for (int k = 0; k < kCauchyNodes; ++k) {
+      const double m = mean.dot(e_[k]), s = s_[k];
+      sum += s > 1e-12
+                 ? s * std::sqrt(2 / std::numbers::pi) * std::exp(-0.5 * m * m / (s * s)) +
+                       m * std::erf(m / (s * std::numbers::sqrt2))
+                 : std::abs(m);
+    }
+    return 0.5 * std::numbers::pi * sum / kCauchyNodes;
+  }
+
+ private:
+  std::array<Eigen::Vector2d, kCauchyNodes> e_;
+  std::array<double, kCauchyNodes> s_;
+};
 
 }  // namespace
 
@@ -214,13 +227,14 @@ DodgePlan plan_dodge(const CollisionRisk& risk, const VehicleState& vehicle, con
   // Δ by the closest approach, the attitude lag delaying its horizontal part (VehicleLimits).
   const double after_delay_s = closest_s - delay_s, lag_s = limits.attitude_lag_s;
 
+  const ExpectedNorm expected_norm(miss_cov);
   std::vector<Eigen::Vector3d> candidates(options.directions);
   std::vector<double> scores(options.directions);
   for (int k = 0; k < options.directions; ++k) {
     const double theta = 2 * std::numbers::pi * k / options.directions;
     const Eigen::Vector3d u = std::cos(theta) * E.row(0).transpose() + std::sin(theta) * E.row(1).transpose();
     candidates[k] = max_acceleration_along(u, limits, vehicle.odometry, end_s) * u;
-    scores[k] = expected_norm(miss - displacement_in_plane(E, candidates[k], after_delay_s, lag_s), miss_cov) - R;
+    scores[k] = expected_norm(miss - displacement_in_plane(E, candidates[k], after_delay_s, lag_s)) - R;
   }
   // Near-ties (e.g. a dead-ahead threat with isotropic uncertainty) go to the most upward
   // direction: away from the ground, as the paper's hovering vehicle does.
@@ -248,7 +262,7 @@ DodgePlan plan_dodge(const CollisionRisk& risk, const VehicleState& vehicle, con
   m.start_t = vehicle.odometry.t + from_seconds(delay_s);
   m.duration_s = std::max(0.0, end_s - delay_s);
   const Eigen::Vector2d shifted = miss - displacement_in_plane(E, best_a, after_delay_s, lag_s);
-  m.expected_clearance_m = expected_norm(shifted, miss_cov) - R;
+  m.expected_clearance_m = expected_norm(shifted) - R;
   m.probability_after = gaussian_disc_probability(shifted, miss_cov, R);
 
   // The trigger: t_c against the time needed to put the passage outside the sphere.
