@@ -3,6 +3,7 @@
 // in the window's report, and produce the documented result.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 
 #include "fdv/compensation/compensator.h"
@@ -223,6 +224,42 @@ TEST(Fallback, DepthPreparedOnArrivalGivesTheSameWindow) {
   const CompensatedWindow& w = on_arrival->compensate({ev, t0, t1, imu, odo, &wrong});
   EXPECT_TRUE(w.report.depth_wrong_size);
   EXPECT_FALSE(w.report.depth_prepared_here);
+}
+
+// With overlapping windows a frame arrives while the windows before it still wait for their IMU:
+// those use the frame before it, the next ones the new frame. The last two frames prepared are
+// kept, so going back and forth between them prepares neither again, and each window is warped as
+// with its frame alone; a third frame takes the older one's place.
+TEST(Fallback, TheLastTwoDepthFramesStayPrepared) {
+  const Calibration c = plain_rig();
+  const TimeNs t0 = 0, t1 = 25 * kNsPerMs;
+  RegisteredDepth first = flat_depth(c, 5.0f, t0);
+  for (int y = 0; y < 240; ++y)
+    for (int x = 0; x < 150; ++x) first.depth_m[static_cast<std::size_t>(y) * 320 + x] = 2.0f;
+  const RegisteredDepth second = flat_depth(c, 3.0f, t0 + 10 * kNsPerMs);
+  const RegisteredDepth third = flat_depth(c, 4.0f, t0 + 20 * kNsPerMs);
+  const auto ev = some_events(t0, 2000);
+  const auto imu = test::constant_imu({0.2, -0.1, 0.3}, -5 * kNsPerMs, 30 * kNsPerMs, kNsPerMs);
+  const OdometrySample odo = moving(0, {0.5, 0, 4.0});
+  CompensationOptions opt;
+  opt.method = CompensationMethod::kRotationTranslation;
+  auto warp_alone = [&](const RegisteredDepth& depth) {
+    const auto alone = make_compensator(c, opt);
+    const CompensatedWindow& w = alone->compensate({ev, t0, t1, imu, odo, &depth});
+    return std::vector<float>(w.x().begin(), w.x().end());
+  };
+  auto comp = make_compensator(c, opt);
+  comp->prepare_depth_frame(first);
+  comp->prepare_depth_frame(second);
+  for (const RegisteredDepth* depth : std::array<const RegisteredDepth*, 4>{&first, &second, &first, &second}) {
+    const CompensatedWindow& w = comp->compensate({ev, t0, t1, imu, odo, depth});
+    EXPECT_FALSE(w.report.depth_prepared_here) << "the frame at " << depth->t;
+    ASSERT_EQ(std::vector<float>(w.x().begin(), w.x().end()), warp_alone(*depth)) << "the frame at " << depth->t;
+  }
+  comp->prepare_depth_frame(third);
+  EXPECT_FALSE(comp->compensate({ev, t0, t1, imu, odo, &second}).report.depth_prepared_here);
+  EXPECT_FALSE(comp->compensate({ev, t0, t1, imu, odo, &third}).report.depth_prepared_here);
+  EXPECT_TRUE(comp->compensate({ev, t0, t1, imu, odo, &first}).report.depth_prepared_here);
 }
 
 TEST(Fallback, BurstIsDecimatedAndCounted) {

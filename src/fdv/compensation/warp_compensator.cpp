@@ -289,7 +289,7 @@ WarpCompensator::WarpCompensator(CompensationMethod method, const Calibration& c
   const std::size_t n = static_cast<std::size_t>(map_->width()) * static_cast<std::size_t>(map_->height());
   raw_rho_.resize(n);
   row_max_.resize(n);
-  inv_depth_.resize(n);
+  for (PreparedDepth& slot : prepared_) slot.inv_depth.resize(n);
   depth_sample_.reserve(n / depth_sample_stride(n) + 1);
 }
 
@@ -353,14 +353,22 @@ void WarpCompensator::prepare_depth_frame(const RegisteredDepth& depth) {
 }
 
 bool WarpCompensator::is_prepared(const RegisteredDepth& depth) const {
-  return &depth == depth_key_ && depth.depth_m.data() == depth_data_key_ && depth.t == depth_t_key_;
+  return std::any_of(prepared_.begin(), prepared_.end(), [&](const PreparedDepth& p) { return p.made_from(depth); });
 }
 
 bool WarpCompensator::prepare_depth(const RegisteredDepth& depth) {
-  if (is_prepared(depth)) return depth_usable_;
-  depth_key_ = &depth;
-  depth_data_key_ = depth.depth_m.data();
-  depth_t_key_ = depth.t;
+  for (int slot = 0; slot < static_cast<int>(prepared_.size()); ++slot)
+    if (prepared_[slot].made_from(depth)) {
+      in_use_ = slot;
+      return prepared_[slot].usable;
+    }
+  // Made into the slot of the older frame (an empty slot first).
+  const auto older = [](const PreparedDepth& a, const PreparedDepth& b) { return !a.key || (b.key && a.t_key < b.t_key); };
+  in_use_ = older(prepared_[0], prepared_[1]) ? 0 : 1;
+  PreparedDepth& made = prepared_[in_use_];
+  made.key = &depth;
+  made.data_key = depth.depth_m.data();
+  made.t_key = depth.t;
   const int w = depth.width, h = depth.height;
   const std::size_t n = static_cast<std::size_t>(w) * h;
   const float* z = depth.depth_m.data();
@@ -370,24 +378,24 @@ bool WarpCompensator::prepare_depth(const RegisteredDepth& depth) {
   for (std::size_t i = 0; i < n; i += stride)
     if (z[i] > 0 && std::isfinite(z[i])) depth_sample_.push_back(z[i]);
   if (depth_sample_.empty()) {
-    depth_usable_ = false;
+    made.usable = false;
     return false;
   }
   if (options_.missing_depth == MissingDepthPolicy::kBeyondRange) {
     // The reach: the 99th percentile, so that a few outliers do not set it.
     auto far = depth_sample_.begin() + static_cast<std::ptrdiff_t>(depth_sample_.size() * 99 / 100);
     std::nth_element(depth_sample_.begin(), far, depth_sample_.end());
-    fallback_depth_m_ = 2 * *far;
+    made.fallback_depth_m = 2 * *far;
   } else {
     auto mid = depth_sample_.begin() + static_cast<std::ptrdiff_t>(depth_sample_.size() / 2);
     std::nth_element(depth_sample_.begin(), mid, depth_sample_.end());
-    fallback_depth_m_ = *mid;
+    made.fallback_depth_m = *mid;
   }
   // ρ = 1/z where valid, 0 in holes. Four pixels at a time (`z <= FLT_MAX` is false for NaN and
   // inf); the tail of a row-major image is done one by one.
   raw_rho_.resize(n);
   row_max_.resize(n);
-  inv_depth_.resize(n);
+  made.inv_depth.resize(n);
   float* raw = raw_rho_.data();
   const vf flt_max = vf{} + std::numeric_limits<float>::max(), one_f = vf{} + 1.0f;
   std::size_t i = 0;
@@ -404,7 +412,7 @@ bool WarpCompensator::prepare_depth(const RegisteredDepth& depth) {
   // the view is beyond the depth camera's range (a long hall: tens of per cent of the pixels).
   const int r = options_.hole_fill_radius_px;
   const float fallback_rho =
-      options_.missing_depth == MissingDepthPolicy::kRotationOnly ? 0.0f : 1.0f / fallback_depth_m_;
+      options_.missing_depth == MissingDepthPolicy::kRotationOnly ? 0.0f : 1.0f / made.fallback_depth_m;
   const std::size_t row_len = static_cast<std::size_t>(w);
   // out[x] = max(out[x], in[x + shift]) over the x where x + shift is in the row.
   auto max_into = [row_len](float* out, const float* in, std::ptrdiff_t shift) {
@@ -415,7 +423,7 @@ bool WarpCompensator::prepare_depth(const RegisteredDepth& depth) {
     for (; x < x1; ++x) out[x] = out[x] > in[x + shift] ? out[x] : in[x + shift];
   };
   float* rows = row_max_.data();
-  float* rho = inv_depth_.data();
+  float* rho = made.inv_depth.data();
   for (int y = 0; y < h; ++y) {
     const float* in = raw + static_cast<std::size_t>(y) * row_len;
     float* out = rows + static_cast<std::size_t>(y) * row_len;
@@ -441,7 +449,7 @@ bool WarpCompensator::prepare_depth(const RegisteredDepth& depth) {
     }
     for (; x < row_len; ++x) out[x] = self[x] != 0 ? self[x] : out[x] != 0 ? out[x] : -fallback_rho;
   }
-  depth_usable_ = true;
+  made.usable = true;
   return true;
 }
 
@@ -449,8 +457,8 @@ double WarpCompensator::warp_inverse_depth_at(const Eigen::Vector2d& x) const {
   const Eigen::Vector2d raw = map_->camera().normalized_to_pixel(x);
   const double u = std::round(raw.x()), v = std::round(raw.y());
   if (u >= 0 && v >= 0 && u < map_->width() && v < map_->height())
-    return std::fabs(inv_depth_[static_cast<std::size_t>(v) * map_->width() + static_cast<std::size_t>(u)]);
-  return options_.missing_depth == MissingDepthPolicy::kRotationOnly ? 0.0 : 1.0 / fallback_depth_m_;
+    return std::fabs(depth_in_use().inv_depth[static_cast<std::size_t>(v) * map_->width() + static_cast<std::size_t>(u)]);
+  return options_.missing_depth == MissingDepthPolicy::kRotationOnly ? 0.0 : 1.0 / depth_in_use().fallback_depth_m;
 }
 
 Eigen::Vector2d WarpCompensator::observed_position(const Eigen::Vector2d& px, double t_s) const {
@@ -538,7 +546,7 @@ const CompensatedWindow& WarpCompensator::compensate(const CompensationInput& in
   }
   if (used == CompensationMethod::kRotationTranslation) {
     const Eigen::Vector3d& v = rep.v_E;
-    p.inv_depth = inv_depth_.data();
+    p.inv_depth = depth_in_use().inv_depth.data();
     p.kv[0] = static_cast<float>(cam.fx * v.x() + cam.cx * v.z());
     p.kv[1] = static_cast<float>(cam.fy * v.y() + cam.cy * v.z());
     p.kv[2] = static_cast<float>(v.z());
@@ -593,7 +601,7 @@ const CompensatedWindow& WarpCompensator::compensate(const CompensationInput& in
   rep.events_out_of_order = c.out_of_order;
   if (used == CompensationMethod::kRotationTranslation) {
     rep.depth_fallback_events = c.fallback;
-    if (options_.missing_depth != MissingDepthPolicy::kRotationOnly) rep.fallback_depth_m = fallback_depth_m_;
+    if (options_.missing_depth != MissingDepthPolicy::kRotationOnly) rep.fallback_depth_m = depth_in_use().fallback_depth_m;
   }
   return out_;
 }

@@ -3,6 +3,7 @@
 /// and "rotation_translation" (the paper, eqs. 6-8). Create through make_compensator().
 /// Thread safety: not thread-safe (as CompensatorBase); one instance per thread.
 #include <Eigen/Geometry>
+#include <array>
 #include <vector>
 
 #include "fdv/compensation/compensator_base.h"
@@ -26,7 +27,7 @@ class WarpCompensator final : public CompensatorBase {
   /// Per raw pixel inverse depth ρ = 1/z (holes filled / fallback applied) and a fallback flag,
   /// rebuilt only when the depth frame changes. False when the frame holds no usable depth.
   bool prepare_depth(const RegisteredDepth& depth);
-  /// `depth` (same object, buffer and time) is the frame prepare_depth last prepared.
+  /// `depth` (same object, buffer and time) is a frame prepare_depth prepared and still keeps.
   bool is_prepared(const RegisteredDepth& depth) const;
   /// The frame checks of compensate(): the event camera's size and a matching buffer.
   bool depth_fits(const RegisteredDepth& depth) const;
@@ -42,14 +43,25 @@ class WarpCompensator final : public CompensatorBase {
     Eigen::Quaterniond R;
   };
   std::vector<RotationKnot> knots_;
-  // Depth cache.
-  const RegisteredDepth* depth_key_ = nullptr;
-  const float* depth_data_key_ = nullptr;
-  TimeNs depth_t_key_ = 0;
-  bool depth_usable_ = false;
-  float fallback_depth_m_ = 0;
-  /// ρ = 1/z per raw pixel [1/m]; sign bit set where the missing-depth policy was applied.
-  std::vector<float> inv_depth_;
+  /// A depth frame made ready for the warp, and the frame it was made from.
+  struct PreparedDepth {
+    const RegisteredDepth* key = nullptr;
+    const float* data_key = nullptr;
+    TimeNs t_key = 0;
+    bool usable = false;
+    float fallback_depth_m = 0;
+    /// ρ = 1/z per raw pixel [1/m]; sign bit set where the missing-depth policy was applied.
+    std::vector<float> inv_depth;
+    bool made_from(const RegisteredDepth& depth) const {
+      return &depth == key && depth.depth_m.data() == data_key && depth.t == t_key;
+    }
+  };
+  /// The last two frames prepared: when a frame arrives, the windows still waiting for their IMU
+  /// use the frame before it and the next windows the new one (every step with overlapping
+  /// windows), and with one kept each arrival made both again inside windows.
+  std::array<PreparedDepth, 2> prepared_;
+  int in_use_ = 0;  ///< prepared_'s slot the last prepare_depth made or found
+  const PreparedDepth& depth_in_use() const { return prepared_[in_use_]; }
   std::vector<float> depth_sample_;  ///< the strided valid depths (median or reach)
   std::vector<float> raw_rho_, row_max_;  ///< ρ before hole filling; its running maximum along rows
 };
