@@ -297,6 +297,34 @@ TEST(DodgePlan, TriggerPolicy) {
   EXPECT_FALSE(plan_dodge(receding, hovering(1.0), o, kR).trigger);
 }
 
+// may_trigger, by which the planner skips the plan, never says no where the plan triggers: over a
+// sweep of probabilities, misses, times to the closest approach and spreads, and for a receding
+// object. Where it says no, a planner with nothing in force decides nothing.
+TEST(DodgePlan, NoPlanIsSkippedThatWouldTrigger) {
+  const DodgeOptions o;
+  int triggered = 0, skipped = 0;
+  for (const double p : {0.0, 0.05, 0.1, 0.149, 0.15, 0.3, 0.49, 0.5, 0.9})
+    for (const double miss : {0.0, 0.3, 0.6, 1.2})
+      for (const double closest_s : {0.05, 0.2, 0.34, 0.8})
+        for (const double sigma : {0.05, 0.3}) {
+          for (const bool receding : {false, true}) {
+            CollisionRisk risk = threat({0, miss, 0}, closest_s, sigma, p);
+            risk.nominal.closest.receding = receding;
+            const bool trigger = plan_dodge(risk, hovering(1.0), o, kR).trigger;
+            triggered += trigger;
+            if (trigger) {
+              EXPECT_TRUE(may_trigger(risk, o)) << "p " << p << " miss " << miss << " at " << closest_s;
+            }
+            if (may_trigger(risk, o)) continue;
+            ++skipped;
+            DodgePlanner planner(o, kR);
+            EXPECT_FALSE(planner.update(1, risk, hovering(1.0)));
+          }
+        }
+  EXPECT_GT(triggered, 20);
+  EXPECT_GT(skipped, 100);
+}
+
 // Dodge at 0.8 s from the closest approach, nothing while the threat is unchanged, commit once
 // t_c <= t_need + commit_margin_s, and nothing after the commit however the risk changes.
 TEST(DodgePlanner, CommitsWhenNoTimeIsLeftAndThenHolds) {

@@ -292,6 +292,11 @@ DodgePlan plan_dodge(const CollisionRisk& risk, const VehicleState& vehicle, con
   return plan;
 }
 
+bool may_trigger(const CollisionRisk& risk, const DodgeOptions& options) {
+  const double p = risk.probability;
+  return !risk.nominal.closest.receding && (p >= options.act_probability || p >= options.late_probability);
+}
+
 DodgePlanner::DodgePlanner(DodgeOptions options, double safety_radius_m)
     : options_(std::move(options)), safety_radius_m_(safety_radius_m) {
   if (auto err = options_.validate(); !err.empty()) throw ConfigError("DodgeOptions: " + err);
@@ -353,6 +358,8 @@ std::optional<DodgeDecision> DodgePlanner::update(int track_id, const CollisionR
       t >= active_->maneuver->start_t + from_seconds(active_->maneuver->duration_s))
     active_.reset();
   if (active_ && active_->committed) return std::nullopt;
+  // The plan (72 candidates' expected clearances) only where it can change the outcome.
+  if ((!active_ || active_->track_id != track_id) && !may_trigger(risk, options_)) return std::nullopt;
 
   const DodgePlan plan = plan_dodge(risk, vehicle, options_, safety_radius_m_,
                                     active_ && active_->track_id == track_id && active_->maneuver

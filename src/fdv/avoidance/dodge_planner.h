@@ -190,6 +190,11 @@ struct DodgePlan {
 DodgePlan plan_dodge(const CollisionRisk& risk, const VehicleState& vehicle, const DodgeOptions& options,
                      double safety_radius_m, const std::optional<Eigen::Vector3d>& in_force = std::nullopt);
 
+/// Whether plan_dodge's trigger can be set for `risk`, whatever the manoeuvre: the object does not
+/// recede and its probability reaches act_probability or late_probability. When not, a planner
+/// with no manoeuvre in force (or one for another track) decides nothing and needs no plan.
+bool may_trigger(const CollisionRisk& risk, const DodgeOptions& options);
+
 class DodgePlanner {
  public:
   /// Throws ConfigError when the options (limits) or the radius are invalid. `safety_radius_m` must
