@@ -528,5 +528,32 @@ TEST(EventRefiner, ABoxOnTexturedBackgroundKeepsItsSize) {
   EXPECT_GT(g->extent_px, 9.0);
 }
 
+// The same window handed over only near the object (PerceptionOptions::gates_only_between_anchors),
+// with every event's time of the window (window_t_s): the band is compared with the whole window's
+// density, and the square keeps its size. Without them the image outside the kept part looks empty
+// and the square grows over the background.
+TEST(EventRefiner, APartOfTheWindowIsMeasuredAgainstTheWholeWindow) {
+  HandMadeWindow w;
+  for (int y = 0; y < kHeight; ++y)
+    for (int x = 0; x < kWidth; ++x) w.add(x, y, 1, (x + y) % 2 == 0 ? 0.005 : 0.020);
+  w.add_square(80, 60, 9, 3, [](int, int) { return 0.0125; });
+  std::vector<std::int32_t> pixel;
+  std::vector<float> t_s;
+  for (std::size_t i = 0; i < w.pixel.size(); ++i)
+    if (std::abs(w.pixel[i] % kWidth - 80) <= 15 && std::abs(w.pixel[i] / kWidth - 60) <= 15)
+      pixel.push_back(w.pixel[i]), t_s.push_back(w.t_s[i]);
+  ASSERT_LT(pixel.size(), w.pixel.size() / 10);
+  CompensatedEventsView part{0, from_seconds(kWindowS), kWidth, kHeight, pixel, t_s};
+  part.window_t_s = w.t_s;
+  const Box2D box{75.5, 55.5, 84.5, 64.5};
+  const std::optional<RefinedCenter> r = refine_once(DetectorOptions{}, part, box, 0.0125);
+  ASSERT_TRUE(r);
+  EXPECT_DOUBLE_EQ(r->extent_px, 9.0);
+  part.window_t_s = {};
+  const std::optional<RefinedCenter> g = refine_once(DetectorOptions{}, part, box, 0.0125);
+  ASSERT_TRUE(g);
+  EXPECT_GT(g->extent_px, 9.0);
+}
+
 }  // namespace
 }  // namespace fdv

@@ -80,6 +80,11 @@ struct SourceWindow {
   bool fills_view = false;
   /// Why there is no detection when no source finds one; the pattern sources refine it.
   DetectionStatus why_not = DetectionStatus::kRemovedAsNoise;
+  /// The window's events, all of them when only a part was searched (CompensatedEventsView::window_t_s):
+  /// what the image's mean density and mean time are taken over.
+  double window_events() const {
+    return events.window_t_s.empty() ? static_cast<double>(ti.events) : static_cast<double>(events.window_t_s.size());
+  }
 };
 
 /// One image of the state a source keeps across windows (CandidateSource::state_images).

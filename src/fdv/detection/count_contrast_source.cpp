@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numeric>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
@@ -217,7 +218,7 @@ std::optional<Candidate> CountContrastSource::find_in(const SourceWindow& in, co
   };
   // The background level: the image's mean events per pixel, the floor of the surround's density
   // (an empty surround must not make any small cluster "infinitely" dense).
-  const double image_density = static_cast<double>(ti.events) / (static_cast<double>(w) * h);
+  const double image_density = in.window_events() / (static_cast<double>(w) * h);
   double best = 0;
   cv::Point at(-1, -1);
   double best_fill = 0, best_surround = 0;
@@ -300,7 +301,9 @@ std::optional<Candidate> CountContrastSource::find_in(const SourceWindow& in, co
   // from mean(N)); early or late, since a late burst of background events (a jerk of the camera)
   // moves the image's mean time, not the object's.
   cand.t_mean_s = cv::sum(ti.sum_time_s(box))[0] / cand.events;
-  const double image_t_mean_s = cv::sum(ti.sum_time_s)[0] / ti.events;
+  const std::span<const float> all_t = in.events.window_t_s;
+  const double image_t_mean_s = all_t.empty() ? cv::sum(ti.sum_time_s)[0] / ti.events
+                                              : std::accumulate(all_t.begin(), all_t.end(), 0.0) / static_cast<double>(all_t.size());
   diagnostics.time_offset = (cand.t_mean_s - image_t_mean_s) / (ti.t_max_s - ti.t_min_s);
   const bool passes = sparse ? still_camera_object(in, cand, box, image_density, in_gate, diagnostics)
                               : in_gate || std::abs(diagnostics.time_offset) >= in.theta - ti.mean_normalized ||

@@ -292,7 +292,7 @@ std::optional<Candidate> EvidenceSource::candidate_at(const SourceWindow& in, cv
 double EvidenceSource::isolation_of(const SourceWindow& in, const Candidate& found) const {
   const cv::Rect box = box_pixels(found.box, width_, height_);
   if (box.area() == 0) return 0;
-  const double image_density = static_cast<double>(in.ti.events) / (static_cast<double>(width_) * height_);
+  const double image_density = in.window_events() / (static_cast<double>(width_) * height_);
   return isolation(in.ti.count, box, cv::sum(in.ti.count(box))[0], image_density);
 }
 

@@ -100,7 +100,7 @@ std::optional<Candidate> evaluate_pattern(const DetectorOptions& o, SourceWindow
       const cv::Rect r = box_pixels(box, w, h);
       const double inside = events_in(box), outside_px = static_cast<double>(w) * h - r.area();
       if (!(outside_px > 0)) return false;
-      return inside / r.area() >= g.large_region_min_contrast * (in.ti.events - inside) / outside_px;
+      return inside / r.area() >= g.large_region_min_contrast * (in.window_events() - inside) / outside_px;
     };
     if (region && (region->box.width() > fit_max_w || region->box.height() > fit_max_h) &&
         !denser_than_the_rest(region->box)) {

@@ -60,6 +60,11 @@ struct CompensatedEventsView {
   /// (Compensator::observed_position). Empty = identity (no ego-motion). The detector reports its
   /// center_raw / center_normalized / box_raw through it: the camera at the detection's time.
   std::function<Eigen::Vector2d(const Eigen::Vector2d& px, double t_s)> observed_at = {};
+  /// Every event's time of the window when `pixel` and `t_s` hold only a part of it (the tracks'
+  /// surroundings: PerceptionOptions::gates_only_between_anchors), in the same order as the whole
+  /// window's; empty when they hold the whole window. The sources measure an object against the
+  /// window's background (its events per pixel, the events of a time slice, their mean time) from it.
+  std::span<const float> window_t_s = {};
 };
 
 struct TimeImages {
