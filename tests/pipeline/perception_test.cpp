@@ -43,6 +43,7 @@ struct Collected {
   std::vector<std::string> windows;  // one line per window: time, status, box
   std::vector<WindowResult> results;  // without the detector pointer
   std::vector<std::vector<DetectionPrior>> priors;  // each window's (WindowResult::priors)
+  std::vector<int> detector_events;  // each window's events in the detector's time images
   std::vector<TrajectoryEstimate> fusion, mono;
   std::vector<int> fusion_track, mono_track;
   std::vector<TimeNs> fusion_t;  // EstimateResult::t of each fusion estimate
@@ -64,6 +65,7 @@ PerceptionCallbacks collect(Collected& c) {
       line += " " + std::to_string(found.detection.center_raw.x()) + "," + std::to_string(found.detection.center_raw.y());
     c.windows.push_back(line);
     c.results.push_back(w);
+    c.detector_events.push_back(w.detector->time_images().events);
     c.results.back().detector = nullptr;
     c.results.back().priors = {};
     c.priors.emplace_back(w.priors.begin(), w.priors.end());
@@ -641,6 +643,63 @@ TEST(Perception, OverlappingWindowsGiveAResultEveryStepAndCountEachEventOnce) {
   const Summary ape = absolute_position_error([&](TimeNs t) { return last->trajectory.position(t); },
                                               s.data.objects, 1, last->t_first, last->t_last);
   EXPECT_LT(ape.rmse, 0.15);  // the bound of the consecutive windows' test above
+}
+
+// gates_only_between_anchors: a window between anchors hands the detector only its events near
+// the tracks' gates (each gate grown by its own size on every side), and none when no track lends
+// a gate ("not searched"); the anchors get every event. The ball is still followed, and estimated
+// every 5 ms, as well as the test above asks of the full windows.
+TEST(Perception, BetweenAnchorsOnlyTheEventsNearTheGatesAreSearched) {
+  const SimulatedThrow& s = simulated_throw();
+  PerceptionOptions options;
+  options.windows.step_ns = 5 * kNsPerMs;
+  const Collected full = run(0, s, options);
+  options.gates_only_between_anchors = true;
+  const Collected gated = run(0, s, options);
+  ASSERT_EQ(gated.results.size(), full.results.size());
+  const Detector sizes_gates(options.detection, s.calib.event_camera);
+  int not_searched = 0, searched_between = 0, fewer_events = 0;
+  for (std::size_t k = 0; k < gated.results.size(); ++k) {
+    const WindowResult& w = gated.results[k];
+    if (w.index % 5 == 0) {  // an anchor: its compensated events are the full run's, all searched
+      EXPECT_EQ(gated.detector_events[k], full.detector_events[k]) << "window " << k;
+      EXPECT_NE(w.status, DetectionStatus::kNotSearched);
+      continue;
+    }
+    if (gated.priors[k].empty()) {
+      ++not_searched;
+      EXPECT_EQ(w.status, DetectionStatus::kNotSearched) << "window " << k;
+      EXPECT_EQ(gated.detector_events[k], 0);
+      EXPECT_TRUE(w.detections.empty());
+      continue;
+    }
+    ++searched_between;
+    EXPECT_LE(gated.detector_events[k], full.detector_events[k]);
+    fewer_events += gated.detector_events[k] < full.detector_events[k] / 2;
+    for (const TrackedDetection& found : w.detections) {
+      const Eigen::Vector2d c = found.detection.center_undistorted;
+      const bool near_a_gate = std::any_of(gated.priors[k].begin(), gated.priors[k].end(), [&](const DetectionPrior& p) {
+        const std::optional<Box2D> g = sizes_gates.prior_gate(p);
+        const double grow = g ? std::max(g->width(), g->height()) : 0;
+        return g && Box2D{g->x0 - grow, g->y0 - grow, g->x1 + grow, g->y1 + grow}.contains(c);
+      });
+      EXPECT_TRUE(near_a_gate) << "window " << k << ": a detection at " << c.transpose() << " away from every gate";
+    }
+  }
+  EXPECT_GT(not_searched, 20);  // before the ball is tracked (the 1 s throw: ~196 windows)
+  EXPECT_GT(searched_between, 40);
+  EXPECT_GT(fewer_events, searched_between / 2) << "the gates' neighbourhoods hold most of the window";
+  const int track = ball_track(s, gated);
+  ASSERT_GE(track, 0);
+  const TrajectoryEstimate* last = nullptr;
+  int estimates = 0;
+  for (std::size_t i = 0; i < gated.fusion.size(); ++i)
+    if (gated.fusion[i].usable && gated.fusion_track[i] == track) last = &gated.fusion[i], ++estimates;
+  ASSERT_NE(last, nullptr);
+  EXPECT_GT(estimates, 40);
+  const Summary ape = absolute_position_error([&](TimeNs t) { return last->trajectory.position(t); },
+                                              s.data.objects, 1, last->t_first, last->t_last);
+  EXPECT_LT(ape.rmse, 0.15);
 }
 
 TEST(Perception, OverlappingWindowsWeighAndConfirmByTheSameEvents) {

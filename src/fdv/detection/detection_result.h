@@ -33,6 +33,9 @@ enum class DetectionStatus {
   kTooFewEventsInBox,  ///< the final box holds fewer than roi_min_events events
   kWeakEvidence,       ///< the box's peak (score) or event density is below min_peak / min_event_density
   kFillsView,          ///< an object larger than fills_view_fraction of the image: too near to detect
+  /// Set by the pipeline, not the detector: a window between anchors with no track's gate to look
+  /// in (PerceptionOptions::gates_only_between_anchors), whose events were not searched.
+  kNotSearched,
 };
 std::string_view to_string(DetectionStatus s);
 

@@ -51,6 +51,7 @@ std::string_view to_string(DetectionStatus s) {
     case DetectionStatus::kTooFewEventsInBox: return "too few events in box";
     case DetectionStatus::kWeakEvidence: return "weak evidence";
     case DetectionStatus::kFillsView: return "object fills the view";
+    case DetectionStatus::kNotSearched: return "not searched";
   }
   return "?";
 }

@@ -74,10 +74,10 @@ class Detector {
   /// Undistorted-grid point -> raw sensor pixel, and the box outline's raw bounding box.
   Eigen::Vector2d undistorted_to_raw(const Eigen::Vector2d& uv) const;
   Box2D undistorted_box_to_raw(const Box2D& box) const;
-
- private:
   /// The search box on the undistorted grid of a prior, or nothing when its centre has no inverse.
   std::optional<Box2D> prior_gate(const DetectionPrior& prior) const;
+
+ private:
   /// The winning candidate as a detection: centre and time from the events (EventRefiner), the
   /// reported box, and both seen by the camera at the detection's time, in raw pixels too.
   Detection2D to_detection(const CompensatedEventsView& window, const Candidate& found, DetectionResult& res);

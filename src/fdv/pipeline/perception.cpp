@@ -8,6 +8,7 @@
 
 #include "fdv/compensation/imu_window.h"
 #include "fdv/core/error.h"
+#include "fdv/detection/gaussian_fit.h"
 #include "fdv/estimation/camera_pose.h"
 #include "fdv/pipeline/detector_input.h"
 #include "fdv/pipeline/sensor_policy.h"
@@ -411,7 +412,47 @@ std::optional<Eigen::Vector2d> Perception::trajectory_pixel(int track_id, TimeNs
 DetectionResult Perception::detect(const CompensatedWindow& cw, std::uint64_t window_index) {
   CompensatedEventsView view = detector_input(cw, *compensator_, options_.threads);
   view.new_evidence = is_anchor_window(window_index);
-  return detector_.detect(view, priors_);
+  const bool gates_only = options_.gates_only_between_anchors && !view.new_evidence;
+  if (gates_only) keep_events_near_gates(view);
+  DetectionResult det = detector_.detect(view, priors_);
+  if (gates_only && gate_surrounds_.empty()) det.status = DetectionStatus::kNotSearched;
+  return det;
+}
+
+// A gate's neighbourhood holds what the gate sources read around it: the count-contrast source's
+// surround (3 centre boxes across) and the pattern's reach past the object's box.
+void Perception::keep_events_near_gates(CompensatedEventsView& view) {
+  gate_surrounds_.clear();
+  for (const DetectionPrior& prior : priors_)
+    if (const auto gate = detector_.prior_gate(prior)) {
+      const double grow = std::max(gate->width(), gate->height());
+      const cv::Rect r = box_pixels(Box2D{gate->x0 - grow, gate->y0 - grow, gate->x1 + grow, gate->y1 + grow},
+                                    view.width, view.height);
+      if (r.area() > 0) gate_surrounds_.push_back(r);
+    }
+  gated_pixel_.clear();
+  gated_t_s_.clear();
+  if (!gate_surrounds_.empty()) {
+    // The rows the neighbourhoods span, as pixel indices: most events fall outside and cost no
+    // division.
+    std::int32_t first = std::numeric_limits<std::int32_t>::max(), last = -1;
+    for (const cv::Rect& r : gate_surrounds_) {
+      first = std::min(first, r.y * view.width);
+      last = std::max(last, (r.y + r.height) * view.width - 1);
+    }
+    for (std::size_t i = 0; i < view.pixel.size(); ++i) {
+      const std::int32_t p = view.pixel[i];
+      if (p < first || p > last) continue;
+      const cv::Point at(p % view.width, p / view.width);
+      if (std::any_of(gate_surrounds_.begin(), gate_surrounds_.end(), [&](const cv::Rect& r) { return r.contains(at); })) {
+        gated_pixel_.push_back(p);
+        gated_t_s_.push_back(view.t_s[i]);
+      }
+    }
+  }
+  view.window_t_s = view.t_s;
+  view.pixel = gated_pixel_;
+  view.t_s = gated_t_s_;
 }
 
 // Association and Kalman filter on the image plane (paper §IV-C.1), with the 3D estimates' say.

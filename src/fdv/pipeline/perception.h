@@ -76,6 +76,13 @@ constexpr std::array<DodgeSource, 4> all_values(DodgeSource) {
 
 struct PerceptionOptions {
   EventWindowerOptions windows;
+  /// Overlapping windows (windows.step_ns < window_ns): the windows between anchors look only
+  /// where the tracks are. Their compensated events outside every track's gate grown by its own
+  /// size on each side are dropped before detection, so a window between anchors costs the
+  /// compensation and the gates' neighbourhoods, not a search of the image; a window with no gate
+  /// is not searched (status "not searched"). New objects are found at the anchors only, a Δt
+  /// apart (docs/ESTIMATION.md §1, "Overlapping windows").
+  bool gates_only_between_anchors = false;
   CompensationOptions compensation;
   DetectorOptions detection;
   DepthRegistrationOptions depth_registration;
@@ -186,6 +193,8 @@ void describe(V& v, PerceptionOptions& o) {
   v.ms("window_ms", o.windows.window_ns, "Δt: length of an event window (paper §III-A), at most 1000");
   v.ms("step_ms", o.windows.step_ns,
        "Δs: a window every Δs (0 = Δt), at least Δt / 25; shorter: overlapping windows, a result every Δs (docs/ESTIMATION.md §1, \"Overlapping windows\")");
+  v("gates_only_between_anchors", o.gates_only_between_anchors, "-",
+    "with step_ms < window_ms, the windows between anchors search only near the tracks' gates (new objects at the anchors)");
   v("max_events_per_window", o.windows.max_events_per_window, "events",
     "overload guard: a fuller window is decimated uniformly in time order (counted)");
   v("max_empty_windows", o.windows.max_empty_windows, "-",
@@ -402,6 +411,9 @@ class Perception {
   /// Fills priors_: the tracks at t, seen by the camera at grid_t (the compensated grid's).
   void detector_priors_from_tracks(TimeNs t, TimeNs grid_t);
   DetectionResult detect(const CompensatedWindow& cw, std::uint64_t window_index);
+  /// gates_only_between_anchors: `view` reduced to its events near priors_' gates (kept in
+  /// gated_pixel_ and gated_t_s_, in their order).
+  void keep_events_near_gates(CompensatedEventsView& view);
   /// Overlapping windows: every N-th window (index a multiple of N = Δt / Δs) is an anchor; the
   /// anchors do not overlap, and the sums over windows see only them (overlapping_window_options).
   bool is_anchor_window(std::uint64_t index) const {
@@ -475,6 +487,9 @@ class Perception {
   std::deque<PendingWindow> pending_windows_;
   std::vector<std::vector<Event>> free_buffers_;
   std::vector<DetectionPrior> priors_;  ///< per window, reused
+  std::vector<cv::Rect> gate_surrounds_;  ///< per window, reused (gates_only_between_anchors)
+  std::vector<std::int32_t> gated_pixel_;  ///< per window, reused (gates_only_between_anchors)
+  std::vector<float> gated_t_s_;
   std::vector<TrackerDetection> tracker_inputs_;  ///< per window, reused: the tracker's input
   std::vector<int> held_;                ///< per window, reused (tracking.held_max_gap_ns)
   std::vector<ExternalGate> vouched_;   ///< per window, reused (estimate_aided_association)
