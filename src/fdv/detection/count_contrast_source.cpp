@@ -202,13 +202,14 @@ std::optional<Candidate> CountContrastSource::find_in(const SourceWindow& in, co
   };
   // Σ of I saturated at 255 over a box (8-bit counts: a hot pixel weighs as 255 events). Few centres
   // pass the fill test (~100 of 280 k on a textured 5 M ev/s window), so their sums are taken
-  // directly; past kDirectSums centres the whole image's table is cheaper and is built. Both give the
-  // same integers.
-  constexpr int kDirectSums = 1000;
+  // directly, until the pixels they read pass the image's: then the whole image's table is cheaper
+  // and is built. Both give the same integers.
+  const double pixels_per_centre = static_cast<double>(k) * k + static_cast<double>(2 * hs + 1) * (2 * hs + 1);
+  const int direct_sums = static_cast<int>(static_cast<double>(w) * h / pixels_per_centre);
   int filled = 0;  // centres that pass the fill test
   Box2D filled_span{1e300, 1e300, -1e300, -1e300};  // their extent
   auto count_sum = [&](int x, int y, int width, int height) {
-    if (tables_.has_saturated() || filled > kDirectSums) return box_sum(tables_.saturated(), x, y, width, height);
+    if (tables_.has_saturated() || filled > direct_sums) return box_sum(tables_.saturated(), x, y, width, height);
     std::int32_t sum = 0;
     for (int r = y; r < y + height; ++r) {
       const std::int32_t* row = ti.count.ptr<std::int32_t>(r) + x;
