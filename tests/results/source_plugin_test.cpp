@@ -91,7 +91,7 @@ TEST(CandidateSourceRegistry, ARegisteredSourceIsTriedAndReportsUnderItsName) {
   std::ifstream in(dir + "/timing.csv");
   std::string header;
   std::getline(in, header);
-  EXPECT_NE(header.find(",count_contrast,evidence,toy,detection_total,"), std::string::npos) << header;
+  EXPECT_NE(header.find(",count_contrast,evidence,toy,refine,detection_total,"), std::string::npos) << header;
   const std::vector<WindowTimingRow> rows = read_timing(dir);
   ASSERT_EQ(rows.size(), 1u);
   EXPECT_EQ(rows[0].stage_ms.at("toy"), r.timings.source_ms("toy"));

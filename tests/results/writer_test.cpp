@@ -398,6 +398,7 @@ TEST(ResultsWriter, TimingCsvHoldsEachWindowsStageTimesAsWritten) {
     t.total_ms = 5.0 + k / 7.0;
   }
   windows[1].timings.detection.add_source_ms("count_contrast", 1.75);
+  windows[2].timings.detection.refine_ms = 0.375;
   {
     ResultsWriter out(dir);
     for (const WindowResult& w : windows) out.window(w);
@@ -423,11 +424,13 @@ TEST(ResultsWriter, TimingCsvHoldsEachWindowsStageTimesAsWritten) {
     EXPECT_EQ(rows[i].stage_ms.count("count_contrast"), i == 1 ? 1u : 0u);
   }
   EXPECT_EQ(rows[1].stage_ms.at("count_contrast"), 1.75);
+  EXPECT_EQ(rows[2].stage_ms.at("refine"), 0.375);  // a window whose candidate was refined
+  EXPECT_EQ(rows[0].stage_ms.count("refine"), 0u);
   std::ifstream in(dir + "/timing.csv");
   std::string header;
   std::getline(in, header);
   EXPECT_EQ(header, "window,t_start,compensation,time_images,segmentation,preprocess,gaussian_fit,track_aided,"
-                    "dense_motion,count_contrast,evidence,detection_total,tracking,window_total");
+                    "dense_motion,count_contrast,evidence,refine,detection_total,tracking,window_total");
 }
 
 TEST(ResultsReader, MalformedLinesAreErrorsNamingFileAndLine) {

@@ -507,7 +507,7 @@ DodgeRow dodge_row(const DodgeDecision& d) {
 std::vector<std::string> window_timing_stages() {
   std::vector<std::string> stages{"compensation", "time_images", "segmentation", "preprocess"};
   for (const RegisteredSource& s : registered_sources()) stages.emplace_back(s.name);
-  for (const char* stage : {"detection_total", "tracking", "window_total"}) stages.emplace_back(stage);
+  for (const char* stage : {"refine", "detection_total", "tracking", "window_total"}) stages.emplace_back(stage);
   return stages;
 }
 
@@ -522,6 +522,8 @@ WindowTimingRow window_timing_row(const WindowResult& w) {
                 {"window_total", t.total_ms}};
   // The candidate sources tried in this window (summary "count": in how many windows).
   for (const SourceTime& s : t.detection.sources()) r.stage_ms[std::string(s.source)] = s.ms;
+  // The found objects' centre and time from their events (EventRefiner): windows with a candidate.
+  if (t.detection.refine_ms > 0) r.stage_ms["refine"] = t.detection.refine_ms;
   return r;
 }
 
