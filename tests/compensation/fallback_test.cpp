@@ -27,6 +27,14 @@ RegisteredDepth flat_depth(const Calibration& c, float z, TimeNs t) {
   return d;
 }
 
+/// 2 m on the left 150 columns, 5 m on the other 170 (the 320x240 rig): median 5 m.
+RegisteredDepth near_left_depth(const Calibration& c, TimeNs t) {
+  RegisteredDepth d = flat_depth(c, 5.0f, t);
+  for (int y = 0; y < 240; ++y)
+    for (int x = 0; x < 150; ++x) d.depth_m[static_cast<std::size_t>(y) * 320 + x] = 2.0f;
+  return d;
+}
+
 std::vector<Event> some_events(TimeNs t0, int n) {
   std::vector<Event> ev;
   for (int i = 0; i < n; ++i)
@@ -129,10 +137,7 @@ TEST(Fallback, RotationTranslationWithoutOdometryOrDepthIsRotation) {
 TEST(Fallback, PixelsWithoutDepthUseTheMedianAndAreCounted) {
   const Calibration c = plain_rig();
   const TimeNs t0 = 0, t1 = 25 * kNsPerMs;
-  // Depth: 2 m on the left 150 columns, 5 m on the rest (170 columns): median 5 m.
-  RegisteredDepth d = flat_depth(c, 5.0f, t0);
-  for (int y = 0; y < 240; ++y)
-    for (int x = 0; x < 150; ++x) d.depth_m[static_cast<std::size_t>(y) * 320 + x] = 2.0f;
+  RegisteredDepth d = near_left_depth(c, t0);
   // Holes: a 5x5 block (not fillable from neighbours with radius 1 at its centre) and one pinhole.
   for (int y = 100; y < 105; ++y)
     for (int x = 200; x < 205; ++x) d.depth_m[static_cast<std::size_t>(y) * 320 + x] = 0.0f;
@@ -187,9 +192,7 @@ TEST(Fallback, PixelsWithoutDepthUseTheMedianAndAreCounted) {
 TEST(Fallback, DepthPreparedOnArrivalGivesTheSameWindow) {
   const Calibration c = plain_rig();
   const TimeNs t0 = 0, t1 = 25 * kNsPerMs;
-  RegisteredDepth d = flat_depth(c, 5.0f, t0);
-  for (int y = 0; y < 240; ++y)
-    for (int x = 0; x < 150; ++x) d.depth_m[static_cast<std::size_t>(y) * 320 + x] = 2.0f;
+  RegisteredDepth d = near_left_depth(c, t0);
   d.depth_m[50 * 320 + 250] = 0.0f;
   const auto ev = some_events(t0, 2000);
   const auto imu = test::constant_imu({0.2, -0.1, 0.3}, -5 * kNsPerMs, 30 * kNsPerMs, kNsPerMs);
@@ -233,9 +236,7 @@ TEST(Fallback, DepthPreparedOnArrivalGivesTheSameWindow) {
 TEST(Fallback, TheLastTwoDepthFramesStayPrepared) {
   const Calibration c = plain_rig();
   const TimeNs t0 = 0, t1 = 25 * kNsPerMs;
-  RegisteredDepth first = flat_depth(c, 5.0f, t0);
-  for (int y = 0; y < 240; ++y)
-    for (int x = 0; x < 150; ++x) first.depth_m[static_cast<std::size_t>(y) * 320 + x] = 2.0f;
+  const RegisteredDepth first = near_left_depth(c, t0);
   const RegisteredDepth second = flat_depth(c, 3.0f, t0 + 10 * kNsPerMs);
   const RegisteredDepth third = flat_depth(c, 4.0f, t0 + 20 * kNsPerMs);
   const auto ev = some_events(t0, 2000);
