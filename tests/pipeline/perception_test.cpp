@@ -47,6 +47,7 @@ struct Collected {
   std::vector<TrajectoryEstimate> fusion, mono;
   std::vector<int> fusion_track, mono_track;
   std::vector<TimeNs> fusion_t;  // EstimateResult::t of each fusion estimate
+  std::vector<TimeNs> mono_t;    // and of each monocular one
   std::vector<bool> fusion_conflict;  // EstimateResult::radius_conflict of each
   std::vector<std::pair<int, DepthObservation>> depth;  // accepted observations and their track
   std::vector<std::pair<int, TimeNs>> depth_segmented;   // every segmentation: track, frame time
@@ -77,7 +78,7 @@ PerceptionCallbacks collect(Collected& c) {
   cb.on_estimate = [&c](const EstimateResult& e) {
     (e.mode == EstimatorMode::kFusion ? c.fusion : c.mono).push_back(*e.estimate);
     (e.mode == EstimatorMode::kFusion ? c.fusion_track : c.mono_track).push_back(e.track_id);
-    if (e.mode == EstimatorMode::kFusion) c.fusion_t.push_back(e.t);
+    (e.mode == EstimatorMode::kFusion ? c.fusion_t : c.mono_t).push_back(e.t);
     if (e.mode == EstimatorMode::kFusion) c.fusion_conflict.push_back(e.radius_conflict);
   };
   cb.on_warning = [&c](const std::string& w) { c.warnings.push_back(w); };
@@ -648,7 +649,8 @@ TEST(Perception, OverlappingWindowsGiveAResultEveryStepAndCountEachEventOnce) {
 // gates_only_between_anchors: a window between anchors hands the detector only its events near
 // the tracks' gates (each gate grown by its own size on every side), and none when no track lends
 // a gate ("not searched"); the anchors get every event. The ball is still followed, and estimated
-// every 5 ms, as well as the test above asks of the full windows.
+// every 5 ms, as well as the test above asks of the full windows; the monocular baseline only at
+// the anchors.
 TEST(Perception, BetweenAnchorsOnlyTheEventsNearTheGatesAreSearched) {
   const SimulatedThrow& s = simulated_throw();
   PerceptionOptions options;
@@ -700,6 +702,12 @@ TEST(Perception, BetweenAnchorsOnlyTheEventsNearTheGatesAreSearched) {
   const Summary ape = absolute_position_error([&](TimeNs t) { return last->trajectory.position(t); },
                                               s.data.objects, 1, last->t_first, last->t_last);
   EXPECT_LT(ape.rmse, 0.15);
+  std::set<TimeNs> anchor_ends;
+  for (const WindowResult& w : gated.results)
+    if (w.index % 5 == 0) anchor_ends.insert(w.t_end);
+  ASSERT_GT(gated.mono_t.size(), 5u);
+  for (const TimeNs t : gated.mono_t) EXPECT_TRUE(anchor_ends.count(t)) << "a monocular estimate at " << t;
+  EXPECT_GT(full.mono_t.size(), 2 * gated.mono_t.size());  // the full windows' every 5 ms
 }
 
 TEST(Perception, OverlappingWindowsWeighAndConfirmByTheSameEvents) {

@@ -81,7 +81,8 @@ struct PerceptionOptions {
   /// size on each side are dropped before detection, so a window between anchors costs the
   /// compensation and the gates' neighbourhoods, not a search of the image; a window with no gate
   /// is not searched (status "not searched"). New objects are found at the anchors only, a Δt
-  /// apart (docs/ESTIMATION.md §1, "Overlapping windows").
+  /// apart, and the monocular baseline is solved at the anchors only (unless dodge_from is
+  /// monocular) (docs/ESTIMATION.md §1, "Overlapping windows").
   bool gates_only_between_anchors = false;
   CompensationOptions compensation;
   DetectorOptions detection;
@@ -194,7 +195,7 @@ void describe(V& v, PerceptionOptions& o) {
   v.ms("step_ms", o.windows.step_ns,
        "Δs: a window every Δs (0 = Δt), at least Δt / 25; shorter: overlapping windows, a result every Δs (docs/ESTIMATION.md §1, \"Overlapping windows\")");
   v("gates_only_between_anchors", o.gates_only_between_anchors, "-",
-    "with step_ms < window_ms, the windows between anchors search only near the tracks' gates (new objects at the anchors)");
+    "with step_ms < window_ms, the windows between anchors search only near the tracks' gates (new objects, and the monocular baseline, at the anchors)");
   v("max_events_per_window", o.windows.max_events_per_window, "events",
     "overload guard: a fuller window is decimated uniformly in time order (counted)");
   v("max_empty_windows", o.windows.max_empty_windows, "-",
