@@ -322,6 +322,37 @@ TEST(CountContrastSource, AnEvenlyFiringMovingBlobIsFoundOnlyWithTheCameraStill)
   }
 }
 
+// A part of the window (the events within 20 px of the blob) handed over with every event time of
+// the whole window (window_t_s), whose background fires early: the blob's time offset against the
+// image's mean time is the whole window's. Without the times the kept events, mostly the blob's,
+// would set the mean, and the offset would shrink.
+TEST(CountContrastSource, APartOfTheWindowIsMeasuredAgainstTheWholeWindow) {
+  const DetectorOptions o;
+  HandMadeWindow whole = evenly_firing_square(4 / kWindowS);
+  for (int y = 2; y < kHeight; y += 4)
+    for (int x = 2; x < kWidth; x += 4) whole.add(x, y, 1, 0.1 * kWindowS);
+  DetectionResult whole_res;
+  ASSERT_TRUE(count_contrast(o, whole, whole_res));
+  HandMadeWindow part;
+  for (std::size_t i = 0; i < whole.pixel.size(); ++i)
+    if (std::abs(whole.pixel[i] % kWidth - 100) <= 20 && std::abs(whole.pixel[i] / kWidth - 70) <= 20) {
+      part.pixel.push_back(whole.pixel[i]);
+      part.t_s.push_back(whole.t_s[i]);
+    }
+  auto offset_of_part = [&](std::span<const float> window_t_s) {
+    SourceWindow in = part.build(o);
+    part.view.window_t_s = window_t_s;
+    CountContrastSource source(o);
+    source.allocate(kWidth, kHeight);
+    DetectionResult res;
+    EXPECT_TRUE(source.find(in, res));
+    return test::count_contrast_of(res).time_offset;
+  };
+  const double whole_offset = test::count_contrast_of(whole_res).time_offset;
+  EXPECT_NEAR(offset_of_part(whole.t_s), whole_offset, 1e-6);
+  EXPECT_LT(offset_of_part({}), whole_offset - 0.05);
+}
+
 // The least m with centres · P(Binomial(n, p) ≥ m) ≤ chance, checked against scipy.stats.binom.sf:
 // 25 pixels at p = 0.013 over a DAVIS346 frame need 8 (7 give 2.7e-3 expected boxes); at p = 0.04, 11.
 TEST(CountContrastSource, TheSparseFillIsTheFewestActivePixelsScatteredEventsSeldomReach) {

@@ -147,12 +147,13 @@ std::optional<RefinedCenter> EventRefiner::refine(const CompensatedEventsView& w
   }
   // The slice's mean density over the image: the band must stand out from it as an object does.
   // Of the whole window's events when only a part was searched (CompensatedEventsView::window_t_s).
-  double slice_events = window.time_sorted ? static_cast<double>(end - begin)
-                                           : static_cast<double>(end) * 2 * tau / duration_s;
-  if (const std::span<const float> all_t = window.window_t_s; !all_t.empty())
-    slice_events = window.time_sorted ? static_cast<double>(std::upper_bound(all_t.begin(), all_t.end(), t_hi) -
-                                                            std::lower_bound(all_t.begin(), all_t.end(), t_lo))
-                                      : static_cast<double>(all_t.size()) * 2 * tau / duration_s;
+  const std::span<const float> all_t = window.window_t_s;
+  const double slice_events =
+      all_t.empty() ? (window.time_sorted ? static_cast<double>(end - begin)
+                                          : static_cast<double>(end) * 2 * tau / duration_s)
+                    : (window.time_sorted ? static_cast<double>(std::upper_bound(all_t.begin(), all_t.end(), t_hi) -
+                                                                std::lower_bound(all_t.begin(), all_t.end(), t_lo))
+                                          : static_cast<double>(all_t.size()) * 2 * tau / duration_s);
   const double slice_density = slice_events / (static_cast<double>(window.width) * window.height);
   auto square = [&](const Eigen::Vector2d& at, double half_side) {
     return box_pixels({at.x() - half_side, at.y() - half_side, at.x() + half_side, at.y() + half_side}, window.width,

@@ -523,6 +523,10 @@ std::vector<int> Perception::add_event_observations(const TrackerStep& step, std
   // Overlapping windows: one detection per Δt is kept, the others stand only until the next one
   // (overlapping_window_options).
   const bool provisional = !is_anchor_window(window_index);
+  // With gates_only_between_anchors the monocular baseline, a comparison rather than the
+  // decisions' input (unless dodge_from says so), is solved at the anchors only.
+  const bool mono_observes = !provisional || !options_.gates_only_between_anchors ||
+                             options_.dodge_from == DodgeSource::kMonocular;
   for (const TrackAssignment& a : step.assignments) {
     if (a.track_id < 0) continue;
     const TrackerDetection& d = tracker_inputs_[a.detection];
@@ -547,10 +551,7 @@ std::vector<int> Perception::add_event_observations(const TrackerStep& step, std
     if (const Detection2D& found = detections[a.detection]; !found.partial)
       e.looming.add(d.t, found.box_raw.width(), found.box_raw.height());
     e.fusion_new |= e.fusion.add(obs) == AddResult::kAccepted;
-    // With gates_only_between_anchors the monocular baseline, a comparison rather than the
-    // decisions' input (unless dodge_from says so), is solved at the anchors only.
-    const bool mono_at_anchors_only = options_.gates_only_between_anchors && options_.dodge_from != DodgeSource::kMonocular;
-    if (e.mono && !(provisional && mono_at_anchors_only)) e.mono_new |= e.mono->add(obs) == AddResult::kAccepted;
+    if (e.mono && mono_observes) e.mono_new |= e.mono->add(obs) == AddResult::kAccepted;
     const Track* track = tracker_.find(a.track_id);
     if (track && track->confirmed() &&
         std::find(to_solve.begin(), to_solve.end(), a.track_id) == to_solve.end())
