@@ -7,6 +7,7 @@
 #include <cmath>
 #include <random>
 #include <string>
+#include <tuple>
 
 #include "fdv/compensation/compensator.h"
 #include "fdv/compensation/undistortion_map.h"
@@ -505,6 +506,95 @@ TEST(Warp, ADistortedCamerasMapIsTheLensInverseAtEveryPixel) {
         ASSERT_NE(map.grid_index(x, y), UndistortionMap::kNoInverse) << x << ", " << y;
       }
     EXPECT_EQ(map.pixels_without_inverse(), without_inverse);
+  }
+}
+
+// Compensating only near some boxes of the grid (CompensationInput::near_regions) must put into
+// them exactly what the full compensation puts there, event for event in the same order, and skip
+// the rest: fast rotation and translation over near depth (the warp moves events up to ~60 px
+// here), and a gyro rate ramping to 6 rad/s within the window.
+TEST(Warp, NearRegionsGetEveryEventTheFullWarpPutsThere) {
+  const Calibration calib = test_rig();
+  const TimeNs t0 = 1'000 * kNsPerMs, dt = 25 * kNsPerMs;
+  const Eigen::Vector3d omega_E(0.8, -1.2, 2.0), v_E(1.5, -0.8, 2.0);
+  const test::SyntheticWindow fast = test::make_window(calib.event_camera, omega_E, v_E, t0, dt, 50 * kNsPerUs);
+  const Inputs motion = inputs_for(calib, omega_E, v_E, t0);
+  const Eigen::Vector3d axis_E = Eigen::Vector3d(0.4, -1.0, 0.3).normalized();
+  const double alpha = 240.0;  // rad/s²
+  const test::SyntheticWindow tilt = test::make_window_rotating(
+      calib.event_camera, [&](double t) { return Eigen::AngleAxisd(0.5 * alpha * t * t, axis_E).toRotationMatrix().eval(); },
+      Eigen::Vector3d::Zero(), t0, dt, 50 * kNsPerUs);
+  std::vector<ImuSample> ramp;
+  const Eigen::Vector3d axis_I = calib.R_B_I.transpose() * (calib.T_B_E.linear() * axis_E);
+  for (TimeNs t = t0 - 5 * kNsPerMs; t <= t0 + 30 * kNsPerMs; t += kNsPerMs)
+    ramp.push_back({t, axis_I * alpha * std::max(0.0, to_seconds(t - t0)), {0, 0, 9.81}});
+  // One box inside, one across the left edge, a small one in a corner.
+  const std::vector<Eigen::AlignedBox2d> regions = {{Eigen::Vector2d(300, 200), Eigen::Vector2d(380, 260)},
+                                                    {Eigen::Vector2d(-0.5, 100), Eigen::Vector2d(60, 300)},
+                                                    {Eigen::Vector2d(600, 440), Eigen::Vector2d(639.5, 479.5)}};
+  const auto in_regions = [&](float x, float y) {
+    return std::any_of(regions.begin(), regions.end(), [&](const Eigen::AlignedBox2d& b) { return b.contains(Eigen::Vector2d(x, y)); });
+  };
+  struct Case {
+    const char* name;
+    CompensationMethod method;
+    bool integrate_gyro;
+    const test::SyntheticWindow& window;
+    CompensationInput input;
+  };
+  const Case cases[] = {
+      {"rotation_translation", CompensationMethod::kRotationTranslation, false, fast,
+       {fast.events, t0, t0 + dt, motion.imu, motion.odometry, &fast.depth}},
+      {"rotation, integrated ramp", CompensationMethod::kRotation, true, tilt, {tilt.events, t0, t0 + dt, ramp, std::nullopt, nullptr}}};
+  for (const Case& c : cases) {
+    CompensationOptions opt;
+    opt.method = c.method;
+    opt.integrate_gyro = c.integrate_gyro;
+    auto comp = make_compensator(calib, opt);
+    using Landed = std::tuple<float, float, float, std::int32_t>;
+    const auto landed = [&](const CompensatedWindow& out) {
+      std::vector<Landed> v;
+      for (std::size_t k = 0; k < out.size(); ++k)
+        if (in_regions(out.x()[k], out.y()[k])) v.emplace_back(out.x()[k], out.y()[k], out.t_s()[k], out.pixel()[k]);
+      return v;
+    };
+    const std::vector<Landed> full = landed(comp->compensate(c.input));
+    CompensationInput near = c.input;
+    near.near_regions = regions;
+    const CompensatedWindow& out = comp->compensate(near);
+    EXPECT_EQ(landed(out), full) << c.name;
+    EXPECT_GT(full.size(), 1000u) << c.name;
+    const CompensationReport& r = out.report;
+    // The reach bounds how far the warp moves an event from its undistorted pixel (every 20th event
+    // warped on its own, so that its output is known to be its own). It takes the grid's farthest
+    // ray and the frame's nearest depth, so it may be loose, but not by 3x here.
+    double moved_px = 0;
+    const PinholeCamera& cam = calib.event_camera;
+    for (std::size_t k = 0; k < c.window.events.size(); k += 20) {
+      CompensationInput one = c.input;
+      const Event& e = c.window.events[k];
+      one.events = std::span<const Event>(&e, 1);
+      const CompensatedWindow& w = comp->compensate(one);
+      if (w.size() != 1) continue;
+      const Eigen::Vector2d lens_only = cam.undistort_pixel(Eigen::Vector2d(e.x, e.y));
+      moved_px = std::max(moved_px, (Eigen::Vector2d(w.x()[0], w.y()[0]) - lens_only).norm());
+    }
+    const double reach = comp->compensate(near).report.near_regions_reach_px;
+    EXPECT_LE(moved_px, reach) << c.name;
+    EXPECT_GT(moved_px, 0.35 * reach) << c.name;
+    EXPECT_GT(r.skipped_far_from_regions, c.window.events.size() / 3) << c.name << ": " << r.brief();
+    EXPECT_EQ(r.events_in, r.events_kept + r.dropped_outside_window + r.dropped_outside_sensor + r.dropped_no_inverse +
+                               r.dropped_left_image + r.dropped_burst + r.skipped_far_from_regions)
+        << c.name;
+    // Every event's time, as the warp writes it.
+    ASSERT_EQ(out.window_t_s().size(), c.window.events.size()) << c.name;
+    for (std::size_t k = 0; k < c.window.events.size(); ++k)
+      ASSERT_EQ(out.window_t_s()[k], static_cast<float>(c.window.events[k].t - t0) * 1e-9f) << c.name << " " << k;
+    // No region: nothing is needed.
+    near.near_regions = std::span<const Eigen::AlignedBox2d>{};
+    const CompensatedWindow& none = comp->compensate(near);
+    EXPECT_EQ(none.size(), 0u) << c.name;
+    EXPECT_EQ(none.report.skipped_far_from_regions, c.window.events.size()) << c.name;
   }
 }
 

@@ -74,7 +74,7 @@ std::string CompensationReport::brief() const {
   const std::pair<const char*, std::uint64_t> drops[] = {
       {"outside window", dropped_outside_window}, {"outside sensor", dropped_outside_sensor},
       {"no undistortion", dropped_no_inverse},     {"left image", dropped_left_image},
-      {"burst decimation", dropped_burst}};
+      {"burst decimation", dropped_burst}, {"far from the regions", skipped_far_from_regions}};
   for (const auto& [what, n] : drops)
     if (n) s << ", " << what << " " << n;
   if (depth_fallback_events) s << ", depth fallback " << depth_fallback_events;

@@ -31,6 +31,7 @@
 /// A compensator keeps its buffers between calls (no allocation once warmed up). Not thread-safe:
 /// one per thread.
 #include <array>
+#include <bit>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -150,6 +151,11 @@ struct CompensationInput {
   std::span<const ImuSample> imu = {};      ///< samples around the window (IMU frame), may be empty
   std::optional<OdometrySample> odometry = {};  ///< vehicle state near t_start (v_W, q_W_B), may be absent
   const RegisteredDepth* depth = nullptr;   ///< latest depth registered into E, may be null or stale
+  /// When set, only the events whose warp may land in one of these boxes of the undistorted grid
+  /// [px] are needed (an empty list: none). A compensator may leave the others out, counted in
+  /// CompensationReport::skipped_far_from_regions, and then gives every event's time in
+  /// CompensatedWindow::window_t_s(). Unset: every event.
+  std::optional<std::span<const Eigen::AlignedBox2d>> near_regions = {};
 };
 
 /// How a window was compensated, what fell back and what was dropped.
@@ -163,7 +169,7 @@ struct CompensationReport {
   bool depth_missing = false;     ///< no depth frame -> "rotation"
   bool depth_stale = false;       ///< depth older than max_depth_age_ns -> "rotation"
   bool depth_wrong_size = false;  ///< registered depth not the event camera's size -> "rotation"
-  // Event accounting: events_in = events_kept + all dropped_*.
+  // Event accounting: events_in = events_kept + all dropped_* + skipped_far_from_regions.
   std::uint64_t events_in = 0;
   std::uint64_t events_kept = 0;
   std::uint64_t dropped_outside_window = 0;  ///< t outside [t_start, t_end)
@@ -171,6 +177,12 @@ struct CompensationReport {
   std::uint64_t dropped_no_inverse = 0;      ///< raw pixel without undistortion (camera.h)
   std::uint64_t dropped_left_image = 0;      ///< warped outside the undistorted grid (or behind)
   std::uint64_t dropped_burst = 0;           ///< removed by the max_events_per_window decimation
+  /// Not compensated: no warp could bring them into CompensationInput::near_regions. Not a loss
+  /// (the caller asked for the regions only), so not a `dropped_*`, but in the sum above.
+  std::uint64_t skipped_far_from_regions = 0;
+  /// With near_regions: how far [grid px] the warp could move an event from where the lens alone
+  /// puts it, the margin by which the regions were grown (0 when every event was warped).
+  double near_regions_reach_px = 0;
   std::uint64_t depth_fallback_events = 0;   ///< events warped with the missing-depth policy
   /// Events earlier than their predecessor (kept, not reordered). 0 means the output's t_s is
   /// non-decreasing: set CompensatedEventsView::time_sorted from it.
@@ -211,6 +223,9 @@ class CompensatedWindow {
   std::span<const float> t_s() const { return {t_.data(), size_}; }  ///< t − t_start [s]
   /// Row-major index v·width + u of the nearest grid pixel (round half up).
   std::span<const std::int32_t> pixel() const { return {pixel_.data(), size_}; }
+  /// t − t_start [s] of every event of the window in the sensor, in input order, when the events
+  /// were compensated near CompensationInput::near_regions only; empty otherwise.
+  std::span<const float> window_t_s() const { return {window_t_s_.data(), window_t_size_}; }
 
   // Writer side (compensators): grow the buffers to hold n events (never shrinks), then fill.
   void reserve_events(std::size_t n);
@@ -219,11 +234,19 @@ class CompensatedWindow {
   float* t_data() { return t_.data(); }
   std::int32_t* pixel_data() { return pixel_.data(); }
   void set_size(std::size_t n) { size_ = n; }
+  /// Room for n window times (never shrinks); set_window_t_s_size() says how many were written.
+  float* reserve_window_t_s(std::size_t n) {
+    if (window_t_s_.size() < n) window_t_s_.resize(std::bit_ceil(n));
+    return window_t_s_.data();
+  }
+  void set_window_t_s_size(std::size_t n) { window_t_size_ = n; }
 
  private:
   std::size_t size_ = 0;
   std::vector<float> x_, y_, t_;
   std::vector<std::int32_t> pixel_;
+  std::vector<float> window_t_s_;
+  std::size_t window_t_size_ = 0;
 };
 
 class Compensator {

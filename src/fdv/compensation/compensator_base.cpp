@@ -16,6 +16,7 @@ ImuWindowSummary CompensatorBase::begin_window(const CompensationInput& in) {
   out_.t_start = in.t_start;
   out_.t_end = in.t_end;
   out_.set_size(0);
+  out_.set_window_t_s_size(0);
   CompensationReport& rep = out_.report;
   rep = CompensationReport{};
   rep.requested = rep.used = method_;

@@ -3,6 +3,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -283,6 +284,10 @@ FDV_AVX2_CLONES WarpCounts warp_range(const WarpParams& p, std::size_t begin, st
 WarpCompensator::WarpCompensator(CompensationMethod method, const Calibration& calibration,
                                  const CompensationOptions& options, std::shared_ptr<const UndistortionMap> map)
     : CompensatorBase(method, calibration, options, std::move(map)) {
+  const PinholeCamera& cam = map_->camera();
+  for (const double u : {-0.5, map_->width() - 0.5})
+    for (const double v : {-0.5, map_->height() - 0.5})
+      grid_max_radius_ = std::max(grid_max_radius_, std::hypot((u - cam.cx) / cam.fx, (v - cam.cy) / cam.fy));
   if (method != CompensationMethod::kRotationTranslation) return;
   // The depth frame's buffers, sized as prepare_depth sizes them (a registered frame has the event
   // camera's size), so that the first frame does not fault them in inside a window.
@@ -369,6 +374,7 @@ bool WarpCompensator::prepare_depth(const RegisteredDepth& depth) {
   made.key = &depth;
   made.data_key = depth.depth_m.data();
   made.t_key = depth.t;
+  made.max_rho = 0;
   const int w = depth.width, h = depth.height;
   const std::size_t n = static_cast<std::size_t>(w) * h;
   const float* z = depth.depth_m.data();
@@ -435,6 +441,7 @@ bool WarpCompensator::prepare_depth(const RegisteredDepth& depth) {
   }
   // Not vf{} + x: 0.0f + −0.0f would lose the sign bit.
   const vf fallback{-fallback_rho, -fallback_rho, -fallback_rho, -fallback_rho}, zero{};
+  vf largest{};  // max |ρ|, for the warp's reach (warp_reach_px)
   for (int y = 0; y < h; ++y) {
     const float* self = raw + static_cast<std::size_t>(y) * row_len;
     float* out = rho + static_cast<std::size_t>(y) * row_len;
@@ -445,12 +452,122 @@ bool WarpCompensator::prepare_depth(const RegisteredDepth& depth) {
     std::size_t x = 0;
     for (; x + 4 <= row_len; x += 4) {
       const vf own = load(self + x), dil = load(out + x);
-      store(out + x, select(own != zero, own, select(dil != zero, dil, fallback)));
+      const vf rho_x = select(own != zero, own, select(dil != zero, dil, fallback));
+      store(out + x, rho_x);
+      largest = vmax(largest, from_bits(bits(rho_x) & 0x7fffffff));
     }
-    for (; x < row_len; ++x) out[x] = self[x] != 0 ? self[x] : out[x] != 0 ? out[x] : -fallback_rho;
+    for (; x < row_len; ++x) {
+      out[x] = self[x] != 0 ? self[x] : out[x] != 0 ? out[x] : -fallback_rho;
+      made.max_rho = std::max(made.max_rho, std::fabs(out[x]));
+    }
   }
+  for (int j = 0; j < 4; ++j) made.max_rho = std::max(made.max_rho, largest[j]);
   made.usable = true;
   return true;
+}
+
+// A turn by θ moves a ray at normalised radius r by at most tan(atan r + θ) − r (the most at the
+// grid's largest r: it grows with r), to radius r'. The translation then moves it by
+// ρ·dt·|v_xy − x'·v_z| / (Z + ρ·dt·v_z) ≤ s·√(1 + r'²) / (Z_min − s), with s = ρ_max·|v|·T and
+// Z_min = cos θ − r·sin θ the smallest depth scale a turned ray keeps (eqs. 6-8).
+double WarpCompensator::warp_reach_px(CompensationMethod used, TimeNs duration_ns) const {
+  constexpr double kNoBound = std::numeric_limits<double>::infinity();
+  const CompensationReport& rep = out_.report;
+  const double T = to_seconds(duration_ns);
+  double theta = rep.omega_E.norm() * T;
+  if (!knots_.empty()) {
+    theta = 0;
+    for (const RotationKnot& k : knots_) theta = std::max(theta, Eigen::AngleAxisd(k.R).angle());
+  }
+  const double r = grid_max_radius_;
+  if (!(std::atan(r) + theta < 1.4)) return kNoBound;  // rays turned near 90°: no useful bound
+  const double r_turned = std::tan(std::atan(r) + theta);
+  double reach = r_turned - r;
+  if (used == CompensationMethod::kRotationTranslation) {
+    const double s = depth_in_use().max_rho * rep.v_E.norm() * T;
+    const double z_min = std::cos(theta) - r * std::sin(theta);
+    if (!(z_min - s > 0.2)) return kNoBound;
+    reach += s * std::sqrt(1 + r_turned * r_turned) / (z_min - s);
+  }
+  const PinholeCamera& cam = map_->camera();
+  return reach * std::max(cam.fx, cam.fy) + 1.5;  // + rounding to the nearest pixel, and float error
+}
+
+std::span<const Event> WarpCompensator::events_near(const CompensationInput& in,
+                                                    std::span<const Eigen::AlignedBox2d> regions, double reach_px) {
+  const PinholeCamera& cam = map_->camera();
+  const int w = map_->width(), h = map_->height();
+  // Each region grown by the reach, in raw pixels: the lens map of a lattice over it (its edges
+  // included), whose bounding box grown by the map's largest stretch over half a lattice cell holds
+  // the raw pixels whose rays fall inside.
+  constexpr double kLatticePx = 8;
+  raw_boxes_.clear();
+  for (const Eigen::AlignedBox2d& region : regions) {
+    // Not clipped to the grid: a ray just outside it (a raw pixel the lens puts there) may be
+    // warped into it.
+    const double x0 = region.min().x() - reach_px, x1 = region.max().x() + reach_px;
+    const double y0 = region.min().y() - reach_px, y1 = region.max().y() + reach_px;
+    if (!(x0 < x1 && y0 < y1)) continue;
+    const int nx = static_cast<int>(std::ceil((x1 - x0) / kLatticePx)), ny = static_cast<int>(std::ceil((y1 - y0) / kLatticePx));
+    const double dx = (x1 - x0) / nx, dy = (y1 - y0) / ny;
+    Eigen::AlignedBox2d raw;
+    double stretch = 1;
+    lattice_row_.assign(static_cast<std::size_t>(nx) + 1, Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN()));
+    for (int j = 0; j <= ny; ++j)
+      for (int i = 0; i <= nx; ++i) {
+        const Eigen::Vector2d grid(x0 + i * dx, y0 + j * dy);
+        const Eigen::Vector2d px = cam.normalized_to_pixel({(grid.x() - cam.cx) / cam.fx, (grid.y() - cam.cy) / cam.fy});
+        Eigen::Vector2d& above = lattice_row_[static_cast<std::size_t>(i)];
+        if (px.allFinite()) {
+          raw.extend(px);
+          if (above.allFinite()) stretch = std::max(stretch, (px - above).norm() / dy);
+          if (i > 0 && lattice_row_[static_cast<std::size_t>(i) - 1].allFinite())
+            stretch = std::max(stretch, (px - lattice_row_[static_cast<std::size_t>(i) - 1]).norm() / dx);
+        }
+        above = px;
+      }
+    if (raw.isEmpty()) continue;
+    const double grow = stretch * std::hypot(dx, dy) / 2 + 1;
+    raw_boxes_.push_back({static_cast<int>(std::floor(raw.min().x() - grow)), static_cast<int>(std::floor(raw.min().y() - grow)),
+                          static_cast<int>(std::ceil(raw.max().x() + grow)), static_cast<int>(std::ceil(raw.max().y() + grow))});
+  }
+  if (raw_boxes_.empty()) {  // nothing can land near a region: no event is needed, nor their times
+    out_.report.events_out_of_order = 0;
+    return {};
+  }
+  // One branch-free pass: every event in the window and the sensor gives its time; it goes on to
+  // the warp when near a region, and so do those outside the window or the sensor (the warp drops
+  // and counts them).
+  const std::size_t n = in.events.size();
+  if (near_events_.size() < n) near_events_.resize(std::bit_ceil(n));
+  const Event* events = in.events.data();
+  Event* near = near_events_.data();
+  float* times = out_.reserve_window_t_s(n);
+  const RawBox* boxes = raw_boxes_.data();
+  const std::size_t n_boxes = raw_boxes_.size();
+  const auto duration = static_cast<std::uint64_t>(std::max<TimeNs>(0, in.t_end - in.t_start));
+  const auto t0 = static_cast<std::uint64_t>(in.t_start);
+  std::size_t n_near = 0, n_times = 0;
+  std::uint64_t out_of_order = 0;
+  TimeNs previous_t = std::numeric_limits<TimeNs>::min();
+  for (std::size_t i = 0; i < n; ++i) {
+    const Event e = events[i];
+    out_of_order += e.t < previous_t;
+    previous_t = e.t;
+    const std::uint64_t d = static_cast<std::uint64_t>(e.t) - t0;
+    const bool inside = (d < duration) & (e.x < w) & (e.y < h);
+    times[n_times] = static_cast<float>(static_cast<TimeNs>(d)) * 1e-9f;  // as the warp writes t
+    n_times += inside;
+    bool in_box = false;
+    for (std::size_t b = 0; b < n_boxes; ++b)
+      in_box |= (static_cast<unsigned>(e.x - boxes[b].x0) <= static_cast<unsigned>(boxes[b].x1 - boxes[b].x0)) &
+                (static_cast<unsigned>(e.y - boxes[b].y0) <= static_cast<unsigned>(boxes[b].y1 - boxes[b].y0));
+    near[n_near] = e;
+    n_near += !inside | in_box;
+  }
+  out_.set_window_t_s_size(n_times);
+  out_.report.events_out_of_order = out_of_order;
+  return {near, n_near};
 }
 
 double WarpCompensator::warp_inverse_depth_at(const Eigen::Vector2d& x) const {
@@ -527,11 +644,6 @@ const CompensatedWindow& WarpCompensator::compensate(const CompensationInput& in
 
   const PinholeCamera& cam = map_->camera();
   WarpParams p;
-  const std::size_t n_events = in.events.size();
-  p.events = in.events.data();
-  p.stride = burst_stride(n_events);
-  const std::size_t visits = p.stride == 1 ? n_events : (n_events + p.stride - 1) / p.stride;
-  rep.dropped_burst = n_events - visits;
   p.rays = map_->rays();
   p.width = map_->width();
   p.height = map_->height();
@@ -551,6 +663,23 @@ const CompensatedWindow& WarpCompensator::compensate(const CompensationInput& in
     p.kv[1] = static_cast<float>(cam.fy * v.y() + cam.cy * v.z());
     p.kv[2] = static_cast<float>(v.z());
   }
+  // Near the regions only, when the warp's reach bounds where an event can go ("none": the
+  // caller's regions may be for the camera at another time, so every event).
+  std::span<const Event> events = in.events;
+  bool selected = false;
+  if (in.near_regions && used != CompensationMethod::kNone)
+    if (const double reach = warp_reach_px(used, p.duration); std::isfinite(reach)) {
+      events = events_near(in, *in.near_regions, reach);
+      rep.near_regions_reach_px = reach;
+      selected = true;
+    }
+  const std::uint64_t window_out_of_order = rep.events_out_of_order;
+  rep.skipped_far_from_regions = in.events.size() - events.size();
+  const std::size_t n_events = events.size();
+  p.events = events.data();
+  p.stride = burst_stride(n_events);
+  const std::size_t visits = p.stride == 1 ? n_events : (n_events + p.stride - 1) / p.stride;
+  rep.dropped_burst = n_events - visits;
 
   out_.reserve_events(visits);
   const Output o{out_.x_data(), out_.y_data(), out_.t_data(), out_.pixel_data()};
@@ -598,7 +727,8 @@ const CompensatedWindow& WarpCompensator::compensate(const CompensationInput& in
   rep.dropped_outside_sensor = c.outside_sensor;
   rep.dropped_no_inverse = c.no_inverse;
   rep.dropped_left_image = c.left;
-  rep.events_out_of_order = c.out_of_order;
+  // The whole window's order when a part was warped: its times are the sources' too.
+  rep.events_out_of_order = selected ? window_out_of_order : c.out_of_order;
   if (used == CompensationMethod::kRotationTranslation) {
     rep.depth_fallback_events = c.fallback;
     if (options_.missing_depth != MissingDepthPolicy::kRotationOnly) rep.fallback_depth_m = depth_in_use().fallback_depth_m;

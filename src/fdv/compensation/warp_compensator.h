@@ -31,6 +31,14 @@ class WarpCompensator final : public CompensatorBase {
   bool is_prepared(const RegisteredDepth& depth) const;
   /// The frame checks of compensate(): the event camera's size and a matching buffer.
   bool depth_fits(const RegisteredDepth& depth) const;
+  /// How far [grid px] this window's warp (eqs. 6-8) can move an event from where the lens alone
+  /// puts it; infinite when no useful bound exists. Needs the slots built.
+  double warp_reach_px(CompensationMethod used, TimeNs duration_ns) const;
+  /// CompensationInput::near_regions: the window's events whose raw pixel the lens and a warp of
+  /// at most warp_reach_px() can bring into a region (a superset of those it does), and every
+  /// in-sensor event's time into the output's window_t_s. Counts the whole window's time order.
+  std::span<const Event> events_near(const CompensationInput& in, std::span<const Eigen::AlignedBox2d> regions,
+                                     double reach_px);
   /// |ρ| the last window's warp used at normalised ray x (the nearest raw pixel), or the
   /// missing-depth policy's value outside the sensor.
   double warp_inverse_depth_at(const Eigen::Vector2d& x) const;
@@ -50,6 +58,7 @@ class WarpCompensator final : public CompensatorBase {
     TimeNs t_key = 0;
     bool usable = false;
     float fallback_depth_m = 0;
+    float max_rho = 0;  ///< max |ρ| over the frame
     /// ρ = 1/z per raw pixel [1/m]; sign bit set where the missing-depth policy was applied.
     std::vector<float> inv_depth;
     bool made_from(const RegisteredDepth& depth) const {
@@ -64,6 +73,13 @@ class WarpCompensator final : public CompensatorBase {
   const PreparedDepth& depth_in_use() const { return prepared_[in_use_]; }
   std::vector<float> depth_sample_;  ///< the strided valid depths (median or reach)
   std::vector<float> raw_rho_, row_max_;  ///< ρ before hole filling; its running maximum along rows
+  double grid_max_radius_ = 0;  ///< largest |x| (normalised) over the undistorted grid
+  std::vector<Event> near_events_;  ///< events_near's selection, reused
+  struct RawBox {
+    int x0, y0, x1, y1;  ///< raw pixels, inclusive
+  };
+  std::vector<RawBox> raw_boxes_;               ///< events_near's regions in raw pixels, reused
+  std::vector<Eigen::Vector2d> lattice_row_;  ///< events_near's previous lattice row, reused
 };
 
 }  // namespace fdv::internal

@@ -316,13 +316,26 @@ void Perception::process_window(PendingWindow& w) {
   result.skipped_before = w.skipped_before;
 
   result.hot_pixel_events = drop_hot_pixels(w);
-  const CompensatedWindow& cw = compensate(w);
+  // Between anchors with gates_only_between_anchors, only the events that can reach the gates'
+  // surroundings are compensated.
+  const TimeNs t_mid = w.t_start + (w.t_end - w.t_start) / 2;
+  std::optional<std::span<const Eigen::AlignedBox2d>> near_gates;
+  if (options_.gates_only_between_anchors && !is_anchor_window(w.index)) {
+    detector_priors_from_tracks(t_mid, w.t_start);
+    const PinholeCamera& camera = calibration_.event_camera;
+    surround_gates(camera.width, camera.height);
+    gate_regions_.clear();
+    for (const cv::Rect& r : gate_surrounds_)
+      gate_regions_.emplace_back(Eigen::Vector2d(r.x - 0.5, r.y - 0.5),
+                                 Eigen::Vector2d(r.x + r.width - 0.5, r.y + r.height - 0.5));
+    near_gates = gate_regions_;
+  }
+  const CompensatedWindow& cw = compensate(w, near_gates);
   result.compensation = cw.report;
   result.timings.compensation_ms = ms_since(start);
 
   // The detector searches the compensated grid, the camera at the window's start (the events
   // were warped there), or the raw image when nothing was warped.
-  const TimeNs t_mid = w.t_start + (w.t_end - w.t_start) / 2;
   detector_priors_from_tracks(t_mid, cw.report.used == CompensationMethod::kNone ? t_mid : w.t_start);
   const DetectionResult det = detect(cw, w.index);
   result.status = det.status;
@@ -353,8 +366,10 @@ std::size_t Perception::drop_hot_pixels(PendingWindow& w) {
 
 // Ego-motion compensation (paper §IV-A) with the IMU history, the vehicle state at the window's
 // start and the newest registered depth frame not newer than the window's end.
-const CompensatedWindow& Perception::compensate(const PendingWindow& w) {
+const CompensatedWindow& Perception::compensate(const PendingWindow& w,
+                                                std::optional<std::span<const Eigen::AlignedBox2d>> near_regions) {
   CompensationInput in;
+  in.near_regions = near_regions;
   in.events = w.events;
   in.t_start = w.t_start;
   in.t_end = w.t_end;
@@ -413,7 +428,10 @@ DetectionResult Perception::detect(const CompensatedWindow& cw, std::uint64_t wi
   CompensatedEventsView view = detector_input(cw, *compensator_, options_.threads);
   view.new_evidence = is_anchor_window(window_index);
   const bool gates_only = options_.gates_only_between_anchors && !view.new_evidence;
-  if (gates_only) keep_events_near_gates(view);
+  if (gates_only) {
+    surround_gates(view.width, view.height);
+    keep_events_near_gates(view, cw.window_t_s().empty() ? view.t_s : cw.window_t_s());
+  }
   DetectionResult det = detector_.detect(view, priors_);
   if (gates_only && gate_surrounds_.empty()) det.status = DetectionStatus::kNotSearched;
   return det;
@@ -421,15 +439,17 @@ DetectionResult Perception::detect(const CompensatedWindow& cw, std::uint64_t wi
 
 // A gate's neighbourhood holds what the gate sources read around it: the count-contrast source's
 // surround (3 centre boxes across) and the pattern's reach past the object's box.
-void Perception::keep_events_near_gates(CompensatedEventsView& view) {
+void Perception::surround_gates(int width, int height) {
   gate_surrounds_.clear();
   for (const DetectionPrior& prior : priors_)
     if (const auto gate = detector_.prior_gate(prior)) {
       const double grow = std::max(gate->width(), gate->height());
-      const cv::Rect r = box_pixels(Box2D{gate->x0 - grow, gate->y0 - grow, gate->x1 + grow, gate->y1 + grow},
-                                    view.width, view.height);
+      const cv::Rect r = box_pixels(Box2D{gate->x0 - grow, gate->y0 - grow, gate->x1 + grow, gate->y1 + grow}, width, height);
       if (r.area() > 0) gate_surrounds_.push_back(r);
     }
+}
+
+void Perception::keep_events_near_gates(CompensatedEventsView& view, std::span<const float> window_t_s) {
   gated_pixel_.clear();
   gated_t_s_.clear();
   if (!gate_surrounds_.empty()) {
@@ -450,7 +470,7 @@ void Perception::keep_events_near_gates(CompensatedEventsView& view) {
       }
     }
   }
-  view.window_t_s = view.t_s;
+  view.window_t_s = window_t_s;
   view.pixel = gated_pixel_;
   view.t_s = gated_t_s_;
 }

@@ -408,13 +408,18 @@ class Perception {
   /// One window through every stage: the steps below, in this order.
   void process_window(PendingWindow& w);
   std::size_t drop_hot_pixels(PendingWindow& w);  ///< the events erased
-  const CompensatedWindow& compensate(const PendingWindow& w);
+  /// near_regions: only the events that may land there are needed (CompensationInput).
+  const CompensatedWindow& compensate(const PendingWindow& w,
+                                      std::optional<std::span<const Eigen::AlignedBox2d>> near_regions = {});
   /// Fills priors_: the tracks at t, seen by the camera at grid_t (the compensated grid's).
   void detector_priors_from_tracks(TimeNs t, TimeNs grid_t);
   DetectionResult detect(const CompensatedWindow& cw, std::uint64_t window_index);
-  /// gates_only_between_anchors: `view` reduced to its events near priors_' gates (kept in
+  /// gates_only_between_anchors: fills gate_surrounds_ with priors_' gates, each grown by its size
+  /// on every side (what the gate sources read around it), on a grid of width x height.
+  void surround_gates(int width, int height);
+  /// gates_only_between_anchors: `view` reduced to its events in gate_surrounds_ (kept in
   /// gated_pixel_ and gated_t_s_, in their order).
-  void keep_events_near_gates(CompensatedEventsView& view);
+  void keep_events_near_gates(CompensatedEventsView& view, std::span<const float> window_t_s);
   /// Overlapping windows: every N-th window (index a multiple of N = Δt / Δs) is an anchor; the
   /// anchors do not overlap, and the sums over windows see only them (overlapping_window_options).
   bool is_anchor_window(std::uint64_t index) const {
@@ -489,6 +494,7 @@ class Perception {
   std::vector<std::vector<Event>> free_buffers_;
   std::vector<DetectionPrior> priors_;  ///< per window, reused
   std::vector<cv::Rect> gate_surrounds_;  ///< per window, reused (gates_only_between_anchors)
+  std::vector<Eigen::AlignedBox2d> gate_regions_;  ///< gate_surrounds_ for the compensation, reused
   std::vector<std::int32_t> gated_pixel_;  ///< per window, reused (gates_only_between_anchors)
   std::vector<float> gated_t_s_;
   std::vector<TrackerDetection> tracker_inputs_;  ///< per window, reused: the tracker's input
