@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <random>
 #include <string>
 #include <tuple>
@@ -512,7 +513,7 @@ TEST(Warp, ADistortedCamerasMapIsTheLensInverseAtEveryPixel) {
 // Compensating only near some boxes of the grid (CompensationInput::near_regions) must put into
 // them exactly what the full compensation puts there, event for event in the same order, and skip
 // the rest: fast rotation and translation over near depth (the warp moves events up to ~60 px
-// here), and a gyro rate ramping to 6 rad/s within the window.
+// here), a gyro rate ramping to 6 rad/s within the window, and the lens alone ("none").
 TEST(Warp, NearRegionsGetEveryEventTheFullWarpPutsThere) {
   const Calibration calib = test_rig();
   const TimeNs t0 = 1'000 * kNsPerMs, dt = 25 * kNsPerMs;
@@ -545,8 +546,25 @@ TEST(Warp, NearRegionsGetEveryEventTheFullWarpPutsThere) {
   const Case cases[] = {
       {"rotation_translation", CompensationMethod::kRotationTranslation, false, fast,
        {fast.events, t0, t0 + dt, motion.imu, motion.odometry, &fast.depth}},
-      {"rotation, integrated ramp", CompensationMethod::kRotation, true, tilt, {tilt.events, t0, t0 + dt, ramp, std::nullopt, nullptr}}};
-  for (const Case& c : cases) {
+      {"rotation, integrated ramp", CompensationMethod::kRotation, true, tilt, {tilt.events, t0, t0 + dt, ramp, std::nullopt, nullptr}},
+      {"none", CompensationMethod::kNone, false, fast, {fast.events, t0, t0 + dt, motion.imu, motion.odometry, &fast.depth}}};
+  // Events on the sensor's first and last columns too, which the lens or the warp puts off the
+  // grid: their times count all the same.
+  const auto with_border_events = [&](const std::vector<Event>& events) {
+    std::vector<Event> border;
+    const int w = calib.event_camera.width, h = calib.event_camera.height;
+    for (int k = 0; k < 2000; ++k)
+      border.push_back({t0 + k * (dt / 2000), static_cast<std::uint16_t>(k % 2 ? w - 1 - k % 3 : k % 3),
+                        static_cast<std::uint16_t>((k * 7) % h), k % 2 == 0});
+    std::vector<Event> all;
+    std::merge(events.begin(), events.end(), border.begin(), border.end(), std::back_inserter(all),
+               [](const Event& a, const Event& b) { return a.t < b.t; });
+    return all;
+  };
+  std::size_t moved_off_grid = 0;
+  for (Case c : cases) {
+    const std::vector<Event> events = with_border_events(c.window.events);
+    c.input.events = events;
     CompensationOptions opt;
     opt.method = c.method;
     opt.integrate_gyro = c.integrate_gyro;
@@ -558,44 +576,58 @@ TEST(Warp, NearRegionsGetEveryEventTheFullWarpPutsThere) {
         if (in_regions(out.x()[k], out.y()[k])) v.emplace_back(out.x()[k], out.y()[k], out.t_s()[k], out.pixel()[k]);
       return v;
     };
-    const std::vector<Landed> full = landed(comp->compensate(c.input));
+    const CompensatedWindow& whole = comp->compensate(c.input);
+    moved_off_grid += events.size() - whole.size();
+    const std::vector<Landed> full = landed(whole);
     CompensationInput near = c.input;
     near.near_regions = regions;
     const CompensatedWindow& out = comp->compensate(near);
     EXPECT_EQ(landed(out), full) << c.name;
+    const double reach = out.report.near_regions_reach_px;
     EXPECT_GT(full.size(), 1000u) << c.name;
     const CompensationReport& r = out.report;
+    EXPECT_GT(r.skipped_far_from_regions, events.size() / 3) << c.name << ": " << r.brief();
+    EXPECT_EQ(r.events_in, r.events_kept + r.dropped_outside_window + r.dropped_outside_sensor + r.dropped_no_inverse +
+                               r.dropped_left_image + r.dropped_burst + r.skipped_far_from_regions)
+        << c.name;
+    // Every event's time, as the warp writes it, those the warp moves off the grid included.
+    ASSERT_EQ(out.window_t_s().size(), events.size()) << c.name;
+    for (std::size_t k = 0; k < events.size(); ++k)
+      ASSERT_EQ(out.window_t_s()[k], static_cast<float>(events[k].t - t0) * 1e-9f) << c.name << " " << k;
     // The reach bounds how far the warp moves an event from its undistorted pixel (every 20th event
     // warped on its own, so that its output is known to be its own). It takes the grid's farthest
     // ray and the frame's nearest depth, so it may be loose, but not by 3x here.
     double moved_px = 0;
     const PinholeCamera& cam = calib.event_camera;
-    for (std::size_t k = 0; k < c.window.events.size(); k += 20) {
+    for (std::size_t k = 0; k < events.size(); k += 20) {
       CompensationInput one = c.input;
-      const Event& e = c.window.events[k];
+      const Event& e = events[k];
       one.events = std::span<const Event>(&e, 1);
       const CompensatedWindow& w = comp->compensate(one);
       if (w.size() != 1) continue;
       const Eigen::Vector2d lens_only = cam.undistort_pixel(Eigen::Vector2d(e.x, e.y));
       moved_px = std::max(moved_px, (Eigen::Vector2d(w.x()[0], w.y()[0]) - lens_only).norm());
     }
-    const double reach = comp->compensate(near).report.near_regions_reach_px;
     EXPECT_LE(moved_px, reach) << c.name;
-    EXPECT_GT(moved_px, 0.35 * reach) << c.name;
-    EXPECT_GT(r.skipped_far_from_regions, c.window.events.size() / 3) << c.name << ": " << r.brief();
-    EXPECT_EQ(r.events_in, r.events_kept + r.dropped_outside_window + r.dropped_outside_sensor + r.dropped_no_inverse +
-                               r.dropped_left_image + r.dropped_burst + r.skipped_far_from_regions)
-        << c.name;
-    // Every event's time, as the warp writes it.
-    ASSERT_EQ(out.window_t_s().size(), c.window.events.size()) << c.name;
-    for (std::size_t k = 0; k < c.window.events.size(); ++k)
-      ASSERT_EQ(out.window_t_s()[k], static_cast<float>(c.window.events[k].t - t0) * 1e-9f) << c.name << " " << k;
+    if (c.method != CompensationMethod::kNone) {
+      EXPECT_GT(moved_px, 0.35 * reach) << c.name;
+    }
+    // Out of time order: the whole window's order is reported (the sources then do not search its
+    // times), and the times keep the input's order.
+    std::vector<Event> swapped = events;
+    std::swap(swapped[100], swapped[swapped.size() / 2]);
+    CompensationInput unordered = near;
+    unordered.events = swapped;
+    const CompensatedWindow& shuffled = comp->compensate(unordered);
+    EXPECT_EQ(shuffled.report.events_out_of_order, 2u) << c.name;  // after the swapped pair's first and second
+    EXPECT_EQ(shuffled.window_t_s()[100], static_cast<float>(swapped[100].t - t0) * 1e-9f) << c.name;
     // No region: nothing is needed.
     near.near_regions = std::span<const Eigen::AlignedBox2d>{};
     const CompensatedWindow& none = comp->compensate(near);
     EXPECT_EQ(none.size(), 0u) << c.name;
-    EXPECT_EQ(none.report.skipped_far_from_regions, c.window.events.size()) << c.name;
+    EXPECT_EQ(none.report.skipped_far_from_regions, events.size()) << c.name;
   }
+  EXPECT_GT(moved_off_grid, 100u);
 }
 
 TEST(Warp, EmptyWindowIsFine) {

@@ -152,7 +152,8 @@ struct CompensationInput {
   std::optional<OdometrySample> odometry = {};  ///< vehicle state near t_start (v_W, q_W_B), may be absent
   const RegisteredDepth* depth = nullptr;   ///< latest depth registered into E, may be null or stale
   /// When set, only the events whose warp may land in one of these boxes of the undistorted grid
-  /// [px] are needed (an empty list: none). A compensator may leave the others out, counted in
+  /// [px] are needed (an empty list: none), the grid of the camera at t_start (at any time for
+  /// "none"). A compensator may leave the others out, counted in
   /// CompensationReport::skipped_far_from_regions, and then gives every event's time in
   /// CompensatedWindow::window_t_s(). Unset: every event.
   std::optional<std::span<const Eigen::AlignedBox2d>> near_regions = {};
@@ -223,8 +224,9 @@ class CompensatedWindow {
   std::span<const float> t_s() const { return {t_.data(), size_}; }  ///< t − t_start [s]
   /// Row-major index v·width + u of the nearest grid pixel (round half up).
   std::span<const std::int32_t> pixel() const { return {pixel_.data(), size_}; }
-  /// t − t_start [s] of every event of the window in the sensor, in input order, when the events
-  /// were compensated near CompensationInput::near_regions only; empty otherwise.
+  /// t − t_start [s] of every event of the window in the sensor (before the warp, which may move
+  /// some off the grid), in input order, when the events were compensated near
+  /// CompensationInput::near_regions only; empty otherwise.
   std::span<const float> window_t_s() const { return {window_t_s_.data(), window_t_size_}; }
 
   // Writer side (compensators): grow the buffers to hold n events (never shrinks), then fill.

@@ -472,6 +472,8 @@ bool WarpCompensator::prepare_depth(const RegisteredDepth& depth) {
 // Z_min = cos θ − r·sin θ the smallest depth scale a turned ray keeps (eqs. 6-8).
 double WarpCompensator::warp_reach_px(CompensationMethod used, TimeNs duration_ns) const {
   constexpr double kNoBound = std::numeric_limits<double>::infinity();
+  constexpr double kRoundingPx = 1.5;  // rounding to the nearest pixel, and float error
+  if (used == CompensationMethod::kNone) return kRoundingPx;
   const CompensationReport& rep = out_.report;
   const double T = to_seconds(duration_ns);
   double theta = rep.omega_E.norm() * T;
@@ -490,7 +492,7 @@ double WarpCompensator::warp_reach_px(CompensationMethod used, TimeNs duration_n
     reach += s * std::sqrt(1 + r_turned * r_turned) / (z_min - s);
   }
   const PinholeCamera& cam = map_->camera();
-  return reach * std::max(cam.fx, cam.fy) + 1.5;  // + rounding to the nearest pixel, and float error
+  return reach * std::max(cam.fx, cam.fy) + kRoundingPx;
 }
 
 std::span<const Event> WarpCompensator::events_near(const CompensationInput& in,
@@ -663,11 +665,12 @@ const CompensatedWindow& WarpCompensator::compensate(const CompensationInput& in
     p.kv[1] = static_cast<float>(cam.fy * v.y() + cam.cy * v.z());
     p.kv[2] = static_cast<float>(v.z());
   }
-  // Near the regions only, when the warp's reach bounds where an event can go ("none": the
-  // caller's regions may be for the camera at another time, so every event).
+  // Near the regions only, when the warp's reach bounds where an event can go. Not in a window
+  // that fell back to "none": the caller's regions are for the camera at the window's start, and
+  // the output is the camera through the window.
   std::span<const Event> events = in.events;
   bool selected = false;
-  if (in.near_regions && used != CompensationMethod::kNone)
+  if (in.near_regions && (used != CompensationMethod::kNone || method_ == CompensationMethod::kNone))
     if (const double reach = warp_reach_px(used, p.duration); std::isfinite(reach)) {
       events = events_near(in, *in.near_regions, reach);
       rep.near_regions_reach_px = reach;

@@ -321,7 +321,7 @@ void Perception::process_window(PendingWindow& w) {
   const TimeNs t_mid = w.t_start + (w.t_end - w.t_start) / 2;
   std::optional<std::span<const Eigen::AlignedBox2d>> near_gates;
   if (options_.gates_only_between_anchors && !is_anchor_window(w.index)) {
-    detector_priors_from_tracks(t_mid, w.t_start);
+    detector_priors_from_tracks(t_mid, compensator_->method() == CompensationMethod::kNone ? t_mid : w.t_start);
     const PinholeCamera& camera = calibration_.event_camera;
     surround_gates(camera.width, camera.height);
     gate_regions_.clear();
@@ -337,7 +337,7 @@ void Perception::process_window(PendingWindow& w) {
   // The detector searches the compensated grid, the camera at the window's start (the events
   // were warped there), or the raw image when nothing was warped.
   detector_priors_from_tracks(t_mid, cw.report.used == CompensationMethod::kNone ? t_mid : w.t_start);
-  const DetectionResult det = detect(cw, w.index);
+  const DetectionResult det = detect(cw, w);
   result.status = det.status;
   result.theta = det.theta;
   result.timings.detection = det.timings;
@@ -424,13 +424,17 @@ std::optional<Eigen::Vector2d> Perception::trajectory_pixel(int track_id, TimeNs
 // Detection (paper §IV-B). Feedback, detector -> compensator: the detector reports its centre
 // through the compensator's inverse warp, in the camera at the detection's time, because
 // add_event_observations pairs it with the camera's pose at that time.
-DetectionResult Perception::detect(const CompensatedWindow& cw, std::uint64_t window_index) {
+DetectionResult Perception::detect(const CompensatedWindow& cw, const PendingWindow& w) {
   CompensatedEventsView view = detector_input(cw, *compensator_, options_.threads);
-  view.new_evidence = is_anchor_window(window_index);
+  view.new_evidence = is_anchor_window(w.index);
   const bool gates_only = options_.gates_only_between_anchors && !view.new_evidence;
   if (gates_only) {
     surround_gates(view.width, view.height);
-    keep_events_near_gates(view, cw.window_t_s().empty() ? view.t_s : cw.window_t_s());
+    // The sources measure an object against the window's events in the sensor; compensated near
+    // the gates only, the compensation gives their times.
+    std::span<const float> window_t_s = cw.window_t_s();
+    if (window_t_s.empty() && !gate_surrounds_.empty()) window_t_s = sensor_event_times(w);
+    keep_events_near_gates(view, window_t_s);
   }
   DetectionResult det = detector_.detect(view, priors_);
   if (gates_only && gate_surrounds_.empty()) det.status = DetectionStatus::kNotSearched;
@@ -447,6 +451,16 @@ void Perception::surround_gates(int width, int height) {
       const cv::Rect r = box_pixels(Box2D{gate->x0 - grow, gate->y0 - grow, gate->x1 + grow, gate->y1 + grow}, width, height);
       if (r.area() > 0) gate_surrounds_.push_back(r);
     }
+}
+
+// Every event of the window in the sensor, before the warp moves some off the grid: the same as
+// CompensatedWindow::window_t_s, whichever compensation ran.
+std::span<const float> Perception::sensor_event_times(const PendingWindow& w) {
+  const PinholeCamera& camera = calibration_.event_camera;
+  sensor_t_s_.clear();
+  for (const Event& e : w.events)
+    if (e.x < camera.width && e.y < camera.height) sensor_t_s_.push_back(static_cast<float>(e.t - w.t_start) * 1e-9f);
+  return sensor_t_s_;
 }
 
 void Perception::keep_events_near_gates(CompensatedEventsView& view, std::span<const float> window_t_s) {

@@ -413,7 +413,9 @@ class Perception {
                                       std::optional<std::span<const Eigen::AlignedBox2d>> near_regions = {});
   /// Fills priors_: the tracks at t, seen by the camera at grid_t (the compensated grid's).
   void detector_priors_from_tracks(TimeNs t, TimeNs grid_t);
-  DetectionResult detect(const CompensatedWindow& cw, std::uint64_t window_index);
+  DetectionResult detect(const CompensatedWindow& cw, const PendingWindow& w);
+  /// t − t_start [s] of the window's events in the sensor, in their order (kept in sensor_t_s_).
+  std::span<const float> sensor_event_times(const PendingWindow& w);
   /// gates_only_between_anchors: fills gate_surrounds_ with priors_' gates, each grown by its size
   /// on every side (what the gate sources read around it), on a grid of width x height.
   void surround_gates(int width, int height);
@@ -497,6 +499,7 @@ class Perception {
   std::vector<Eigen::AlignedBox2d> gate_regions_;  ///< gate_surrounds_ for the compensation, reused
   std::vector<std::int32_t> gated_pixel_;  ///< per window, reused (gates_only_between_anchors)
   std::vector<float> gated_t_s_;
+  std::vector<float> sensor_t_s_;  ///< per window, reused (sensor_event_times)
   std::vector<TrackerDetection> tracker_inputs_;  ///< per window, reused: the tracker's input
   std::vector<int> held_;                ///< per window, reused (tracking.held_max_gap_ns)
   std::vector<ExternalGate> vouched_;   ///< per window, reused (estimate_aided_association)
