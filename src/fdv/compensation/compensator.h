@@ -143,6 +143,11 @@ void describe(V& v, CompensationOptions& o) {
             "moved to the top-level key max_events_per_window (the event windower's overload guard, which acts first)");
 }
 
+/// The IMU / odometry compensators cut a window to CompensationInput::near_regions from this many
+/// events on: below it the whole window's warp, its tables in cache, costs less than carrying the
+/// regions through the lens (docs/BENCHMARKS.md, "Overlapping windows: the CPU of a shorter step").
+inline constexpr std::size_t kMinEventsToCutNearRegions = 16'384;
+
 /// Everything one window needs. Spans and the depth pointer are borrowed for the call only.
 struct CompensationInput {
   std::span<const Event> events = {};  ///< raw sensor pixels, time-ordered, in [t_start, t_end)
@@ -153,7 +158,7 @@ struct CompensationInput {
   const RegisteredDepth* depth = nullptr;   ///< latest depth registered into E, may be null or stale
   /// When set, only the events whose warp may land in one of these boxes of the undistorted grid
   /// [px] are needed (an empty list: none), the grid of the camera at t_start (at any time for
-  /// "none"). A compensator may leave the others out, counted in
+  /// "none"). A compensator may leave the others out (kMinEventsToCutNearRegions), counted in
   /// CompensationReport::skipped_far_from_regions, and then gives every event's time in
   /// CompensatedWindow::window_t_s(). Unset: every event.
   std::optional<std::span<const Eigen::AlignedBox2d>> near_regions = {};

@@ -668,9 +668,11 @@ const CompensatedWindow& WarpCompensator::compensate(const CompensationInput& in
   // Near the regions only, when the warp's reach bounds where an event can go. Not in a window
   // that fell back to "none": the caller's regions are for the camera at the window's start, and
   // the output is the camera through the window.
+  // A small window is warped whole unless nothing is needed (kMinEventsToCutNearRegions).
   std::span<const Event> events = in.events;
   bool selected = false;
-  if (in.near_regions && (used != CompensationMethod::kNone || method_ == CompensationMethod::kNone))
+  if (in.near_regions && (in.near_regions->empty() || in.events.size() >= kMinEventsToCutNearRegions) &&
+      (used != CompensationMethod::kNone || method_ == CompensationMethod::kNone))
     if (const double reach = warp_reach_px(used, p.duration); std::isfinite(reach)) {
       events = events_near(in, *in.near_regions, reach);
       rep.near_regions_reach_px = reach;
