@@ -665,10 +665,10 @@ const CompensatedWindow& WarpCompensator::compensate(const CompensationInput& in
     p.kv[1] = static_cast<float>(cam.fy * v.y() + cam.cy * v.z());
     p.kv[2] = static_cast<float>(v.z());
   }
-  // Near the regions only, when the warp's reach bounds where an event can go. Not in a window
-  // that fell back to "none": the caller's regions are for the camera at the window's start, and
-  // the output is the camera through the window.
-  // A small window is warped whole unless nothing is needed (kMinEventsToCutNearRegions).
+  // Near the regions only, when the warp's reach bounds where an event can go and the window is
+  // not small (kMinEventsToCutNearRegions; a small one is warped whole unless nothing is needed).
+  // Not in a window that fell back to "none": the caller's regions are for the camera at the
+  // window's start, and the output is the camera through the window.
   std::span<const Event> events = in.events;
   bool selected = false;
   if (in.near_regions && (in.near_regions->empty() || in.events.size() >= kMinEventsToCutNearRegions) &&
