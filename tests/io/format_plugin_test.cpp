@@ -87,5 +87,21 @@ TEST(FormatPlugin, TheProgramLinksNoneOfThePluginsLibraries) {
             std::string::npos);
 }
 
+// The program links its third-party libraries from Debian's static archives where the build found
+// them (cmake/fdv_static_third_party.cmake): none of those libraries is loaded as a shared one.
+TEST(FormatPlugin, TheProgramLoadsNoSharedCopyOfWhatItLinksStatically) {
+  const std::string archives = FDV_TEST_STATIC_ARCHIVES;
+  if (archives.empty()) GTEST_SKIP() << "no static archives found at configure time";
+  const auto listed = test::run_command(FDV_TEST_LIST_SHARED_LIBRARIES " " FDV_TEST_CLI, "format_plugin_ldd");
+  ASSERT_NE(listed.out.find("libc.so"), std::string::npos) << listed.out;
+  std::size_t begin = 0;
+  while (begin <= archives.size()) {
+    const std::size_t end = std::min(archives.find(',', begin), archives.size());
+    const std::string shared = "lib" + archives.substr(begin, end - begin) + ".so";
+    EXPECT_EQ(listed.out.find(shared), std::string::npos) << shared << " in\n" << listed.out;
+    begin = end + 1;
+  }
+}
+
 }  // namespace
 }  // namespace fdv
