@@ -7,7 +7,8 @@
 #
 #   fdv_static_alternative(<target> ARCHIVES <name>... [LINK <library>...])
 #     <target>'s static alternative: its usage requirements with the archives lib<name>.a (in link
-#     order) and what they need (targets, or shared libraries by name or file name), when every
+#     order) and what they need (targets, or shared libraries by name or file name, "a|b" for
+#     either), when every
 #     archive and library is found; otherwise none, and the program links the shared library.
 #   fdv_prefer_static(<target>... [SELF])
 #     Rewrites each target's link interface (SELF: its own link libraries) so that a target with
@@ -30,13 +31,16 @@ function(fdv_static_alternative target)
   endforeach()
   foreach(library ${arg_LINK})
     if(NOT TARGET ${library})
-      # A shared library, by the name the linker knows or by its file's name (no -dev link).
-      find_library(FDV_SHARED_${library} NAMES ${library} NO_CACHE)
-      if(NOT FDV_SHARED_${library})
+      # A shared library: the name the linker knows, or else its file's name ("GLX|libGLX.so.0": a
+      # sysroot may have the runtime package without the -dev link).
+      string(REPLACE "|" ";" names "${library}")
+      string(MAKE_C_IDENTIFIER "FDV_SHARED_${library}" found)
+      find_library(${found} NAMES ${names} NO_CACHE)
+      if(NOT ${found})
         message(STATUS "fdv: no ${library} for the static ${target}: it stays shared in fdv")
         return()
       endif()
-      set(library ${FDV_SHARED_${library}})
+      set(library ${${found}})
     endif()
     list(APPEND libraries ${library})
   endforeach()
@@ -94,12 +98,13 @@ endfunction()
 # What Debian's archives need beside them (found by linking `fdv`; the shared libraries record it
 # themselves). OpenCV's core reaches OpenGL's loader through its OpenGL interop, BLAS/LAPACK through
 # its solvers and TBB through its thread pool.
-fdv_static_alternative(opencv_core ARCHIVES opencv_core LINK lapack blas tbb z GLX Threads::Threads)
-fdv_static_alternative(opencv_imgproc ARCHIVES opencv_imgproc opencv_core LINK lapack blas tbb z GLX Threads::Threads)
+fdv_static_alternative(opencv_core ARCHIVES opencv_core LINK lapack blas tbb z GLX|libGLX.so.0 Threads::Threads)
+fdv_static_alternative(opencv_imgproc ARCHIVES opencv_imgproc opencv_core
+                       LINK lapack blas tbb z GLX|libGLX.so.0 Threads::Threads)
 # Ceres is static already; its logging (glog, gflags) and sparse solvers (SuiteSparse) are not.
 fdv_static_alternative(Ceres::ceres
   ARCHIVES ceres glog gflags spqr cholmod cxsparse amd camd colamd ccolamd suitesparseconfig
-  LINK unwind libmetis.so.5 lapack f77blas atlas blas libgomp.so.1 Threads::Threads Eigen3::Eigen)
+  LINK unwind|libunwind.so.8 libmetis.so.5 lapack f77blas atlas blas libgomp.so.1 Threads::Threads Eigen3::Eigen)
 fdv_static_alternative(yaml-cpp ARCHIVES yaml-cpp)
 fdv_static_alternative(PNG::PNG ARCHIVES png16 LINK z)
 fdv_static_alternative(PkgConfig::FDV_ZSTD ARCHIVES zstd)
