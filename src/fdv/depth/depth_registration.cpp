@@ -88,16 +88,15 @@ struct Tally {
   std::uint64_t invalid = 0, no_inverse = 0, behind = 0, outside = 0, registered = 0, occluded = 0;
 };
 
-/// The z-test of one registered pixel (cells hold +inf where nothing landed yet).
+/// The z-test of one registered pixel (cells hold +inf where nothing landed yet). One of the two
+/// points on a cell is occluded whichever is nearer: a point that lands on a cell already holding
+/// one counts as occluded. Without branches: which point is nearer is a coin toss on a textured
+/// surface, and the mispredicted branches were a tenth of the registration's samples.
 inline void splat(float& cell, float z_e, Tally& c) {
   const float inf = std::numeric_limits<float>::infinity();
   ++c.registered;
-  if (z_e < cell) {
-    if (cell != inf) ++c.occluded;
-    cell = z_e;
-  } else {
-    ++c.occluded;
-  }
+  c.occluded += cell != inf;
+  cell = z_e < cell ? z_e : cell;
 }
 
 /// Pixels [i0, n) one at a time: the same operations, in the same order, as project_all's lanes.
