@@ -292,8 +292,10 @@ WarpCompensator::WarpCompensator(CompensationMethod method, const Calibration& c
   // The depth frame's buffers, sized as prepare_depth sizes them (a registered frame has the event
   // camera's size), so that the first frame does not fault them in inside a window.
   const std::size_t n = static_cast<std::size_t>(map_->width()) * static_cast<std::size_t>(map_->height());
-  raw_rho_.resize(n);
-  row_max_.resize(n);
+  const auto rows = static_cast<std::size_t>(2 * options.hole_fill_radius_px + 1);
+  const std::size_t ring = rows * static_cast<std::size_t>(map_->width());
+  raw_rho_.resize(ring);
+  row_max_.resize(ring);
   for (PreparedDepth& slot : prepared_) slot.inv_depth.resize(n);
   depth_sample_.reserve(n / depth_sample_stride(n) + 1);
 }
@@ -397,29 +399,23 @@ bool WarpCompensator::prepare_depth(const RegisteredDepth& depth) {
     std::nth_element(depth_sample_.begin(), mid, depth_sample_.end());
     made.fallback_depth_m = *mid;
   }
-  // ρ = 1/z where valid, 0 in holes. Four pixels at a time (`z <= FLT_MAX` is false for NaN and
-  // inf); the tail of a row-major image is done one by one.
-  raw_rho_.resize(n);
-  row_max_.resize(n);
-  made.inv_depth.resize(n);
-  float* raw = raw_rho_.data();
-  const vf flt_max = vf{} + std::numeric_limits<float>::max(), one_f = vf{} + 1.0f;
-  std::size_t i = 0;
-  for (; i + 4 <= n; i += 4) {
-    const vf zi = load(z + i);
-    const vi valid = (zi > 0) & (zi <= flt_max);
-    store(raw + i, from_bits(bits(one_f / from_bits((bits(zi) & valid) | (bits(one_f) & ~valid))) & valid));
-  }
-  for (; i < n; ++i) raw[i] = z[i] > 0 && z[i] <= std::numeric_limits<float>::max() ? 1.0f / z[i] : 0.0f;
-  // Holes take the nearest surface (largest ρ) among the neighbours within hole_fill_radius_px:
-  // a grey dilation with a square window, done as two 1-D running maxima (rows, then columns;
-  // the window is clipped at the border), then the missing-depth policy, marked by the sign bit.
-  // Whole-image vector passes: cheaper than visiting the holes one by one when a large part of
-  // the view is beyond the depth camera's range (a long hall: tens of per cent of the pixels).
+  // ρ = 1/z where valid, 0 in holes; holes take the nearest surface (largest ρ) among the neighbours
+  // within hole_fill_radius_px: a grey dilation with a square window clipped at the border, as two
+  // 1-D running maxima (along each row, then across the 2r + 1 rows around it), then the
+  // missing-depth policy, marked by the sign bit. Vector passes over whole rows: cheaper than
+  // visiting the holes one by one when much of the view is beyond the depth camera's range (a long
+  // hall: tens of per cent of the pixels). One sweep down the frame: only the 2r + 1 rows in flight
+  // of ρ and of their row maxima are kept (rings of rows), so the frame is read once and written once.
   const int r = options_.hole_fill_radius_px;
   const float fallback_rho =
       options_.missing_depth == MissingDepthPolicy::kRotationOnly ? 0.0f : 1.0f / made.fallback_depth_m;
   const std::size_t row_len = static_cast<std::size_t>(w);
+  const int span = 2 * r + 1;
+  raw_rho_.resize(static_cast<std::size_t>(span) * row_len);
+  row_max_.resize(static_cast<std::size_t>(span) * row_len);
+  made.inv_depth.resize(n);
+  auto raw_row = [&](int y) { return raw_rho_.data() + static_cast<std::size_t>(y % span) * row_len; };
+  auto max_row = [&](int y) { return row_max_.data() + static_cast<std::size_t>(y % span) * row_len; };
   // out[x] = max(out[x], in[x + shift]) over the x where x + shift is in the row.
   auto max_into = [row_len](float* out, const float* in, std::ptrdiff_t shift) {
     const std::size_t x0 = shift < 0 ? static_cast<std::size_t>(-shift) : 0;
@@ -428,26 +424,37 @@ bool WarpCompensator::prepare_depth(const RegisteredDepth& depth) {
     for (; x + 4 <= x1; x += 4) store(out + x, vmax(load(out + x), load(in + x + shift)));
     for (; x < x1; ++x) out[x] = out[x] > in[x + shift] ? out[x] : in[x + shift];
   };
-  float* rows = row_max_.data();
-  float* rho = made.inv_depth.data();
-  for (int y = 0; y < h; ++y) {
-    const float* in = raw + static_cast<std::size_t>(y) * row_len;
-    float* out = rows + static_cast<std::size_t>(y) * row_len;
-    std::memcpy(out, in, row_len * sizeof(float));
-    for (int d = 1; d <= r; ++d) {
-      max_into(out, in, d);
-      max_into(out, in, -d);
+  // Row y's ρ (four pixels at a time; `z <= FLT_MAX` is false for NaN and inf) and its running maximum.
+  const vf flt_max = vf{} + std::numeric_limits<float>::max(), one_f = vf{} + 1.0f;
+  auto make_row = [&](int y) {
+    const float* zy = z + static_cast<std::size_t>(y) * row_len;
+    float* raw = raw_row(y);
+    std::size_t x = 0;
+    for (; x + 4 <= row_len; x += 4) {
+      const vf zi = load(zy + x);
+      const vi valid = (zi > 0) & (zi <= flt_max);
+      store(raw + x, from_bits(bits(one_f / from_bits((bits(zi) & valid) | (bits(one_f) & ~valid))) & valid));
     }
-  }
+    for (; x < row_len; ++x) raw[x] = zy[x] > 0 && zy[x] <= std::numeric_limits<float>::max() ? 1.0f / zy[x] : 0.0f;
+    float* out = max_row(y);
+    std::memcpy(out, raw, row_len * sizeof(float));
+    for (int d = 1; d <= r; ++d) {
+      max_into(out, raw, d);
+      max_into(out, raw, -d);
+    }
+  };
+  float* rho = made.inv_depth.data();
   // Not vf{} + x: 0.0f + −0.0f would lose the sign bit.
   const vf fallback{-fallback_rho, -fallback_rho, -fallback_rho, -fallback_rho}, zero{};
   vf largest{};  // max |ρ|, for the warp's reach (warp_reach_px)
+  for (int y = 0; y < std::min(r, h); ++y) make_row(y);
   for (int y = 0; y < h; ++y) {
-    const float* self = raw + static_cast<std::size_t>(y) * row_len;
+    if (y + r < h) make_row(y + r);  // into the slot of row y − r − 1, which no row from y on needs
+    const float* self = raw_row(y);
     float* out = rho + static_cast<std::size_t>(y) * row_len;
-    std::memcpy(out, rows + static_cast<std::size_t>(y) * row_len, row_len * sizeof(float));
+    std::memcpy(out, max_row(y), row_len * sizeof(float));
     for (int yy = std::max(0, y - r); yy <= std::min(h - 1, y + r); ++yy)
-      if (yy != y) max_into(out, rows + static_cast<std::size_t>(yy) * row_len, 0);
+      if (yy != y) max_into(out, max_row(yy), 0);
     // Valid: its own ρ; hole: the dilation, or the policy's −ρ (−0.0f still carries the sign bit).
     std::size_t x = 0;
     for (; x + 4 <= row_len; x += 4) {

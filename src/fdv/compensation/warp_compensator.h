@@ -72,7 +72,8 @@ class WarpCompensator final : public CompensatorBase {
   int in_use_ = 0;  ///< prepared_'s slot the last prepare_depth made or found
   const PreparedDepth& depth_in_use() const { return prepared_[in_use_]; }
   std::vector<float> depth_sample_;  ///< the strided valid depths (median or reach)
-  std::vector<float> raw_rho_, row_max_;  ///< ρ before hole filling; its running maximum along rows
+  /// Rings of 2r + 1 rows (prepare_depth): ρ before hole filling, its running maximum along rows.
+  std::vector<float> raw_rho_, row_max_;
   double grid_max_radius_ = 0;  ///< largest |x| (normalised) over the undistorted grid
   std::vector<Event> near_events_;  ///< events_near's selection, reused
   struct RawBox {
