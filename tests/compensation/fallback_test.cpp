@@ -3,8 +3,11 @@
 // in the window's report, and produce the documented result.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
+#include <random>
+#include <vector>
 
 #include "fdv/compensation/compensator.h"
 #include "synthetic_motion.h"
@@ -185,6 +188,30 @@ TEST(Fallback, PixelsWithoutDepthUseTheMedianAndAreCounted) {
   EXPECT_FLOAT_EQ(out3.report.fallback_depth_m, 10.0f);
   EXPECT_NEAR(out3.x()[3], expected_u(202, 10.0, 0.020), 1e-3);
   EXPECT_NEAR(out3.x()[1], expected_u(250, 5.0, 0.002), 1e-3);
+}
+
+// The reach of "beyond range" is the 99th percentile of the frame's depths (every pixel is sampled
+// on this rig): the depth at index ⌊0.99 n⌋ of the sorted frame. A shuffled ramp of distinct
+// depths, then the same with its top thousand equal (the percentile falls among them).
+TEST(Fallback, TheReachIsTheNinetyNinthPercentileOfTheFramesDepths) {
+  const Calibration c = plain_rig();
+  for (const std::size_t equal_top : {0, 1000}) {
+    RegisteredDepth frame = flat_depth(c, 0.0f, 0);
+    const std::size_t n = frame.depth_m.size();
+    for (std::size_t i = 0; i < n; ++i)
+      frame.depth_m[i] = i + equal_top < n ? 1.0f + 1e-4f * static_cast<float>(i) : 9.5f;
+    std::shuffle(frame.depth_m.begin(), frame.depth_m.end(), std::mt19937(7));
+    std::vector<float> sorted = frame.depth_m;
+    std::sort(sorted.begin(), sorted.end());
+    CompensationOptions opt;
+    opt.method = CompensationMethod::kRotationTranslation;
+    opt.missing_depth = MissingDepthPolicy::kBeyondRange;
+    const std::vector<Event> ev{{1'000'000, 10, 10, true}};
+    const auto imu = test::constant_imu(Eigen::Vector3d::Zero(), -5 * kNsPerMs, 30 * kNsPerMs, kNsPerMs);
+    const CompensatedWindow& out =
+        make_compensator(c, opt)->compensate({ev, 0, 25 * kNsPerMs, imu, moving(0, {0, 0, 1.0}), &frame});
+    EXPECT_EQ(out.report.fallback_depth_m, 2 * sorted[n * 99 / 100]) << out.report.brief();
+  }
 }
 
 // Preparing the depth frame on its arrival (Perception does, off the window path) gives the same
