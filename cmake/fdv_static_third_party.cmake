@@ -8,8 +8,8 @@
 #   fdv_static_alternative(<target> ARCHIVES <name>... [LINK <library>...])
 #     <target>'s static alternative: its usage requirements with the archives lib<name>.a (in link
 #     order) and what they need (targets, or shared libraries by name or file name, "a|b" for
-#     either), when every
-#     archive and library is found; otherwise none, and the program links the shared library.
+#     either), when every archive and library is found; otherwise none, and the program links the
+#     shared library.
 #   fdv_prefer_static(<target>... [SELF])
 #     Rewrites each target's link interface (SELF: its own link libraries) so that a target with
 #     the property FDV_STATIC_THIRD_PARTY links the alternatives. Decided per consumer, at generation.
