@@ -208,8 +208,9 @@ TEST(Fallback, TheReachIsTheNinetyNinthPercentileOfTheFramesDepths) {
     opt.missing_depth = MissingDepthPolicy::kBeyondRange;
     const std::vector<Event> ev{{1'000'000, 10, 10, true}};
     const auto imu = test::constant_imu(Eigen::Vector3d::Zero(), -5 * kNsPerMs, 30 * kNsPerMs, kNsPerMs);
+    const auto compensator = make_compensator(c, opt);  // owns the window `out` refers to
     const CompensatedWindow& out =
-        make_compensator(c, opt)->compensate({ev, 0, 25 * kNsPerMs, imu, moving(0, {0, 0, 1.0}), &frame});
+        compensator->compensate({ev, 0, 25 * kNsPerMs, imu, moving(0, {0, 0, 1.0}), &frame});
     EXPECT_EQ(out.report.fallback_depth_m, 2 * sorted[n * 99 / 100]) << out.report.brief();
   }
 }
