@@ -15,6 +15,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdint>
 #include <ctime>
 #include <random>
@@ -29,6 +30,7 @@
 #include "fdv/compensation/reference_warp.h"
 #include "fdv/compensation/undistortion_map.h"
 #include "fdv/detection/detector.h"
+#include "fdv/detection/event_refinement.h"
 #include "fdv/detection/gaussian_fit_source.h"
 #include "fdv/detection/hot_pixels.h"
 #include "fdv/detection/reference_time_images.h"
@@ -476,6 +478,48 @@ void BM_RegionRetrieval(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_RegionRetrieval)->Unit(benchmark::kMicrosecond);
+
+// The event refinement of one detection (EventRefiner::refine) at 346x260, as in the DAVIS346
+// throw's windows: a ball of the given radius [px] whose rim makes events as it moves 10 px to the
+// right over the 25 ms window (ten sweeps), on 1000 background events, time-sorted, and a box on a fragment of
+// its leading edge at the window's middle, so that the square grows while it cuts the ball (up to
+// the options' largest square).
+void BM_EventRefinement(benchmark::State& state) {
+  constexpr int kWidth = 346, kHeight = 260;
+  const double radius = static_cast<double>(state.range(0));
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  std::vector<std::pair<float, std::int32_t>> events;  // (t [s], pixel)
+  for (int i = 0; i < 1000; ++i)
+    events.emplace_back(0.025f * unit(rng), static_cast<std::int32_t>(unit(rng) * (kWidth * kHeight - 1)));
+  for (int step = 0; step < 10; ++step) {
+    const float t = 0.025f * (static_cast<float>(step) + 0.5f) / 10;
+    const double cx = 168 + 10.0 * t / 0.025, cy = 130;
+    for (int y = static_cast<int>(cy - radius - 1); y <= static_cast<int>(cy + radius + 1); ++y)
+      for (int x = static_cast<int>(cx - radius - 1); x <= static_cast<int>(cx + radius + 1); ++x)
+        if (std::abs(std::hypot(x - cx, y - cy) - radius) < 0.7) events.emplace_back(t, y * kWidth + x);
+  }
+  std::sort(events.begin(), events.end());
+  std::vector<std::int32_t> pixel;
+  std::vector<float> t_s;
+  for (const auto& [t, px] : events) t_s.push_back(t), pixel.push_back(px);
+  CompensatedEventsView view{0, kWindow, kWidth, kHeight, pixel, t_s};
+  view.time_sorted = true;
+  const double lead = 173 + radius;  // the leading edge at the middle time
+  const Box2D fragment{lead - 4, 126, lead + 2, 134};
+  EventRefiner refiner{DetectorOptions{}};
+  refiner.allocate(kWidth, kHeight);
+  std::optional<RefinedCenter> r;
+  for (auto _ : state) {
+    r = refiner.refine(view, fragment, 0.0125);
+    benchmark::DoNotOptimize(r);
+  }
+  if (!r) return state.SkipWithError("no refinement");
+  state.counters["events"] = static_cast<double>(pixel.size());
+  state.counters["extent_px"] = r->extent_px;
+  state.counters["center_x"] = r->center.x();
+}
+BENCHMARK(BM_EventRefinement)->Arg(6)->Arg(20)->Arg(40)->Unit(benchmark::kMicrosecond);
 
 // Whole front end per window: rotation_translation compensation + detection. The scene is seen
 // from a vehicle at rest (IMU and odometry report zero motion) so that the events and the motion
