@@ -129,5 +129,49 @@ TEST(Segmentation, BandsOfRowsOnSeveralThreadsGiveTheSameImages) {
   }
 }
 
+// Windows of events in bands of rows (as a window of the events near a few gates is), built into
+// time images: segment() given the last result's bounds computes only the time images' event rows
+// and blanks the rest of the last S, and must give the S, pixel count and bounds of a whole-image
+// pass, window after window, on one and two threads.
+TEST(Segmentation, OnlyTheRowsWithEventsGiveTheWholeImagesResult) {
+  constexpr int kWidth = 346, kHeight = 260;
+  std::mt19937 rng(11);
+  const cv::Rect bands[] = {{0, 0, 346, 260}, {40, 20, 60, 30}, {200, 180, 90, 70}, {0, 0, 0, 0}, {10, 100, 30, 5}, {300, 0, 46, 12}};
+  TimeImages ti;
+  cv::Mat S_band[2];
+  cv::Rect nonzero[2];
+  for (const cv::Rect& band : bands) {
+    SCOPED_TRACE(testing::Message() << band);
+    std::vector<std::int32_t> pixel;
+    std::vector<float> t_s;
+    std::uniform_real_distribution<float> t(0.0f, 0.025f);
+    for (int y = band.y; y < band.y + band.height; ++y)
+      for (int x = band.x; x < band.x + band.width; ++x)
+        for (int k = static_cast<int>(rng() % 3); k > 0; --k) pixel.push_back(y * kWidth + x), t_s.push_back(t(rng));
+    const CompensatedEventsView view{0, 25 * kNsPerMs, kWidth, kHeight, pixel, t_s};
+    build_time_images(view, ti);
+    if (band.area() > 0 && band.height < kHeight) {  // the band is found, and it is not the image
+      EXPECT_LE(ti.event_rows.start, band.y);
+      EXPECT_GE(ti.event_rows.end, band.y + band.height);
+      EXPECT_LT(ti.event_rows.size(), kHeight);
+    }
+    cv::Mat S_full;
+    const SegmentResult full = segment(ti, 0.5, 1, S_full);
+    for (int threads : {1, 2}) {
+      SCOPED_TRACE(testing::Message() << threads << " threads");
+      cv::Mat& S = S_band[threads - 1];
+      if (S.empty()) S = cv::Mat::zeros(kHeight, kWidth, CV_32F);
+      const SegmentResult rows = segment(ti, 0.5, 1, S, threads, nonzero[threads - 1]);
+      nonzero[threads - 1] = rows.bounds;
+      EXPECT_EQ(rows.pixels, full.pixels);
+      EXPECT_EQ(rows.bounds, full.bounds);
+      EXPECT_EQ(cv::norm(S, S_full, cv::NORM_INF), 0);
+    }
+    if (band.area() > 0) {
+      EXPECT_GT(full.pixels, 0);  // the case is not vacuous
+    }
+  }
+}
+
 }  // namespace
 }  // namespace fdv

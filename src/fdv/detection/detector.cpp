@@ -141,7 +141,7 @@ Detector::Detector(const DetectorOptions& options, const PinholeCamera& event_ca
 void Detector::allocate(int width, int height) {
   S_.create(height, width, CV_32F);
   S_.setTo(0);
-  S_is_zero_ = true;
+  S_nonzero_ = {};
   rest_.create(height, width, CV_32F);
   rest_.setTo(0);
   rest_bounds_ = {};
@@ -207,15 +207,15 @@ DetectionResult Detector::detect(const CompensatedEventsView& window, std::span<
   if (S_.rows != h || S_.cols != w) allocate(w, h);
   if (ti_.events < o.min_window_events) {
     // A run of near-empty windows (a sparse stream, a gap's reported windows) blanks it once.
-    if (!S_is_zero_) zero_rect(S_, {0, 0, w, h});
-    S_is_zero_ = true;
+    zero_rect(S_, S_nonzero_);
+    S_nonzero_ = {};
     return finish(DetectionStatus::kTooFewEvents);
   }
 
   t = Clock::now();
   res.theta = adaptive_threshold(ti_.mean_normalized, window.omega_rad_s, window.speed_m_s, o);
-  const SegmentResult seg = segment(ti_, res.theta, o.min_pixel_events, S_, window.threads);
-  S_is_zero_ = seg.pixels == 0;
+  const SegmentResult seg = segment(ti_, res.theta, o.min_pixel_events, S_, window.threads, S_nonzero_);
+  S_nonzero_ = seg.bounds;
   res.segmented_pixels = seg.pixels;
   res.timings.segmentation_ms = ms_since(t);
   if (!(ti_.t_max_s > ti_.t_min_s)) return finish(DetectionStatus::kNoTemporalContrast);

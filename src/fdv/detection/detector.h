@@ -105,7 +105,7 @@ class Detector {
   // images have seen a window (tests/pipeline/no_allocation_test.cpp).
   TimeImages ti_;
   cv::Mat S_;
-  bool S_is_zero_ = false;  ///< S_ blank: a window with too few events need not blank it again
+  cv::Rect S_nonzero_;  ///< S_ is zero outside this rectangle (the last segmentation's bounds)
   Preprocessor pre_;
   cv::Mat rest_;          ///< P with the window's objects found so far blanked, zero outside rest_bounds_
   cv::Rect rest_bounds_;

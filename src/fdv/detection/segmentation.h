@@ -11,6 +11,7 @@
 /// pre-processing only visits the pixels S can make nonzero (the bounds of S grown by the mean
 /// filter's half-width): a window's segmentation is a small part of the image.
 #include <opencv2/core.hpp>
+#include <optional>
 #include <vector>
 
 #include "fdv/detection/detector_options.h"
@@ -40,9 +41,12 @@ struct SegmentResult {
   cv::Rect bounds;  ///< bounding rectangle of those pixels (empty when none)
 };
 
-/// S_ij = N_ij where N_ij ≥ θ and I_ij ≥ min_pixel_events (≥ 1), else 0 (CV_32F, written over the
-/// whole image; reuses S's buffer when it has the size).
-SegmentResult segment(const TimeImages& ti, double theta, int min_pixel_events, cv::Mat& S, int threads = 1);
+/// S_ij = N_ij where N_ij ≥ θ and I_ij ≥ min_pixel_events (≥ 1), else 0 (CV_32F; reuses S's
+/// buffer when it has the size). Written over the whole image, unless `s_nonzero` is given: S has
+/// the image's size and is zero outside that rectangle (the last result's bounds), and then only
+/// the rows that can hold events (ti.event_rows) are computed and the rest of `s_nonzero` blanked.
+SegmentResult segment(const TimeImages& ti, double theta, int min_pixel_events, cv::Mat& S, int threads = 1,
+                      std::optional<cv::Rect> s_nonzero = std::nullopt);
 
 /// P = (open_k2(mean_k1(S)))², element-wise square, CV_32F: a k1×k1 mean filter, then the opening
 /// (erosion followed by dilation) with a k2×k2 square, everything zero beyond the image border.

@@ -76,6 +76,10 @@ struct TimeImages {
   int pixels_with_events = 0;
   float t_min_s = 0, t_max_s = 0;  ///< min / max of T over pixels with events
   double mean_normalized = 0;      ///< mean of N over pixels with events (threshold θ, §IV-B.1)
+  /// The rows that can hold this window's events: those of the 256-pixel groups it has events in
+  /// (a superset of the rows with I > 0; empty when there are none). A window of the events near a
+  /// few gates spans a band of rows, and the passes after these images need visit only that band.
+  cv::Range event_rows = cv::Range(0, 0);
   /// 16-pixel blocks that pass 1 looked at: those of the groups (16 blocks, 256 pixels) that held
   /// events in this window or the previous one. The work bound that a sparse window's cost follows.
   std::size_t blocks_visited = 0;
