@@ -489,6 +489,30 @@ TEST(EventRefiner, SymmetricEventsGiveTheirCentroidAndMeanTime) {
   EXPECT_NEAR(r->t_mean_s, 0.0125, 1e-7);
 }
 
+// Squares of events against the image's left and right edges, symmetric about their middle row and
+// time: the square the refinement bins is cut by the edge, its first or last column is the image's,
+// and the centroid is the mean of the object's columns (0..6: 3; 153..159: 156), events in time
+// order or not.
+TEST(EventRefiner, AnObjectAtTheImagesEdgeKeepsItsEdgeColumns) {
+  for (const auto& [x0, expected_x] : {std::pair{0, 3.0}, std::pair{kWidth - 7, kWidth - 4.0}}) {
+    for (const bool sorted : {false, true}) {
+      SCOPED_TRACE(testing::Message() << "x0 " << x0 << (sorted ? ", time-sorted" : ""));
+      HandMadeWindow w;
+      for (const double t : {0.005, 0.0125, 0.020})
+        for (int y = 47; y <= 53; ++y)
+          for (int x = x0; x <= x0 + 6; ++x) w.add(x, y, 1, t);
+      w.view = {0, from_seconds(kWindowS), kWidth, kHeight, w.pixel, w.t_s};
+      w.view.time_sorted = sorted;
+      const std::optional<RefinedCenter> r =
+          refine_once(DetectorOptions{}, w.view, Box2D{x0 - 1.0, 46, x0 + 8.0, 54}, 0.0125);
+      ASSERT_TRUE(r);
+      EXPECT_DOUBLE_EQ(r->center.x(), expected_x);
+      EXPECT_DOUBLE_EQ(r->center.y(), 50.0);
+      EXPECT_NEAR(r->t_mean_s, 0.0125, 1e-7);
+    }
+  }
+}
+
 // A ring of events (a uniform ball's rim, 30 px across) on sparse background, and a box on a 6 px
 // fragment of its right arc: the square grows until it holds the whole ring, and the centre is the
 // ring's. Without growth the centre stays on the arc.

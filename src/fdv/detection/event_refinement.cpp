@@ -14,22 +14,38 @@
 namespace fdv {
 namespace {
 
-/// The refinement's scan: the events k in [begin, end) on the image rows [row0, row0 + rows) of a
-/// w-wide image whose time lies in [t_lo, t_hi] are added to acc (per pixel: count, Σt; row-major,
-/// w wide), in event order. Events on and off the band alternate in no pattern, so a branch per
-/// event mispredicts (docs/DETECTION.md, "Tuning"): the tests run four events at a time and write
-/// the passing ones to a short list, branch-free; then the list is added in order.
-/// The band's whole rows are counted, so no column is computed (the caller reads a rectangle of it).
+/// The events' pixels are tested for a rectangle's columns in float: exact while the band of rows
+/// holds fewer pixels than this (the row's error stays below half a pixel's share of the row).
+constexpr std::uint32_t kMaxBandForColumns = 1u << 22;
+
+/// What bin_slice() bins of the rectangle `r` of a w-wide image: its columns, or its whole rows when
+/// it spans more than half of them (the column test costs more per event than blanking the rest of
+/// the rows saves) or they hold kMaxBandForColumns pixels or more.
+cv::Rect binned_part(const cv::Rect& r, int w) {
+  const bool columns = 2 * r.width <= w && static_cast<std::uint32_t>(r.height) * static_cast<std::uint32_t>(w) < kMaxBandForColumns;
+  return columns ? r : cv::Rect(0, r.y, w, r.height);
+}
+
+/// The refinement's scan: the events k in [begin, end) in binned_part(r, w) whose time lies in
+/// [t_lo, t_hi] are added to acc (per pixel: count, Σt; row-major, w wide), in event order. Events
+/// in and out of it alternate in no pattern, so a branch per event mispredicts (docs/DETECTION.md,
+/// "Tuning"): the tests run four events at a time and write the passing ones to a short list,
+/// branch-free; then the list is added in order. A pixel index d's column is found in float,
+/// x = d − ⌊(d + ½)/w⌋·w: no integer division.
 void bin_slice(const std::int32_t* __restrict pixel, const float* __restrict t_s, std::size_t begin, std::size_t end,
-               std::uint32_t w, std::uint32_t row0, std::uint32_t rows, float t_lo, float t_hi,
-               float* __restrict acc) {
+               std::uint32_t w, const cv::Rect& r, float t_lo, float t_hi, float* __restrict acc) {
   using lanes::vf;
   using lanes::vi;
   using vu = std::uint32_t __attribute__((vector_size(16)));
   typedef std::uint32_t vu_u __attribute__((vector_size(16), aligned(4)));
-  const std::uint32_t first = row0 * w, band = rows * w;
+  const cv::Rect part = binned_part(r, static_cast<int>(w));
+  const bool columns = part.width < static_cast<int>(w);
+  const std::uint32_t first = static_cast<std::uint32_t>(part.y) * w, band = static_cast<std::uint32_t>(part.height) * w;
+  const std::uint32_t x0 = static_cast<std::uint32_t>(part.x), x1 = x0 + static_cast<std::uint32_t>(part.width);
   const vu first_v = vu{} + first, band_v = vu{} + band;
   const vf lo = vf{} + t_lo, hi = vf{} + t_hi;
+  const vf wf = vf{} + static_cast<float>(w), inv_w = vf{} + 1.0f / static_cast<float>(w);
+  const vf x0f = vf{} + static_cast<float>(x0), x1f = vf{} + static_cast<float>(x1);
   constexpr std::size_t kChunk = 256;
   std::array<std::uint32_t, kChunk> at;
   std::array<float, kChunk> time;
@@ -40,7 +56,13 @@ void bin_slice(const std::int32_t* __restrict pixel, const float* __restrict t_s
     for (; k + 4 <= chunk_end; k += 4) {
       const vu d = *reinterpret_cast<const vu_u*>(pixel + k) - first_v;  // negative pixels wrap out
       const vf t = lanes::load(t_s + k);
-      const vi pass = (d < band_v) & (t >= lo) & (t <= hi);
+      vi pass = (d < band_v) & (t >= lo) & (t <= hi);
+      if (columns) {  // exact where d < band (kMaxBandForColumns); the other lanes have failed already
+        const vf df = __builtin_convertvector(reinterpret_cast<const vi&>(d), vf);
+        const vf row = __builtin_convertvector(__builtin_convertvector((df + 0.5f) * inv_w, vi), vf);
+        const vf x = df - row * wf;
+        pass &= (x >= x0f) & (x < x1f);
+      }
       for (int j = 0; j < 4; ++j) {
         at[n] = d[j];
         time[n] = t[j];
@@ -52,7 +74,7 @@ void bin_slice(const std::int32_t* __restrict pixel, const float* __restrict t_s
       const float t = t_s[k];
       at[n] = d;
       time[n] = t;
-      n += d < band && t >= t_lo && t <= t_hi;
+      n += d < band && d % w >= x0 && d % w < x1 && t >= t_lo && t <= t_hi;
     }
     for (std::size_t i = 0; i < n; ++i) {
       float* a = acc + 2 * (static_cast<std::size_t>(first) + at[i]);
@@ -232,10 +254,11 @@ std::optional<RefinedCenter> EventRefiner::refine(const CompensatedEventsView& w
     const double band_half = kGrowth * half;
     const cv::Rect outer = square(c, reach + band_half);
     if (outer.area() == 0) return result();
-    // The band of outer's rows, whole (bin_slice counts whole rows).
-    std::fill_n(acc_.ptr<float>(outer.y), 2 * static_cast<std::size_t>(outer.height) * window.width, 0.0f);
-    bin_slice(window.pixel.data(), window.t_s.data(), begin, end, static_cast<std::uint32_t>(w),
-              static_cast<std::uint32_t>(outer.y), static_cast<std::uint32_t>(outer.height), t_lo, t_hi,
+    // What bin_slice() writes of outer, blanked first.
+    const cv::Rect binned = binned_part(outer, w);
+    for (int y = binned.y; y < binned.y + binned.height; ++y)
+      std::fill_n(acc_.ptr<float>(y) + 2 * binned.x, 2 * static_cast<std::size_t>(binned.width), 0.0f);
+    bin_slice(window.pixel.data(), window.t_s.data(), begin, end, static_cast<std::uint32_t>(w), outer, t_lo, t_hi,
               acc_.ptr<float>(0));
     // Mean shift with a flat square kernel: the square starts on the box, whose centre lies ahead of
     // the object (the box holds the latest sweep), and residual background events inside it pull the
