@@ -136,7 +136,8 @@ TEST(Segmentation, BandsOfRowsOnSeveralThreadsGiveTheSameImages) {
 TEST(Segmentation, OnlyTheRowsWithEventsGiveTheWholeImagesResult) {
   constexpr int kWidth = 346, kHeight = 260;
   std::mt19937 rng(11);
-  const cv::Rect bands[] = {{0, 0, 346, 260}, {40, 20, 60, 30}, {200, 180, 90, 70}, {0, 0, 0, 0}, {10, 100, 30, 5}, {300, 0, 46, 12}};
+  const cv::Rect bands[] = {{0, 0, 346, 260}, {40, 20, 60, 30}, {200, 180, 90, 70},
+                            {0, 0, 0, 0},     {10, 100, 30, 5}, {300, 0, 46, 12}};
   TimeImages ti;
   cv::Mat S_band[2];
   cv::Rect nonzero[2];
@@ -147,7 +148,8 @@ TEST(Segmentation, OnlyTheRowsWithEventsGiveTheWholeImagesResult) {
     std::uniform_real_distribution<float> t(0.0f, 0.025f);
     for (int y = band.y; y < band.y + band.height; ++y)
       for (int x = band.x; x < band.x + band.width; ++x)
-        for (int k = static_cast<int>(rng() % 3); k > 0; --k) pixel.push_back(y * kWidth + x), t_s.push_back(t(rng));
+        for (int k = static_cast<int>(rng() % 3); k > 0; --k)
+          pixel.push_back(y * kWidth + x), t_s.push_back(t(rng));
     const CompensatedEventsView view{0, 25 * kNsPerMs, kWidth, kHeight, pixel, t_s};
     build_time_images(view, ti);
     if (band.area() > 0 && band.height < kHeight) {  // the band is found, and it is not the image

@@ -214,7 +214,8 @@ DetectionResult Detector::detect(const CompensatedEventsView& window, std::span<
 
   t = Clock::now();
   res.theta = adaptive_threshold(ti_.mean_normalized, window.omega_rad_s, window.speed_m_s, o);
-  const SegmentResult seg = segment(ti_, res.theta, o.min_pixel_events, S_, window.threads, S_nonzero_);
+  const SegmentResult seg =
+      segment(ti_, res.theta, o.min_pixel_events, S_, window.threads, S_nonzero_);
   S_nonzero_ = seg.bounds;
   res.segmented_pixels = seg.pixels;
   res.timings.segmentation_ms = ms_since(t);

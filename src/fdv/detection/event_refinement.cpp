@@ -18,30 +18,34 @@ namespace {
 /// holds fewer pixels than this (the row's error stays below half a pixel's share of the row).
 constexpr std::uint32_t kMaxBandForColumns = 1u << 22;
 
-/// What bin_slice() bins of the rectangle `r` of a w-wide image: its columns, or its whole rows when
-/// it spans more than half of them (the column test costs more per event than blanking the rest of
-/// the rows saves) or they hold kMaxBandForColumns pixels or more.
+/// What bin_slice() bins of the rectangle `r` of a w-wide image: its columns, or its whole rows
+/// when it spans more than half of them (the column test costs more per event than blanking the
+/// rest of the rows saves) or they hold kMaxBandForColumns pixels or more.
 cv::Rect binned_part(const cv::Rect& r, int w) {
-  const bool columns = 2 * r.width <= w && static_cast<std::uint32_t>(r.height) * static_cast<std::uint32_t>(w) < kMaxBandForColumns;
+  const bool columns =
+      2 * r.width <= w &&
+      static_cast<std::uint32_t>(r.height) * static_cast<std::uint32_t>(w) < kMaxBandForColumns;
   return columns ? r : cv::Rect(0, r.y, w, r.height);
 }
 
-/// The refinement's scan: the events k in [begin, end) in binned_part(r, w) whose time lies in
-/// [t_lo, t_hi] are added to acc (per pixel: count, Σt; row-major, w wide), in event order. Events
-/// in and out of it alternate in no pattern, so a branch per event mispredicts (docs/DETECTION.md,
-/// "Tuning"): the tests run four events at a time and write the passing ones to a short list,
-/// branch-free; then the list is added in order. A pixel index d's column is found in float,
-/// x = d − ⌊(d + ½)/w⌋·w: no integer division.
-void bin_slice(const std::int32_t* __restrict pixel, const float* __restrict t_s, std::size_t begin, std::size_t end,
-               std::uint32_t w, const cv::Rect& r, float t_lo, float t_hi, float* __restrict acc) {
+/// The refinement's scan: the events k in [begin, end) in `part` (a binned_part() of a w-wide
+/// image) whose time lies in [t_lo, t_hi] are added to acc (per pixel: count, Σt; row-major, w
+/// wide), in event order. Events in and out of it alternate in no pattern, so a branch per event
+/// mispredicts (docs/DETECTION.md, "Tuning"): the tests run four events at a time and write the
+/// passing ones to a short list, branch-free; then the list is added in order. A pixel index d's
+/// column is found in float, x = d − ⌊(d + ½)/w⌋·w: no integer division.
+void bin_slice(const std::int32_t* __restrict pixel, const float* __restrict t_s, std::size_t begin,
+               std::size_t end, std::uint32_t w, const cv::Rect& part, float t_lo, float t_hi,
+               float* __restrict acc) {
   using lanes::vf;
   using lanes::vi;
   using vu = std::uint32_t __attribute__((vector_size(16)));
   typedef std::uint32_t vu_u __attribute__((vector_size(16), aligned(4)));
-  const cv::Rect part = binned_part(r, static_cast<int>(w));
   const bool columns = part.width < static_cast<int>(w);
-  const std::uint32_t first = static_cast<std::uint32_t>(part.y) * w, band = static_cast<std::uint32_t>(part.height) * w;
-  const std::uint32_t x0 = static_cast<std::uint32_t>(part.x), x1 = x0 + static_cast<std::uint32_t>(part.width);
+  const std::uint32_t first = static_cast<std::uint32_t>(part.y) * w,
+                      band = static_cast<std::uint32_t>(part.height) * w;
+  const std::uint32_t x0 = static_cast<std::uint32_t>(part.x),
+                      x1 = x0 + static_cast<std::uint32_t>(part.width);
   const vu first_v = vu{} + first, band_v = vu{} + band;
   const vf lo = vf{} + t_lo, hi = vf{} + t_hi;
   const vf wf = vf{} + static_cast<float>(w), inv_w = vf{} + 1.0f / static_cast<float>(w);
@@ -57,9 +61,10 @@ void bin_slice(const std::int32_t* __restrict pixel, const float* __restrict t_s
       const vu d = *reinterpret_cast<const vu_u*>(pixel + k) - first_v;  // negative pixels wrap out
       const vf t = lanes::load(t_s + k);
       vi pass = (d < band_v) & (t >= lo) & (t <= hi);
-      if (columns) {  // exact where d < band (kMaxBandForColumns); the other lanes have failed already
+      if (columns) {  // exact where d < band (kMaxBandForColumns); other lanes failed above
         const vf df = __builtin_convertvector(reinterpret_cast<const vi&>(d), vf);
-        const vf row = __builtin_convertvector(__builtin_convertvector((df + 0.5f) * inv_w, vi), vf);
+        const vf row =
+            __builtin_convertvector(__builtin_convertvector((df + 0.5f) * inv_w, vi), vf);
         const vf x = df - row * wf;
         pass &= (x >= x0f) & (x < x1f);
       }
@@ -72,9 +77,10 @@ void bin_slice(const std::int32_t* __restrict pixel, const float* __restrict t_s
     for (; k < chunk_end; ++k) {
       const std::uint32_t d = static_cast<std::uint32_t>(pixel[k]) - first;
       const float t = t_s[k];
+      const std::uint32_t x = d % w;
       at[n] = d;
       time[n] = t;
-      n += d < band && d % w >= x0 && d % w < x1 && t >= t_lo && t <= t_hi;
+      n += d < band && x >= x0 && x < x1 && t >= t_lo && t <= t_hi;
     }
     for (std::size_t i = 0; i < n; ++i) {
       float* a = acc + 2 * (static_cast<std::size_t>(first) + at[i]);
@@ -85,9 +91,10 @@ void bin_slice(const std::int32_t* __restrict pixel, const float* __restrict t_s
 }
 
 /// Σ count and Σ count·x over the pixels [x0, x1) of one row of the refinement's accumulator
-/// (count, Σt per pixel). The counts are whole numbers below 2^24 and x below 2^16, so every partial
-/// sum is an integer below 2^53: exact in any order. Two pixels per double vector and two vectors
-/// per step, then, where one chain of dependent scalar additions was the refinement's main cost.
+/// (count, Σt per pixel). The counts are whole numbers below 2^24 and x below 2^16, so every
+/// partial sum is an integer below 2^53: exact in any order. Two pixels per double vector and two
+/// vectors per step, then, where one chain of dependent scalar additions was the refinement's main
+/// cost.
 struct RowMoments {
   double n = 0, sx = 0;
 };
@@ -216,13 +223,15 @@ std::optional<RefinedCenter> EventRefiner::refine(const CompensatedEventsView& w
   };
   auto events_in = [&](const cv::Rect& r) {
     double sum = 0;
-    for (int y = r.y; y < r.y + r.height; ++y) sum += row_moments(acc_.ptr<float>(y), r.x, r.x + r.width).n;
+    for (int y = r.y; y < r.y + r.height; ++y)
+      sum += row_moments(acc_.ptr<float>(y), r.x, r.x + r.width).n;
     return sum;
   };
   std::optional<RefinedCenter> refined;
   // The mean time of `refined`'s square and the outline's fit of it are made only when `refined` is
   // returned: a square that grows is measured again, and a fit costs 0.05-0.2 ms. Its pixels are
-  // binned alike until then: a grown pass bins the same slice over a superset of the last pass's rows.
+  // binned alike until then: a grown pass bins the same slice over a superset of the last pass's
+  // area.
   cv::Rect refined_square;
   long refined_events = 0;
   struct OutlineFit {
@@ -237,11 +246,13 @@ std::optional<RefinedCenter> EventRefiner::refine(const CompensatedEventsView& w
     double st = 0;
     for (int y = refined_square.y; y < refined_square.y + refined_square.height; ++y) {
       const float* acc = acc_.ptr<float>(y);
-      for (int x = refined_square.x; x < refined_square.x + refined_square.width; ++x) st += acc[2 * x + 1];
+      for (int x = refined_square.x; x < refined_square.x + refined_square.width; ++x)
+        st += acc[2 * x + 1];
     }
     refined->t_mean_s = st / static_cast<double>(refined_events);
     if (pending_fit)
-      if (const auto outline = outline_center(pending_fit->square, pending_fit->centroid, pending_fit->extent))
+      if (const auto outline =
+              outline_center(pending_fit->square, pending_fit->centroid, pending_fit->extent))
         refined->center = *outline;
     return refined;
   };
@@ -257,9 +268,10 @@ std::optional<RefinedCenter> EventRefiner::refine(const CompensatedEventsView& w
     // What bin_slice() writes of outer, blanked first.
     const cv::Rect binned = binned_part(outer, w);
     for (int y = binned.y; y < binned.y + binned.height; ++y)
-      std::fill_n(acc_.ptr<float>(y) + 2 * binned.x, 2 * static_cast<std::size_t>(binned.width), 0.0f);
-    bin_slice(window.pixel.data(), window.t_s.data(), begin, end, static_cast<std::uint32_t>(w), outer, t_lo, t_hi,
-              acc_.ptr<float>(0));
+      std::fill_n(acc_.ptr<float>(y) + 2 * binned.x, 2 * static_cast<std::size_t>(binned.width),
+                  0.0f);
+    bin_slice(window.pixel.data(), window.t_s.data(), begin, end, static_cast<std::uint32_t>(w),
+              binned, t_lo, t_hi, acc_.ptr<float>(0));
     // Mean shift with a flat square kernel: the square starts on the box, whose centre lies ahead of
     // the object (the box holds the latest sweep), and residual background events inside it pull the
     // centroid towards that centre. Re-centring the square on the centroid removes the pull: the
@@ -298,7 +310,8 @@ std::optional<RefinedCenter> EventRefiner::refine(const CompensatedEventsView& w
     const bool in_view = center.x() - half >= 0 && center.y() - half >= 0 && center.x() + half <= window.width &&
                          center.y() + half <= window.height;
     pending_fit.reset();
-    if (half > initial_half && options_.refine_fit_outline && in_view) pending_fit = OutlineFit{e, center, extent};
+    if (half > initial_half && options_.refine_fit_outline && in_view)
+      pending_fit = OutlineFit{e, center, extent};
     if (!(options_.refine_grow_density > 0) || kGrowth * half > max_half) return result();
     // The band's four sides, each alone: the centroid lags towards the fragment, so the object's
     // far part shows in the side facing it.

@@ -250,8 +250,8 @@ segment_rows(const TimeImages& ti, float th, std::int32_t min_count, cv::Mat& S,
 
 }  // namespace
 
-SegmentResult segment(const TimeImages& ti, double theta, int min_pixel_events, cv::Mat& S, int threads,
-                      std::optional<cv::Rect> s_nonzero) {
+SegmentResult segment(const TimeImages& ti, double theta, int min_pixel_events, cv::Mat& S,
+                      int threads, std::optional<cv::Rect> s_nonzero) {
   CV_Assert(ti.normalized.type() == CV_32F && ti.count.type() == CV_32S && ti.normalized.size() == ti.count.size());
   CV_Assert(!s_nonzero || (S.type() == CV_32F && S.size() == ti.normalized.size()));
   S.create(ti.normalized.size(), CV_32F);
@@ -264,7 +264,8 @@ SegmentResult segment(const TimeImages& ti, double theta, int min_pixel_events, 
     y0 = std::clamp(ti.event_rows.start, 0, S.rows);
     y1 = std::clamp(ti.event_rows.end, y0, S.rows);
     const cv::Rect old = *s_nonzero & cv::Rect(0, 0, S.cols, S.rows);
-    zero_rect(S, cv::Rect(old.x, old.y, old.width, std::max(0, std::min(old.y + old.height, y0) - old.y)));
+    zero_rect(S, cv::Rect(old.x, old.y, old.width,
+                          std::max(0, std::min(old.y + old.height, y0) - old.y)));
     const int below = std::max(old.y, y1);
     zero_rect(S, cv::Rect(old.x, below, old.width, std::max(0, old.y + old.height - below)));
   }
@@ -273,7 +274,8 @@ SegmentResult segment(const TimeImages& ti, double theta, int min_pixel_events, 
   const int parts = std::clamp(std::min(threads, rows / kStripRows), 1, kMaxImageParts);
   std::array<SegmentResult, kMaxImageParts> part_res;
   run_parts(parts, [&](int i) {
-    part_res[i] = segment_rows(ti, th, min_pixel_events, S, y0 + rows * i / parts, y0 + rows * (i + 1) / parts);
+    part_res[i] = segment_rows(ti, th, min_pixel_events, S, y0 + rows * i / parts,
+                               y0 + rows * (i + 1) / parts);
   });
   SegmentResult res;
   for (int i = 0; i < parts; ++i) {

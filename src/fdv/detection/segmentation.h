@@ -45,8 +45,8 @@ struct SegmentResult {
 /// buffer when it has the size). Written over the whole image, unless `s_nonzero` is given: S has
 /// the image's size and is zero outside that rectangle (the last result's bounds), and then only
 /// the rows that can hold events (ti.event_rows) are computed and the rest of `s_nonzero` blanked.
-SegmentResult segment(const TimeImages& ti, double theta, int min_pixel_events, cv::Mat& S, int threads = 1,
-                      std::optional<cv::Rect> s_nonzero = std::nullopt);
+SegmentResult segment(const TimeImages& ti, double theta, int min_pixel_events, cv::Mat& S,
+                      int threads = 1, std::optional<cv::Rect> s_nonzero = std::nullopt);
 
 /// P = (open_k2(mean_k1(S)))², element-wise square, CV_32F: a k1×k1 mean filter, then the opening
 /// (erosion followed by dilation) with a k2×k2 square, everything zero beyond the image border.

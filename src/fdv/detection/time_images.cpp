@@ -403,17 +403,19 @@ void build_time_images(const CompensatedEventsView& view, TimeImages& out) {
           static_cast<float>(inv));
   });
 
-  // Pass 2 made this window's groups the "before" ones.
+  // Pass 2 made this window's groups the "before" ones: the rows of the first to the last.
   const auto& groups = out.groups_before;
   const auto marked = [](std::uint8_t g) { return g != 0; };
-  const auto first_group = std::find_if(groups.begin(), groups.end(), marked);
-  if (first_group == groups.end()) {
-    out.event_rows = cv::Range(0, 0);
-  } else {
-    const auto last_group = std::find_if(groups.rbegin(), groups.rend(), marked);
-    const std::size_t p0 = static_cast<std::size_t>(first_group - groups.begin()) * kGroupPixels;
-    const std::size_t p1 = std::min(npx, (groups.size() - static_cast<std::size_t>(last_group - groups.rbegin())) * kGroupPixels);
-    out.event_rows = cv::Range(static_cast<int>(p0 / static_cast<std::size_t>(w)), static_cast<int>((p1 - 1) / static_cast<std::size_t>(w)) + 1);
+  const auto first = std::find_if(groups.begin(), groups.end(), marked);
+  out.event_rows = cv::Range(0, 0);
+  if (first != groups.end()) {
+    const auto g0 = static_cast<std::size_t>(first - groups.begin());
+    const auto past_last = static_cast<std::size_t>(
+        groups.rend() - std::find_if(groups.rbegin(), groups.rend(), marked));
+    const auto width = static_cast<std::size_t>(w);
+    const std::size_t p0 = g0 * kGroupPixels, p1 = std::min(npx, past_last * kGroupPixels);
+    out.event_rows =
+        cv::Range(static_cast<int>(p0 / width), static_cast<int>((p1 - 1) / width + 1));
   }
 
   double sum_t = 0;
